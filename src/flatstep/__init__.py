@@ -1,0 +1,20 @@
+"""flatstep: flatness-based planning and sliding-mode control of permanent-magnet stepping motors."""
+from .control import FlatnessSMC, SMCGains
+from .equilibria import CriticalPoint, equilibrium_currents, rest_positions, stable_angle
+from .feasibility import FeasibilityReport, InfeasiblePlanError, check_feasibility
+from .flat import FlatFlag, cartesian, flat_to_state, polar, polar_rhs, state_to_flat
+from .motor import PRESETS, MotorParams, rhs
+from .plan import PAPER_PLAN, RestToRest, point_to_point, psi
+from .result import SimResult
+from .simulate import simulate
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "MotorParams", "PRESETS", "rhs",
+    "CriticalPoint", "rest_positions", "stable_angle", "equilibrium_currents",
+    "FlatFlag", "polar", "cartesian", "polar_rhs", "flat_to_state", "state_to_flat",
+    "RestToRest", "PAPER_PLAN", "point_to_point", "psi",
+    "FeasibilityReport", "InfeasiblePlanError", "check_feasibility",
+    "FlatnessSMC", "SMCGains", "simulate", "SimResult",
+]

@@ -1,0 +1,137 @@
+"""Permanent-magnet stepper parameters and the a-b model of eq. (1).
+
+State order everywhere in flatstep: ``x = (ia, ib, omega, theta)``; inputs ``v = (va, vb)``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Callable, Union
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Load = Union[float, Callable[[NDArray[np.float64]], ArrayLike]]
+
+STATE_NAMES = ("ia", "ib", "omega", "theta")
+INPUT_NAMES = ("va", "vb")
+
+
+def _check_finite(name: str, value: float) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}={value!r} is not a number; give a finite real value") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{name}={value!r} is not finite; give a finite real value")
+    return value
+
+
+def check_positive(name: str, value: float, *, unit: str = "") -> float:
+    """Return ``value`` as float, or raise a ValueError if it is not finite and > 0."""
+    value = _check_finite(name, value)
+    if value <= 0.0:
+        raise ValueError(f"{name}={value!r}{unit} must be > 0")
+    return value
+
+
+@dataclass(frozen=True)
+class MotorParams:
+    """Parameters of the two-phase PM stepper of eq. (1).
+
+    Parameters
+    ----------
+    R : phase resistance [ohm], > 0
+    L : phase inductance [H], > 0
+    Km : torque (and back-emf) constant [N m/A = V s/rad], > 0
+    J : rotor and load inertia [kg m^2], > 0
+    B : viscous friction [N m s/rad], >= 0
+    Nr : number of rotor teeth, a positive integer
+    """
+
+    R: float
+    L: float
+    Km: float
+    J: float
+    B: float
+    Nr: int
+
+    def __post_init__(self) -> None:
+        for name, unit in (("R", " ohm"), ("L", " H"), ("Km", " V s/rad"), ("J", " kg m^2")):
+            object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=unit))
+        B = _check_finite("B", self.B)
+        if B < 0.0:
+            raise ValueError(f"B={B!r} N m s/rad must be >= 0 (viscous friction cannot be negative)")
+        object.__setattr__(self, "B", B)
+        Nr = self.Nr
+        if isinstance(Nr, bool) or not isinstance(Nr, (int, np.integer, float)) or (
+            isinstance(Nr, float) and (not math.isfinite(Nr) or not Nr.is_integer())
+        ):
+            raise ValueError(f"Nr={Nr!r} must be a positive integer (number of rotor teeth)")
+        if int(Nr) < 1:
+            raise ValueError(f"Nr={Nr!r} must be a positive integer (number of rotor teeth)")
+        object.__setattr__(self, "Nr", int(Nr))
+
+    @classmethod
+    def preset(cls, name: str) -> "MotorParams":
+        """Return a named parameter set; see :data:`PRESETS`."""
+        try:
+            return cls(**PRESETS[name])
+        except KeyError:
+            raise ValueError(f"unknown motor preset {name!r}; valid presets: {sorted(PRESETS)}") from None
+
+    def replace(self, **changes: float) -> "MotorParams":
+        """Return a copy with some parameters changed (validated again)."""
+        unknown = set(changes) - set(asdict(self))
+        if unknown:
+            raise ValueError(f"unknown motor parameter(s) {sorted(unknown)}; valid: {list(asdict(self))}")
+        return MotorParams(**{**asdict(self), **changes})
+
+    def as_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+
+#: The paper's motor (Section 3).
+PRESETS: dict[str, dict[str, float]] = {
+    "paper": dict(R=8.4, L=0.010, Km=0.05, J=3.6e-6, B=1e-4, Nr=50),
+}
+
+
+def load_function(load: Load) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+    """Normalise a load torque (a constant [N m] or a function of time) to a vectorized function."""
+    if callable(load):
+        def tau(t: NDArray[np.float64]) -> NDArray[np.float64]:
+            value = np.asarray(load(t), dtype=float)
+            if not np.all(np.isfinite(value)):
+                raise ValueError(f"load torque function returned a non-finite value {value!r} at t={t!r}")
+            return np.broadcast_to(value, np.shape(t)) if np.ndim(value) == 0 else value
+        return tau
+    constant = _check_finite("load_torque", load)
+    return lambda t: np.full(np.shape(t), constant)
+
+
+def rhs(t: ArrayLike, x: ArrayLike, v: ArrayLike, motor: MotorParams, load: Load = 0.0) -> NDArray[np.float64]:
+    r"""Right-hand side of the a-b model, eq. (1); vectorized over trailing axes.
+
+    .. math::
+        L\dot i_a = v_a - R i_a + K_m\omega\sin N_r\theta,\quad
+        L\dot i_b = v_b - R i_b - K_m\omega\cos N_r\theta,\\
+        J\dot\omega = K_m(-i_a\sin N_r\theta + i_b\cos N_r\theta) - B\omega - \tau,\quad
+        \dot\theta = \omega
+    """
+    ia, ib, omega, theta = np.asarray(x, dtype=float)
+    va, vb = np.asarray(v, dtype=float)
+    tau = load_function(load)(np.asarray(t, dtype=float))
+    s, c = np.sin(motor.Nr * theta), np.cos(motor.Nr * theta)
+    return np.array([
+        (va - motor.R * ia + motor.Km * omega * s) / motor.L,
+        (vb - motor.R * ib - motor.Km * omega * c) / motor.L,
+        (motor.Km * (ib * c - ia * s) - motor.B * omega - tau) / motor.J,
+        omega + 0.0 * theta,
+    ])
+
+
+def torque(x: ArrayLike, motor: MotorParams) -> NDArray[np.float64]:
+    """Electromagnetic torque ``Km (ib cos Nr theta - ia sin Nr theta)`` [N m]."""
+    ia, ib, _, theta = np.asarray(x, dtype=float)
+    return motor.Km * (ib * np.cos(motor.Nr * theta) - ia * np.sin(motor.Nr * theta))

@@ -1,0 +1,131 @@
+r"""Rest-to-rest plans of the flat outputs (rho, theta): the interpolating polynomial psi, eqs. (15)-(21).
+
+The paper's psi (eq. 17) in normalised time :math:`\tau = (t - t_0)/(t_f - t_0)` is
+
+.. math::
+    \psi(\tau) = \tau^5 (252 - 1050\tau + 1800\tau^2 - 1575\tau^3 + 700\tau^4 - 126\tau^5),\qquad
+    \psi'(\tau) = 1260\,\tau^4 (1 - \tau)^5,
+
+a degree-10 polynomial (the regularized incomplete beta function :math:`I_\tau(5, 6)`): its first four
+derivatives vanish at :math:`t_0` and its first five at :math:`t_f`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.polynomial import Polynomial
+from numpy.typing import ArrayLike, NDArray
+
+from .equilibria import equilibrium_currents, stable_angle
+from .flat import FlatFlag
+from .motor import MotorParams, _check_finite, check_positive
+
+#: Coefficients r1..r6 of eq. (17).
+PAPER_R = (252.0, 1050.0, 1800.0, 1575.0, 700.0, 126.0)
+#: Highest derivative of psi available analytically (the controller needs theta''').
+MAX_ORDER = 5
+
+_PSI = Polynomial([0.0] * 5 + [r * (-1) ** i for i, r in enumerate(PAPER_R)])
+_PSI_DERIVS = [_PSI.deriv(k) for k in range(MAX_ORDER + 1)]
+
+
+def psi(t: ArrayLike, t0: float, tf: float, order: int = 0) -> NDArray[np.float64]:
+    r"""The paper's interpolating polynomial :math:`\psi(t, t_0, t_f)` (eq. 17) or its ``order``-th time
+    derivative, held at 0 before :math:`t_0` and at 1 after :math:`t_f` (derivatives 0 outside).
+
+    .. math:: \frac{d^k\psi}{dt^k} = \frac{\psi^{(k)}(\tau)}{(t_f - t_0)^k}
+    """
+    if not 0 <= order <= MAX_ORDER:
+        raise ValueError(f"order={order!r} is out of range; psi has analytic derivatives 0..{MAX_ORDER}")
+    if not tf > t0:
+        raise ValueError(f"tf={tf!r} must be greater than t0={t0!r}")
+    t = np.asarray(t, dtype=float)
+    T = tf - t0
+    tau = np.clip((t - t0) / T, 0.0, 1.0)
+    value = _PSI_DERIVS[order](tau) / T**order
+    if order > 0:
+        value = np.where((t > t0) & (t < tf), value, 0.0)
+    return value
+
+
+@dataclass(frozen=True)
+class RestToRest:
+    r"""Equilibrium-to-equilibrium transfer of the flat outputs, eqs. (16) and (18):
+
+    .. math::
+        \theta^*(t) = \bar\theta^1 + \psi(t)(\bar\theta^2 - \bar\theta^1),\qquad
+        \rho^*(t) = \bar\rho^1 + \psi(t)(\bar\rho^2 - \bar\rho^1)
+
+    Build one with :func:`point_to_point` (which also checks feasibility) or directly.
+    """
+
+    theta1: float
+    theta2: float
+    rho1: float
+    rho2: float
+    t0: float = 0.02
+    tf: float = 0.04
+
+    def __post_init__(self) -> None:
+        for name in ("theta1", "theta2", "t0", "tf"):
+            object.__setattr__(self, name, _check_finite(name, getattr(self, name)))
+        for name in ("rho1", "rho2"):
+            object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=" A"))
+        if not self.tf > self.t0:
+            raise ValueError(f"tf={self.tf!r} s must be greater than t0={self.t0!r} s")
+
+    @classmethod
+    def from_currents(cls, ia1: float, ib1: float, ia2: float, ib2: float, Nr: int,
+                      t0: float = 0.02, tf: float = 0.04, theta_near: float = 0.0) -> "RestToRest":
+        """The transfer between the stable rest positions held by end currents (eq. 2 and eq. 20).
+
+        The start angle is the stable equilibrium nearest ``theta_near``; the end angle the one nearest
+        the start (a move of at most half an electrical period, ``pi / Nr``).
+        """
+        for name, value in (("ia1", ia1), ("ib1", ib1), ("ia2", ia2), ("ib2", ib2)):
+            _check_finite(name, value)
+        theta1 = stable_angle(ia1, ib1, Nr, near=theta_near)
+        theta2 = stable_angle(ia2, ib2, Nr, near=theta1)
+        return cls(theta1, theta2, math.hypot(ia1, ib1), math.hypot(ia2, ib2), t0, tf)
+
+    def flag(self, t: ArrayLike) -> FlatFlag:
+        """The planned flat flag (rho*, rho*', theta*, theta*', theta*'', theta*''') at times ``t``."""
+        t = np.asarray(t, dtype=float)
+        p = [psi(t, self.t0, self.tf, k) for k in range(4)]
+        dth, drho = self.theta2 - self.theta1, self.rho2 - self.rho1
+        return FlatFlag(self.rho1 + p[0] * drho, p[1] * drho,
+                        self.theta1 + p[0] * dth, p[1] * dth, p[2] * dth, p[3] * dth)
+
+    def x0(self, Nr: int) -> NDArray[np.float64]:
+        """Initial equilibrium state (ia, ib, omega, theta), eq. (19)."""
+        return np.array([*equilibrium_currents(self.theta1, self.rho1, Nr), 0.0, self.theta1])
+
+    def xf(self, Nr: int) -> NDArray[np.float64]:
+        """Final equilibrium state (ia, ib, omega, theta), eqs. (20)-(21)."""
+        return np.array([*equilibrium_currents(self.theta2, self.rho2, Nr), 0.0, self.theta2])
+
+    def as_dict(self) -> dict[str, float]:
+        return dict(theta1=self.theta1, theta2=self.theta2, rho1=self.rho1, rho2=self.rho2, t0=self.t0, tf=self.tf)
+
+
+#: The paper's move (Section 3): 0 -> 0.02 rad at constant rho = 0.4 A, t0 = 0.02 s, tf = 0.04 s.
+PAPER_PLAN = RestToRest(theta1=0.0, theta2=0.02, rho1=0.4, rho2=0.4, t0=0.02, tf=0.04)
+
+
+def point_to_point(motor: MotorParams, theta1: float, theta2: float, rho1: float, rho2: float,
+                   t0: float = 0.02, tf: float = 0.04, *, load_torque: float = 0.0,
+                   v_max: float | None = None, i_max: float | None = None) -> RestToRest:
+    """Plan a rest-to-rest move and refuse it, before anything is simulated, if it is infeasible.
+
+    Raises
+    ------
+    InfeasiblePlanError
+        (a ValueError) carrying the :class:`~flatstep.feasibility.FeasibilityReport` of the worst point.
+    """
+    from .feasibility import check_feasibility
+
+    plan = RestToRest(theta1, theta2, rho1, rho2, t0, tf)
+    check_feasibility(plan, motor, load_torque=load_torque, v_max=v_max, i_max=i_max).raise_if_infeasible()
+    return plan
