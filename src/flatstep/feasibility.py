@@ -1,6 +1,8 @@
 """Feasibility of a plan before anything is simulated: rho > 0, the controller's singularity, limits."""
 from __future__ import annotations
 
+import math
+
 from dataclasses import asdict, dataclass, field
 from typing import Optional
 
@@ -44,9 +46,11 @@ class FeasibilityReport:
 
     def describe(self) -> str:
         head = "feasible plan" if self.feasible else "infeasible plan: " + "; ".join(self.violations)
+        peaks = "" if math.isnan(self.peak_voltage) else (
+            f"; peak feedforward |v| {self.peak_voltage:.6g} V at t={self.peak_voltage_time:.6g} s, "
+            f"peak |i| {self.peak_current:.6g} A at t={self.peak_current_time:.6g} s")
         return (f"{head} (min rho {self.min_rho:.6g} A at t={self.min_rho_time:.6g} s; torque margin "
-                f"{self.torque_margin:.6g} N m, ratio {self.torque_ratio:.4f} at t={self.worst_time:.6g} s; "
-                f"peak |v| {self.peak_voltage:.6g} V, peak |i| {self.peak_current:.6g} A)")
+                f"{self.torque_margin:.6g} N m, ratio {self.torque_ratio:.4f} at t={self.worst_time:.6g} s{peaks})")
 
     def raise_if_infeasible(self) -> "FeasibilityReport":
         if not self.feasible:

@@ -104,7 +104,7 @@ def check_flag_domain(flag: FlatFlag, motor: MotorParams, load_torque: float = 0
         raise ValueError("the flat flag contains NaN or infinite values")
     if np.any(rho <= 0):
         i = int(np.argmin(rho))
-        raise ValueError(f"rho={rho.flat[i]!r} A at sample {i}: the flat maps need rho > 0 (phi is undefined at 0)")
+        raise ValueError(f"rho={float(rho.flat[i])!r} A at sample {i}: the flat maps need rho > 0 (phi is undefined at 0)")
     c = A / (motor.Km * rho)
     if np.any(np.abs(c) >= 1):
         i = int(np.argmax(np.abs(c)))

@@ -1,0 +1,104 @@
+"""Command line: ``flatstep reproduce`` and ``flatstep simulate``."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Sequence
+
+from .control.smc import MEASUREMENTS, SMCGains
+from .feasibility import InfeasiblePlanError
+from .plan import PAPER_PLAN, RestToRest
+from .scenario import PAPER_SCENARIOS, Scenario
+
+TABLE_KEYS = ("theta_final", "max_abs_theta_error", "max_abs_rho_error", "max_abs_va", "max_abs_vb", "omega_final")
+
+
+def _table(summaries: dict[str, dict[str, float]]) -> str:
+    head = f"{'run':<6}" + "".join(f"{k:>21}" for k in TABLE_KEYS)
+    rows = [f"{name:<6}" + "".join(f"{s[k]:>21.6e}" for k in TABLE_KEYS) for name, s in summaries.items()]
+    return "\n".join([head, *rows])
+
+
+def _write(out: Path, name: str, scenario: Scenario, result, title: str) -> None:
+    from .plots import plot_run
+
+    out.mkdir(parents=True, exist_ok=True)
+    plot_run(result, title=title, path=out / f"{name}.png")
+    result.to_csv(out / f"{name}.csv")
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    titles = {"fig1": "Fig. 1: ideal closed loop, no load (W1 = W2 = 100)",
+              "fig2": "Fig. 2: constant load torque 1e-5 N m (W1 = W2 = 300)"}
+    summaries = {}
+    for name, scenario in PAPER_SCENARIOS.items():
+        result = scenario.run()
+        _write(out, name, scenario, result, titles[name])
+        summaries[name] = result.summary()
+    (out / "summary.json").write_text(json.dumps(summaries, indent=2) + "\n")
+    print(_table(summaries))
+    print(f"wrote {out / 'fig1.png'}, {out / 'fig2.png'}, {out / 'summary.json'}")
+    return 0
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    plan = RestToRest(args.theta1, args.theta2, args.rho1, args.rho2, args.t0, args.tf)
+    gains = SMCGains(W1=args.W1, W2=args.W2, eps1=args.eps1, eps2=args.eps2, xi=args.xi, wn=args.wn)
+    scenario = Scenario("run", plan=plan, gains=gains, measurement=args.measurement,
+                        load_torque=args.load_torque, t_end=args.t_end)
+    result = scenario.run()
+    summary = result.summary()
+    if args.out:
+        out = Path(args.out)
+        _write(out, "run", scenario, result, f"theta {plan.theta1:g} -> {plan.theta2:g} rad, "
+               f"load {args.load_torque:g} N m, {args.measurement} measurement")
+        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    print(json.dumps(summary, indent=2) if args.json else _table({"run": summary}))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="flatstep", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    rep = sub.add_parser("reproduce", help="run the paper's Fig. 1 and Fig. 2 scenarios")
+    rep.add_argument("--out", default="out", help="output directory (default: out)")
+    rep.set_defaults(func=cmd_reproduce)
+
+    sim = sub.add_parser("simulate", help="simulate one closed-loop move (defaults: the paper's Fig. 1)")
+    p, g = PAPER_PLAN, SMCGains()
+    for flag, default, help_ in (
+        ("--theta1", p.theta1, "start angle [rad]"), ("--theta2", p.theta2, "end angle [rad]"),
+        ("--rho1", p.rho1, "start current norm [A]"), ("--rho2", p.rho2, "end current norm [A]"),
+        ("--t0", p.t0, "move start [s]"), ("--tf", p.tf, "move end [s]"), ("--t-end", 0.06, "horizon [s]"),
+        ("--load-torque", 0.0, "constant load torque on the plant [N m]"),
+        ("--W1", g.W1, "sliding gain on s1"), ("--W2", g.W2, "sliding gain on s2"),
+        ("--eps1", g.eps1, "boundary layer of s1"), ("--eps2", g.eps2, "boundary layer of s2"),
+        ("--xi", g.xi, "damping of the theta error dynamics"), ("--wn", g.wn, "natural frequency [rad/s]"),
+    ):
+        sim.add_argument(flag, type=float, default=default, help=f"{help_} (default {default:g})")
+    sim.add_argument("--measurement", choices=MEASUREMENTS, default="ideal",
+                     help="ideal: true theta'' known (the paper); model: theta'' from the zero-load model")
+    sim.add_argument("--out", default=None, help="write run.png, run.csv and summary.json here")
+    sim.add_argument("--json", action="store_true", help="print the summary as JSON")
+    sim.set_defaults(func=cmd_simulate)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except InfeasiblePlanError as exc:
+        print(f"flatstep: refused: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
+        print(f"flatstep: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
