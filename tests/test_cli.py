@@ -1,0 +1,57 @@
+import json
+
+import numpy as np
+import pytest
+
+from flatstep.cli import main
+from flatstep.scenario import PAPER_SCENARIOS
+
+KEYS = {"theta_final", "ia_final", "ib_final", "omega_final", "max_abs_theta_error", "max_abs_rho_error",
+        "max_abs_va", "max_abs_vb"}
+
+
+def test_reproduce_writes_figures_and_summary(tmp_path, capsys):
+    assert main(["reproduce", "--out", str(tmp_path)]) == 0
+    for name in ("fig1.png", "fig2.png", "summary.json"):
+        assert (tmp_path / name).stat().st_size > 1000 or name == "summary.json"
+    assert (tmp_path / "fig1.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert set(summary) == {"fig1", "fig2"} and KEYS <= set(summary["fig1"]) and KEYS <= set(summary["fig2"])
+    assert summary["fig1"]["max_abs_theta_error"] <= 1e-8
+    direct = PAPER_SCENARIOS["fig2"].run().summary()
+    assert summary["fig2"]["theta_final"] == pytest.approx(direct["theta_final"], rel=1e-12)
+    out = capsys.readouterr().out
+    assert "fig1" in out and "fig2" in out and "max_abs_theta_error" in out
+
+
+def test_simulate_json_matches_the_flags(capsys):
+    assert main(["simulate", "--theta2", "0.01", "--load-torque", "1e-6", "--W1", "200", "--W2", "200",
+                 "--measurement", "model", "--t-end", "0.05", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert KEYS <= set(s)
+    assert abs(s["theta_final"] - 0.01) < 1e-3 and s["theta_final"] != pytest.approx(0.02, abs=1e-3)
+
+
+def test_simulate_writes_outputs(tmp_path, capsys):
+    assert main(["simulate", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "run.png").exists() and (tmp_path / "summary.json").exists()
+    data = np.genfromtxt(tmp_path / "run.csv", delimiter=",", names=True)
+    assert data["t"][-1] == pytest.approx(0.06)
+
+
+def test_infeasible_move_is_refused(capsys):
+    assert main(["simulate", "--theta2", "0.05", "--tf", "0.022"]) == 2
+    err = capsys.readouterr().err
+    assert "refused" in err and "controller singular" in err and "t=0.02" in err
+
+
+def test_bad_value_names_itself(capsys):
+    assert main(["simulate", "--rho1", "-1"]) == 2
+    assert "rho1=-1.0" in capsys.readouterr().err
+    assert main(["simulate", "--W2", "0"]) == 2
+    assert "W2=0.0" in capsys.readouterr().err
+
+
+def test_unknown_measurement_is_an_argparse_error(capsys):
+    with pytest.raises(SystemExit):
+        main(["simulate", "--measurement", "perfect"])
