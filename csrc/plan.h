@@ -1,0 +1,29 @@
+// Rest-to-rest plans of the flat outputs (rho, theta) through the paper's psi, eqs. (15)-(21).
+#ifndef FS_PLAN_H
+#define FS_PLAN_H
+
+#include <stdbool.h>
+#include "fs_real.h"
+
+// Flat flag layout used by plan_eval and the flat maps.
+enum { PLAN_RHO, PLAN_DRHO, PLAN_THETA, PLAN_DTHETA, PLAN_DDTHETA, PLAN_DDDTHETA, PLAN_FLAG_LEN };
+
+// theta*(t) = theta1 + psi(t) (theta2 - theta1), rho*(t) = rho1 + psi(t) (rho2 - rho1), eqs. (16), (18).
+struct plan {
+    fs_real theta1, theta2;  // start and end angle [rad]
+    fs_real rho1, rho2;      // start and end current magnitude [A], > 0
+    fs_real t0, tf;          // start and end of the move [s], tf > t0
+};
+
+// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0.
+bool plan_valid(const struct plan *p);
+
+// Returns the order-th time derivative (0..3) of psi(t, t0, tf) of eq. (17): held at 0 before t0 and at 1
+// after tf, derivatives 0 outside the open interval (t0, tf); 0 for an order out of range.
+fs_real plan_psi(fs_real t, fs_real t0, fs_real tf, int order);
+
+// Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
+// theta''') at time t, exactly as flatstep.plan.RestToRest.flag.
+bool plan_eval(const struct plan *p, fs_real t, fs_real flag[PLAN_FLAG_LEN]);
+
+#endif

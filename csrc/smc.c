@@ -1,0 +1,118 @@
+// smc_init / smc_reset / smc_step: the law of flatstep.control.smc, guarded so no input yields NaN or a division by 0.
+#include "smc.h"
+#include "flat.h"
+
+// Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
+// v_limit = 1e3 V and rho_min = 1e-6 A.
+void smc_params_default(struct smc_params *p)
+{
+    struct motor_params m = {FS_C(8.4), FS_C(0.010), FS_C(0.05), FS_C(3.6e-6), FS_C(1e-4), 50};
+    struct plan pl = {0, FS_C(0.02), FS_C(0.4), FS_C(0.4), FS_C(0.02), FS_C(0.04)};
+    struct smc_gains g = {100, 100, FS_C(0.005), FS_C(0.005), FS_C(0.8), 10};
+    p->motor = m;
+    p->plan = pl;
+    p->gains = g;
+    p->measurement = SMC_IDEAL;
+    p->v_limit = FS_C(1e3);
+    p->rho_min = FS_C(1e-6);
+}
+
+// Returns true when x is finite and > 0.
+static bool positive(fs_real x)
+{
+    return fs_isfinite(x) && x > 0;
+}
+
+// Returns SMC_PARAMS_OK, or the smc_param_error naming the invalid group (s is then left unusable).
+int smc_init(struct smc *s, const struct smc_params *p)
+{
+    const struct smc_gains *g = &p->gains;
+    if (!motor_params_valid(&p->motor))
+        return SMC_EMOTOR;
+    if (!plan_valid(&p->plan))
+        return SMC_EPLAN;
+    if (!(positive(g->W1) && positive(g->W2) && positive(g->eps1) && positive(g->eps2) && positive(g->xi)
+          && positive(g->wn)))
+        return SMC_EGAINS;
+    if (p->measurement != SMC_IDEAL && p->measurement != SMC_MODEL)
+        return SMC_EMEASUREMENT;
+    if (!positive(p->v_limit) || !positive(p->rho_min))
+        return SMC_ELIMITS;
+    s->p = *p;
+    s->alpha1 = fs_pow(g->wn, 2);
+    s->alpha2 = 2 * g->xi * g->wn;
+    smc_reset(s);
+    return SMC_PARAMS_OK;
+}
+
+// Returns nothing; clears the accumulated status of a controller set up by smc_init.
+void smc_reset(struct smc *s)
+{
+    s->status_seen = SMC_OK;
+}
+
+// Returns the status bits of the unguarded law; writes its voltages (0 V on a fault).
+static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
+{
+    const struct motor_params *m = &s->p.motor;
+    const struct smc_gains *g = &s->p.gains;
+    fs_real ref[PLAN_FLAG_LEN], rho, phi, acc, e, de, dde, s1, s2, gamma1, gamma2;
+    int flat;
+    plan_eval(&s->p.plan, t, ref);
+    rho = fs_hypot(y[0], y[1]);
+    phi = fs_atan2(y[0], y[1]);
+    if (!(rho >= s->p.rho_min))
+        return SMC_RHO;
+    acc = s->p.measurement == SMC_IDEAL ? y[4] : motor_acceleration(m, y, 0);
+    e = y[3] - ref[PLAN_THETA];
+    de = y[2] - ref[PLAN_DTHETA];
+    dde = acc - ref[PLAN_DDTHETA];
+    s1 = rho - ref[PLAN_RHO];
+    s2 = dde + s->alpha2 * de + s->alpha1 * e;
+    gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
+    gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
+    flat = flat_voltages(m, rho, gamma1, y[3], y[2], acc, gamma2, phi, m->J * acc + m->B * y[2], v);
+    if (flat & FLAT_ERHO)
+        return SMC_RHO;
+    if (flat & FLAT_ESQRT)
+        return SMC_SQRT;
+    return SMC_OK;
+}
+
+// Returns the smc_status bits of this step; writes finite phase voltages v with hypot(v) <= v_limit for any
+// time t and measurement y = (ia, ib, omega, theta, theta'') (y[4] read in SMC_IDEAL mode only).
+uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
+{
+    // Law (12)-(14): s1 = rho - rho*, s2 = e'' + a2 e' + a1 e; Gamma1 = rho*' - W1 s1/(|s1| + eps1),
+    // Gamma2 = theta*''' - a2 e'' - a1 e' - W2 s2/(|s2| + eps2); v = flat inverse (13) with rho' -> Gamma1,
+    // theta''' -> Gamma2 at the measured (rho, phi, theta, theta', theta'').
+    uint32_t status = SMC_OK;
+    fs_real norm, big;
+    int n = s->p.measurement == SMC_IDEAL ? 5 : 4, k;
+    v[0] = v[1] = 0;
+    for (k = 0; k < n; k++)
+        if (!fs_isfinite(y[k]))
+            status = SMC_NONFINITE;
+    if (!fs_isfinite(t))
+        status = SMC_NONFINITE;
+    if (status == SMC_OK)
+        status = smc_law(s, t, y, v);
+    if (status == SMC_OK && !(fs_isfinite(v[0]) && fs_isfinite(v[1])))
+        status = SMC_OVERFLOW;
+    if (status != SMC_OK) {
+        v[0] = v[1] = 0;
+    } else {
+        if (fs_hypot(v[0], v[1]) > s->p.v_limit) {
+            // Scale by the larger component first so that hypot cannot overflow; big > v_limit / 2 > 0.
+            big = fs_fabs(v[0]) > fs_fabs(v[1]) ? fs_fabs(v[0]) : fs_fabs(v[1]);
+            v[0] /= big;
+            v[1] /= big;
+            norm = fs_hypot(v[0], v[1]);
+            v[0] *= s->p.v_limit / norm;
+            v[1] *= s->p.v_limit / norm;
+            status = SMC_SATURATED;
+        }
+    }
+    s->status_seen |= status;
+    return status;
+}

@@ -1,0 +1,64 @@
+// The paper's flatness + sliding-mode controller, eqs. (12)-(14), with a boundary layer and output guards.
+#ifndef FS_SMC_H
+#define FS_SMC_H
+
+#include <stdint.h>
+#include "fs_real.h"
+#include "motor.h"
+#include "plan.h"
+
+// Where theta'' comes from: the measurement y[4] (the paper's assumption) or the zero-load model.
+enum smc_measurement { SMC_IDEAL = 0, SMC_MODEL = 1 };
+
+// Status bits returned by smc_step. Any bit below SMC_SATURATED is a fault: the step then outputs
+// v = (0, 0), i.e. de-energises both phases, which is the safe state of a PM stepper (no current can run
+// away; the detent torque and friction hold the rotor) until the caller decides to re-energise.
+enum smc_status {
+    SMC_OK = 0,
+    SMC_NONFINITE = 1,   // t or a used measurement is NaN or infinite
+    SMC_RHO = 2,         // current magnitude rho < rho_min: phi is undefined
+    SMC_SQRT = 4,        // Km^2 rho^2 - (J theta'' + B theta')^2 <= 0: the torque demand is out of reach
+    SMC_OVERFLOW = 8,    // the law overflowed to a non-finite voltage from finite inputs
+    SMC_SATURATED = 16,  // |v| > v_limit: v scaled to |v| = v_limit keeping its direction (not a fault)
+};
+
+// Errors of smc_init: which group of parameters is invalid.
+enum smc_param_error { SMC_PARAMS_OK = 0, SMC_EMOTOR, SMC_EPLAN, SMC_EGAINS, SMC_EMEASUREMENT, SMC_ELIMITS };
+
+// Design constants; the paper's are W1 = W2 = 100, eps1 = eps2 = 0.005, xi = 0.8, wn = 10.
+struct smc_gains {
+    fs_real W1, W2;      // reaching gains [A/s], [rad/s^3], > 0
+    fs_real eps1, eps2;  // boundary-layer widths of s/(|s| + eps), > 0
+    fs_real xi, wn;      // alpha1 = wn^2, alpha2 = 2 xi wn, > 0
+};
+
+struct smc_params {
+    struct motor_params motor;  // the controller's model of the motor
+    struct plan plan;           // the planned flat outputs
+    struct smc_gains gains;
+    int measurement;            // enum smc_measurement
+    fs_real v_limit;            // bound on |v| = hypot(va, vb) [V], > 0
+    fs_real rho_min;            // smallest current magnitude the law acts on [A], > 0
+};
+
+struct smc {
+    struct smc_params p;
+    fs_real alpha1, alpha2;  // wn^2, 2 xi wn
+    uint32_t status_seen;    // OR of every status since the last reset
+};
+
+// Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
+// v_limit = 1e3 V and rho_min = 1e-6 A.
+void smc_params_default(struct smc_params *p);
+
+// Returns SMC_PARAMS_OK, or the smc_param_error naming the invalid group (s is then left unusable).
+int smc_init(struct smc *s, const struct smc_params *p);
+
+// Returns nothing; clears the accumulated status of a controller set up by smc_init.
+void smc_reset(struct smc *s);
+
+// Returns the smc_status bits of this step; writes finite phase voltages v with hypot(v) <= v_limit for any
+// time t and measurement y = (ia, ib, omega, theta, theta'') (y[4] read in SMC_IDEAL mode only).
+uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2]);
+
+#endif
