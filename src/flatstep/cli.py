@@ -49,7 +49,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     gains = SMCGains(W1=args.W1, W2=args.W2, eps1=args.eps1, eps2=args.eps2, xi=args.xi, wn=args.wn)
     scenario = Scenario("run", plan=plan, gains=gains, measurement=args.measurement,
                         load_torque=args.load_torque, t_end=args.t_end)
-    result = scenario.run()
+    result = scenario.run(**({} if args.x0 is None else {"x0": args.x0}))
     summary = result.summary()
     if args.out:
         out = Path(args.out)
@@ -82,6 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
         sim.add_argument(flag, type=float, default=default, help=f"{help_} (default {default:g})")
     sim.add_argument("--measurement", choices=MEASUREMENTS, default="ideal",
                      help="ideal: true theta'' known (the paper); model: theta'' from the zero-load model")
+    sim.add_argument("--x0", type=float, nargs=4, metavar=("IA", "IB", "OMEGA", "THETA"), default=None,
+                     help="initial plant state (default: the plan's start equilibrium)")
     sim.add_argument("--out", default=None, help="write run.png, run.csv and summary.json here")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     sim.set_defaults(func=cmd_simulate)
