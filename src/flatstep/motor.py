@@ -17,7 +17,7 @@ STATE_NAMES = ("ia", "ib", "omega", "theta")
 INPUT_NAMES = ("va", "vb")
 
 
-def _check_finite(name: str, value: float) -> float:
+def check_finite(name: str, value: float) -> float:
     try:
         value = float(value)
     except (TypeError, ValueError):
@@ -29,7 +29,7 @@ def _check_finite(name: str, value: float) -> float:
 
 def check_positive(name: str, value: float, *, unit: str = "") -> float:
     """Return ``value`` as float, or raise a ValueError if it is not finite and > 0."""
-    value = _check_finite(name, value)
+    value = check_finite(name, value)
     if value <= 0.0:
         raise ValueError(f"{name}={value!r}{unit} must be > 0")
     return value
@@ -59,7 +59,7 @@ class MotorParams:
     def __post_init__(self) -> None:
         for name, unit in (("R", " ohm"), ("L", " H"), ("Km", " V s/rad"), ("J", " kg m^2")):
             object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=unit))
-        B = _check_finite("B", self.B)
+        B = check_finite("B", self.B)
         if B < 0.0:
             raise ValueError(f"B={B!r} N m s/rad must be >= 0 (viscous friction cannot be negative)")
         object.__setattr__(self, "B", B)
@@ -106,7 +106,7 @@ def load_function(load: Load) -> Callable[[NDArray[np.float64]], NDArray[np.floa
                 raise ValueError(f"load torque function returned a non-finite value {value!r} at t={t!r}")
             return np.broadcast_to(value, np.shape(t)) if np.ndim(value) == 0 else value
         return tau
-    constant = _check_finite("load_torque", load)
+    constant = check_finite("load_torque", load)
     return lambda t: np.full(np.shape(t), constant)
 
 

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .equilibria import equilibrium_currents, stable_angle
 from .flat import FlatFlag
-from .motor import MotorParams, _check_finite, check_positive
+from .motor import MotorParams, check_finite, check_positive
 
 #: Coefficients r1..r6 of eq. (17).
 PAPER_R = (252.0, 1050.0, 1800.0, 1575.0, 700.0, 126.0)
@@ -70,7 +70,7 @@ class RestToRest:
 
     def __post_init__(self) -> None:
         for name in ("theta1", "theta2", "t0", "tf"):
-            object.__setattr__(self, name, _check_finite(name, getattr(self, name)))
+            object.__setattr__(self, name, check_finite(name, getattr(self, name)))
         for name in ("rho1", "rho2"):
             object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=" A"))
         if not self.tf > self.t0:
@@ -85,7 +85,7 @@ class RestToRest:
         the start (a move of at most half an electrical period, ``pi / Nr``).
         """
         for name, value in (("ia1", ia1), ("ib1", ib1), ("ia2", ia2), ("ib2", ib2)):
-            _check_finite(name, value)
+            check_finite(name, value)
         theta1 = stable_angle(ia1, ib1, Nr, near=theta_near)
         theta2 = stable_angle(ia2, ib2, Nr, near=theta1)
         return cls(theta1, theta2, math.hypot(ia1, ib1), math.hypot(ia2, ib2), t0, tf)

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..flat import flat_voltages, polar
-from ..motor import MotorParams, _check_finite, check_positive
+from ..motor import MotorParams, check_finite, check_positive
 from ..plan import RestToRest
 
 MEASUREMENTS = ("ideal", "model")
@@ -37,7 +37,7 @@ class SMCGains:
     def __post_init__(self) -> None:
         for name in ("W1", "W2", "eps1", "eps2", "wn"):
             object.__setattr__(self, name, check_positive(name, getattr(self, name)))
-        xi = _check_finite("xi", self.xi)
+        xi = check_finite("xi", self.xi)
         if xi <= 0:
             raise ValueError(f"xi={xi!r} must be > 0 for the error dynamics e'' + 2 xi wn e' + wn^2 e = 0 to be stable")
         object.__setattr__(self, "xi", xi)
