@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from typing import Optional
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
@@ -13,7 +15,7 @@ from .motor import Load, MotorParams, check_positive, load_function, rhs, torque
 from .plan import RestToRest
 from .result import SimResult
 
-ENGINES = ("scipy",)
+ENGINES = ("c", "scipy")
 METHODS = ("LSODA", "Radau", "BDF", "DOP853", "RK45")
 
 
@@ -24,9 +26,11 @@ def _grid(t_end: float, knots: list[float], dt_out: float) -> list[np.ndarray]:
 
 
 def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[FlatnessSMC] = None, *,
-             load: Load = 0.0, t_end: float = 0.06, x0: Optional[ArrayLike] = None, engine: str = "scipy",
-             method: str = "LSODA", rtol: float = 1e-10, atol: float = 1e-12, dt_out: float = 1e-5) -> SimResult:
-    """Simulate the continuous-time closed loop (the control law evaluated inside the right-hand side).
+             load: Load = 0.0, t_end: float = 0.06, x0: Optional[ArrayLike] = None, engine: str = "c",
+             method: str = "LSODA", rtol: float = 1e-10, atol: float = 1e-12, dt_out: float = 1e-5,
+             control_period: Optional[float] = None, substeps: int = 10) -> SimResult:
+    """Simulate the closed loop: continuous-time control (the law evaluated inside the right-hand side) or,
+    with ``control_period``, sampled control with a zero-order hold.
 
     Parameters
     ----------
@@ -35,8 +39,12 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
     controller : default :class:`~flatstep.control.smc.FlatnessSMC` with the paper's gains, ``ideal`` mode.
     load : load torque on the plant [N m], a constant or a function of time.
     t_end : horizon [s].
-    engine : ``"scipy"``: :func:`scipy.integrate.solve_ivp` with ``method`` at ``rtol``/``atol``.
-    dt_out : spacing of the returned samples [s].
+    engine : ``"c"`` (default): the C core, adaptive Dormand-Prince 5(4) at ``rtol``/``atol`` (``method``
+        is not used); ``"scipy"``: :func:`scipy.integrate.solve_ivp` with ``method`` at ``rtol``/``atol``.
+    dt_out : spacing of the returned samples [s] (continuous control).
+    control_period : ``None`` for continuous control; a period ``Ts`` [s] runs the controller at
+        ``t = k Ts`` with the voltage held in between (C engine only), the plant integrated by ``substeps``
+        RK4 steps per period, and returns the samples at the control instants (voltages as applied).
     """
     if engine not in ENGINES:
         raise ValueError(f"engine={engine!r} is not available; valid engines: {ENGINES}")
@@ -51,6 +59,9 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
     x0 = plan.x0(motor.Nr) if x0 is None else np.asarray(x0, dtype=float)
     if x0.shape != (4,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"x0={x0!r} must be 4 finite numbers (ia, ib, omega, theta)")
+    if engine == "c" or control_period is not None:
+        return _simulate_c(motor, plan, controller, load, t_end, x0, engine, rtol, atol, dt_out,
+                           control_period, substeps)
 
     def plant_acceleration(t, x):
         return (torque(x, motor) - motor.B * x[2] - tau(t)) / motor.J
@@ -72,10 +83,42 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
                    "rtol": rtol, "atol": atol})
 
 
+def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, load: Load, t_end: float,
+                x0: np.ndarray, engine: str, rtol: float, atol: float, dt_out: float,
+                control_period: Optional[float], substeps: int) -> SimResult:
+    """The C engine: continuous (DOPRI5 on the output grid of :func:`_grid`) or sampled (ZOH + RK4)."""
+    from . import _core
+
+    if engine != "c":
+        raise ValueError(f"control_period={control_period!r} needs engine='c' (engine={engine!r} is continuous only)")
+    if callable(load):
+        raise ValueError(f"load={load!r}: engine='c' takes a constant load torque; use engine='scipy' for a function")
+    tau = load_function(load)(0.0)[()]
+    acc = lambda X: (torque(X, motor) - motor.B * X[2] - tau) / motor.J  # noqa: E731
+    if control_period is None:
+        segs = _grid(t_end, [plan.t0, plan.tf], dt_out)
+        t = np.concatenate([segs[0]] + [s[1:] for s in segs[1:]])
+        X, stats = _core.run_continuous(controller, motor, tau, x0, t, rtol=rtol, atol=atol)
+        # The voltages (and status) on the returned samples; stats["stage_status"] also counts trial stages.
+        v, status = _core.smc_voltages(controller, t, X, acc(X))
+        stats = {**stats, "controller_status": _core.status_names(np.bitwise_or.reduce(status))}
+        return collect(t, X, plan, controller, acc(X), {"engine": engine, "method": "DOPRI5", "rtol": rtol,
+                                                        "atol": atol, **stats}, v=v)
+    Ts = check_positive("control_period", control_period, unit=" s")
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise ValueError(f"substeps={substeps!r} must be a positive integer (RK4 steps per control period)")
+    n = max(1, math.ceil(t_end / Ts - 1e-9))
+    X, V, stats = _core.run_sampled(controller, motor, tau, x0, 0.0, n, Ts=Ts, substeps=int(substeps))
+    t = np.arange(n + 1) * Ts
+    return collect(t, X, plan, controller, acc(X), {"engine": engine, "method": "RK4", "control_period": Ts,
+                                                    "substeps": int(substeps), **stats}, v=V)
+
+
 def collect(t: np.ndarray, X: np.ndarray, plan: RestToRest, controller: FlatnessSMC, acc: np.ndarray,
-            meta: dict) -> SimResult:
-    """Assemble a :class:`SimResult` from sampled states, recomputing voltages and references vectorized."""
-    v = controller.voltages(t, X, acc)
+            meta: dict, v: Optional[np.ndarray] = None) -> SimResult:
+    """Assemble a :class:`SimResult` from sampled states, recomputing voltages (unless the applied ``v``
+    is given) and references vectorized."""
+    v = controller.voltages(t, X, acc) if v is None else v
     ref = plan.flag(t)
     x_ref, v_ref = flat_to_state(ref, controller.motor)
     rho, phi = polar(X[0], X[1])

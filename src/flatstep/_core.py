@@ -1,0 +1,210 @@
+"""Thin binding to the C core (csrc/), built at install time by cffi (see _build_core.py).
+
+Every function takes and returns NumPy arrays and makes one C call per array: no Python loop over samples.
+Arrays are float64, C-contiguous, row-major ``(n, k)`` on the C side and ``(k, n)`` (components first, as
+in the Python reference) on this side.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._flatstep_core import ffi, lib
+from .control.smc import FlatnessSMC, SMCGains
+from .flat import FlatFlag
+from .motor import MotorParams, check_positive
+from .plan import RestToRest
+
+Array = NDArray[np.float64]
+
+#: smc_step status bits by name; every bit but ``saturated`` is a fault (the step then outputs 0 V).
+STATUS_BITS = {"nonfinite": lib.SMC_NONFINITE, "rho": lib.SMC_RHO, "sqrt": lib.SMC_SQRT,
+               "overflow": lib.SMC_OVERFLOW, "saturated": lib.SMC_SATURATED}
+_SIM_ERRORS = {lib.SIM_EARGS: "invalid arguments", lib.SIM_ECONTROL: "the controller faulted",
+               lib.SIM_EHMIN: "the step size fell below rounding level",
+               lib.SIM_EMAXSTEPS: "more than max_steps steps", lib.SIM_ENONFINITE: "the state became non-finite"}
+_PARAM_ERRORS = {lib.SMC_EMOTOR: "motor", lib.SMC_EPLAN: "plan", lib.SMC_EGAINS: "gains",
+                 lib.SMC_EMEASUREMENT: "measurement", lib.SMC_ELIMITS: "v_limit/rho_min"}
+#: Defaults of the guards in smc_step: bound on hypot(va, vb) [V] and smallest rho acted on [A].
+V_LIMIT, RHO_MIN = 1e3, 1e-6
+
+
+def status_names(status: int) -> list[str]:
+    """The names of the smc_step status bits set in ``status``."""
+    return [name for name, bit in STATUS_BITS.items() if int(status) & bit]
+
+
+def _rows(a: ArrayLike, k: int, name: str) -> np.ndarray:
+    """(k, n) or (k,) components-first input -> C-contiguous (n, k) float64 rows."""
+    a = np.asarray(a, dtype=np.float64)
+    if a.shape[:1] != (k,):
+        raise ValueError(f"{name} has shape {a.shape}; expected ({k},) or ({k}, n)")
+    return np.ascontiguousarray(a.reshape(k, -1).T)
+
+
+def _vec(a: ArrayLike) -> np.ndarray:
+    return np.ascontiguousarray(np.asarray(a, dtype=np.float64).ravel())
+
+
+def _in(a: np.ndarray):
+    return ffi.from_buffer("double[]", a)
+
+
+def _out(a: np.ndarray):
+    return ffi.from_buffer("double[]", a, require_writable=True)
+
+
+def _shape(out: np.ndarray, like: tuple) -> np.ndarray:
+    """(n, k) C rows -> (k, *like) components first."""
+    return out.T.reshape((out.shape[1],) + like)
+
+
+def motor_struct(m: MotorParams):
+    """A ``struct motor_params`` holding ``m``."""
+    return ffi.new("struct motor_params *", dict(R=m.R, L=m.L, Km=m.Km, J=m.J, B=m.B, Nr=m.Nr))
+
+
+def plan_struct(p: RestToRest):
+    """A ``struct plan`` holding ``p``."""
+    return ffi.new("struct plan *", p.as_dict())
+
+
+def smc_struct(controller: FlatnessSMC, v_limit: float = V_LIMIT, rho_min: float = RHO_MIN):
+    """An initialised ``struct smc`` for ``controller`` (its motor model, plan, gains and measurement)."""
+    check_positive("v_limit", v_limit, unit=" V")
+    check_positive("rho_min", rho_min, unit=" A")
+    m, g = controller.motor, controller.gains
+    params = ffi.new("struct smc_params *")
+    params.motor = dict(R=m.R, L=m.L, Km=m.Km, J=m.J, B=m.B, Nr=m.Nr)
+    params.plan = controller.plan.as_dict()
+    params.gains = dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn)
+    params.measurement = lib.SMC_IDEAL if controller.measurement == "ideal" else lib.SMC_MODEL
+    params.v_limit, params.rho_min = v_limit, rho_min
+    s = ffi.new("struct smc *")
+    err = lib.smc_init(s, params)
+    if err != lib.SMC_PARAMS_OK:
+        raise ValueError(f"smc_init rejected the controller's {_PARAM_ERRORS.get(err, err)} parameters")
+    return s
+
+
+def plan_flag(plan: RestToRest, t: ArrayLike) -> FlatFlag:
+    """C ``plan_eval`` at times ``t``; the same values as :meth:`RestToRest.flag`."""
+    t_arr = np.asarray(t, dtype=np.float64)
+    tv = _vec(t_arr)
+    out = np.empty((tv.size, 6))
+    lib.batch_plan_eval(plan_struct(plan), _in(tv), tv.size, _out(out))
+    return FlatFlag(*_shape(out, t_arr.shape))
+
+
+def flat_voltages(motor: MotorParams, rho: ArrayLike, drho: ArrayLike, theta: ArrayLike, dtheta: ArrayLike,
+                  ddtheta: ArrayLike, dddtheta: ArrayLike, phi: ArrayLike, torque_demand: ArrayLike) -> Array:
+    """C ``flat_voltages``; (2, ...) voltages, NaN where the sample is outside the maps' domain."""
+    args = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in
+                                 (rho, drho, theta, dtheta, ddtheta, dddtheta, phi, torque_demand)))
+    rows = np.ascontiguousarray(np.stack([a.ravel() for a in args], axis=1))
+    out = np.empty((rows.shape[0], 2))
+    lib.batch_flat_voltages(motor_struct(motor), _in(rows), rows.shape[0], _out(out))
+    return _nan_outside(_shape(out, args[0].shape), rows, motor)
+
+
+def _nan_outside(v: Array, rows: np.ndarray, motor: MotorParams) -> Array:
+    """Mark samples outside the domain (rho <= 0 or |A| >= Km rho) with NaN instead of the C core's 0 V."""
+    rho, A = rows[:, 0], rows[:, 7]
+    bad = ~((rho > 0) & (motor.Km**2 * rho**2 - A**2 > 0))
+    if np.any(bad):
+        v = v.copy()
+        v.reshape(2, -1)[:, bad] = np.nan
+    return v
+
+
+def flat_to_state(flag: FlatFlag, motor: MotorParams, load_torque: float = 0.0) -> tuple[Array, Array]:
+    """C ``flat_to_state``; raises ValueError (naming the sample) outside the maps' domain."""
+    arrays = np.broadcast_arrays(*(np.asarray(f, dtype=np.float64) for f in flag))
+    rows = np.ascontiguousarray(np.stack([a.ravel() for a in arrays], axis=1))
+    x, v = np.empty((rows.shape[0], 4)), np.empty((rows.shape[0], 2))
+    bad = lib.batch_flat_to_state(motor_struct(motor), _in(rows), rows.shape[0], float(load_torque), _out(x), _out(v))
+    if bad:
+        raise ValueError(f"{bad} sample(s) of the flat flag are outside the domain of the flat maps "
+                         "(rho <= 0 or |J theta'' + B theta' + tau| >= Km rho)")
+    return _shape(x, arrays[0].shape), _shape(v, arrays[0].shape)
+
+
+def state_to_flat(x: ArrayLike, v: ArrayLike, motor: MotorParams, load_torque: float = 0.0) -> FlatFlag:
+    """C ``state_to_flat``; raises ValueError where ia = ib = 0."""
+    x_arr = np.asarray(x, dtype=np.float64)
+    xr, vr = _rows(x_arr, 4, "x"), _rows(v, 2, "v")
+    if xr.shape[0] != vr.shape[0]:
+        raise ValueError(f"x has {xr.shape[0]} samples but v has {vr.shape[0]}")
+    out = np.empty((xr.shape[0], 6))
+    bad = lib.batch_state_to_flat(motor_struct(motor), _in(xr), _in(vr), xr.shape[0], float(load_torque), _out(out))
+    if bad:
+        raise ValueError(f"{bad} sample(s) have ia = ib = 0 (rho = 0): the flat outputs' phase is undefined there")
+    return FlatFlag(*_shape(out, x_arr.shape[1:]))
+
+
+def smc_voltages(controller: FlatnessSMC, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None, *,
+                 v_limit: float = V_LIMIT, rho_min: float = RHO_MIN) -> tuple[Array, NDArray[np.uint32]]:
+    """C ``smc_step`` at times ``t`` for states ``x`` (4, n) (and true theta'' in ideal mode).
+
+    Returns the (2, n) voltages and the (n,) status bits (see :data:`STATUS_BITS`).
+    """
+    xr = _rows(x, 4, "x")
+    n = xr.shape[0]
+    if controller.measurement == "ideal" and ddtheta is None:
+        raise ValueError("measurement='ideal' needs the true acceleration ddtheta; use measurement='model'")
+    acc = np.zeros(n) if ddtheta is None else np.broadcast_to(np.asarray(ddtheta, dtype=np.float64).ravel(), (n,))
+    y = np.ascontiguousarray(np.column_stack([xr, acc]))
+    tv = np.ascontiguousarray(np.broadcast_to(_vec(t), (n,)))
+    v, status = np.empty((n, 2)), np.empty(n, dtype=np.uint32)
+    lib.batch_smc_step(smc_struct(controller, v_limit, rho_min), _in(tv), _in(y), n, _out(v),
+                       ffi.from_buffer("uint32_t[]", status, require_writable=True))
+    return np.ascontiguousarray(v.T), status
+
+
+def _plant(motor: MotorParams, load: float):
+    return ffi.new("struct sim_plant *", dict(motor=dict(R=motor.R, L=motor.L, Km=motor.Km, J=motor.J, B=motor.B,
+                                                         Nr=motor.Nr), load=float(load)))
+
+
+def _stats(st, key: str) -> dict:
+    return {"steps": st.steps, "rejected": st.rejected, "rhs_evals": st.rhs_evals, key: status_names(st.smc_status)}
+
+
+def _check(rc: int, st, what: str) -> None:
+    if rc != lib.SIM_OK:
+        raise RuntimeError(f"C {what} run failed at t = {st.t_fail:.6g} s: {_SIM_ERRORS.get(rc, rc)} "
+                           f"(controller status {status_names(st.smc_status)})")
+
+
+def run_continuous(controller: FlatnessSMC, motor: MotorParams, load: float, x0: ArrayLike, t_out: ArrayLike, *,
+                   rtol: float, atol: float, h_max: float = np.inf, max_steps: int = 10_000_000,
+                   v_limit: float = V_LIMIT, rho_min: float = RHO_MIN) -> tuple[Array, dict]:
+    """C ``sim_continuous``: the (4, n) states at the nondecreasing times ``t_out`` and the run's stats
+    (``stage_status``: the status bits of every controller call, trial stages of rejected steps included)."""
+    t_out = _vec(t_out)
+    x0 = _vec(x0)
+    X = np.empty((t_out.size, 4))
+    params = ffi.new("struct sim_continuous_params *", dict(rtol=rtol, atol=atol, h_max=min(h_max, 1e300),
+                                                            max_steps=max_steps))
+    st = ffi.new("struct sim_stats *")
+    rc = lib.sim_continuous(smc_struct(controller, v_limit, rho_min), _plant(motor, load), _in(x0), _in(t_out),
+                            t_out.size, params, _out(X), st)
+    _check(rc, st, "continuous")
+    return np.ascontiguousarray(X.T), _stats(st, "stage_status")
+
+
+def run_sampled(controller: FlatnessSMC, motor: MotorParams, load: float, x0: ArrayLike, t_start: float,
+                n_periods: int, *, Ts: float, substeps: int, v_limit: float = V_LIMIT,
+                rho_min: float = RHO_MIN) -> tuple[Array, Array, dict]:
+    """C ``sim_sampled``: the (4, n_periods + 1) states and (2, n_periods + 1) applied voltages at the
+    control instants ``t_start + k Ts`` and the run's stats."""
+    x0 = _vec(x0)
+    X, V = np.empty((n_periods + 1, 4)), np.empty((n_periods + 1, 2))
+    params = ffi.new("struct sim_sampled_params *", dict(Ts=Ts, substeps=substeps))
+    st = ffi.new("struct sim_stats *")
+    rc = lib.sim_sampled(smc_struct(controller, v_limit, rho_min), _plant(motor, load), _in(x0), float(t_start),
+                         n_periods, params, _out(X), _out(V), st)
+    _check(rc, st, "sampled")
+    return np.ascontiguousarray(X.T), np.ascontiguousarray(V.T), _stats(st, "controller_status")
