@@ -14,6 +14,8 @@ int flat_voltages(const struct motor_params *m, fs_real rho, fs_real drho, fs_re
     if (!(S2 > 0))
         return FLAT_ESQRT;
     S = fs_sqrt(S2);
+    if (!(rho * S > 0))
+        return FLAT_ESQRT;  // rho S underflowed: the division below would be by zero
     // phi' from the theta''' row of eq. (8) solved for phi'; the polar-frame voltages X, Y follow.
     dphi = -((m->J * dddtheta + m->B * ddtheta) * rho - A * drho) / (rho * S) - m->Nr * dtheta;
     delta = m->Nr * theta + phi;
@@ -39,6 +41,8 @@ int flat_to_state(const struct motor_params *m, const fs_real flag[PLAN_FLAG_LEN
     if (!(rho > 0))
         return FLAT_ERHO;
     A = m->J * flag[PLAN_DDTHETA] + m->B * flag[PLAN_DTHETA] + load;
+    if (!(m->Km * rho > 0))
+        return FLAT_ERHO;
     c = A / (m->Km * rho);
     if (!(fs_fabs(c) < 1))
         return FLAT_ESQRT;
@@ -51,7 +55,7 @@ int flat_to_state(const struct motor_params *m, const fs_real flag[PLAN_FLAG_LEN
                          flag[PLAN_DDDTHETA], phi, c * m->Km * rho, v);
 }
 
-// Returns FLAT_OK, or FLAT_ERHO with the flag zeroed when ia = ib = 0; writes the flat flag
+// Returns FLAT_OK, or FLAT_ERHO with the flag zeroed when ia = ib = 0 (rho L underflows); writes the flat flag
 // (rho, rho', theta, theta', theta'', theta''') of state x under inputs v through eq. (8).
 int state_to_flat(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load,
                   fs_real flag[PLAN_FLAG_LEN])
@@ -61,7 +65,7 @@ int state_to_flat(const struct motor_params *m, const fs_real x[4], const fs_rea
     int k;
     for (k = 0; k < PLAN_FLAG_LEN; k++)
         flag[k] = 0;
-    if (!(rho > 0))
+    if (!(m->L * rho > 0))
         return FLAT_ERHO;
     delta = m->Nr * theta + phi;
     sp = fs_sin(phi);

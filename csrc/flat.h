@@ -9,8 +9,8 @@
 // Domain errors of the flat maps (bit flags); the maps never divide by zero.
 enum {
     FLAT_OK = 0,
-    FLAT_ERHO = 1,   // rho <= 0 (or not a number): phi is undefined
-    FLAT_ESQRT = 2,  // Km^2 rho^2 - A^2 <= 0 (or not a number): the torque demand cannot be met
+    FLAT_ERHO = 1,   // rho <= 0, not a number, or so small that a product with it underflows
+    FLAT_ESQRT = 2,  // Km^2 rho^2 - A^2 <= 0 (or NaN, or rho sqrt(.) underflows): demand out of reach
 };
 
 // Returns FLAT_OK, or a FLAT_E* flag with v = (0, 0); writes the voltages that give rho' = drho and
@@ -23,7 +23,7 @@ int flat_voltages(const struct motor_params *m, fs_real rho, fs_real drho, fs_re
 int flat_to_state(const struct motor_params *m, const fs_real flag[PLAN_FLAG_LEN], fs_real load, fs_real x[4],
                   fs_real v[2]);
 
-// Returns FLAT_OK, or FLAT_ERHO with the flag zeroed when ia = ib = 0; writes the flat flag
+// Returns FLAT_OK, or FLAT_ERHO with the flag zeroed when ia = ib = 0 (rho L underflows); writes the flat flag
 // (rho, rho', theta, theta', theta'', theta''') of state x under inputs v through eq. (8).
 int state_to_flat(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load,
                   fs_real flag[PLAN_FLAG_LEN]);

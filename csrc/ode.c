@@ -14,9 +14,9 @@ static const fs_real a_[7][6] = {
 };
 static const fs_real e_[7] = {FS_C(71.0) / 57600, 0, FS_C(-71.0) / 16695, FS_C(71.0) / 1920,
                               FS_C(-17253.0) / 339200, FS_C(22.0) / 525, FS_C(-1.0) / 40};
-static const fs_real d_[7] = {FS_C(-12715105075.0) / 11282082432, 0, FS_C(87487479700.0) / 32700410799,
-                              FS_C(-10690763975.0) / 1880347072, FS_C(701980252875.0) / 199316789632,
-                              FS_C(-1453857185.0) / 822651844, FS_C(69997945.0) / 29380423};
+static const fs_real d_[7] = {FS_C(-12715105075.0) / FS_C(11282082432.0), 0, FS_C(87487479700.0) / FS_C(32700410799.0),
+                              FS_C(-10690763975.0) / FS_C(1880347072.0), FS_C(701980252875.0) / FS_C(199316789632.0),
+                              FS_C(-1453857185.0) / FS_C(822651844.0), FS_C(69997945.0) / FS_C(29380423.0)};
 
 // Step-size control constants of Hairer's code: safety factor, PI exponent beta, step ratio bounds.
 #define SAFE FS_C(0.9)

@@ -1,0 +1,82 @@
+// The integrators on problems with known solutions: accuracy, dense output, order, landing on t_end.
+#include "check.h"
+#include "ode.h"
+
+// Returns 0; x' = A x for the harmonic oscillator x = (cos t, -sin t) and decay x3' = -2 x3.
+static int osc(void *ctx, double t, const double *x, double *dx)
+{
+    (void)ctx, (void)t;
+    dx[0] = x[1];
+    dx[1] = -x[0];
+    dx[2] = -2 * x[2];
+    return 0;
+}
+
+// Returns 1 (a failing right-hand side) beyond t = 0.5, 0 before.
+static int wall(void *ctx, double t, const double *x, double *dx)
+{
+    (void)ctx;
+    dx[0] = x[0];
+    return t > 0.5;
+}
+
+// Returns the largest error of the oscillator state at t against the exact solution.
+static double osc_error(const double *x, double t)
+{
+    double e0 = fabs(x[0] - cos(t)), e1 = fabs(x[1] + sin(t)), e2 = fabs(x[2] - exp(-2 * t));
+    return fmax(e0, fmax(e1, e2));
+}
+
+// Returns 0 after checking DOPRI5 and RK4.
+int test_ode(void)
+{
+    struct ode_dopri5_params p = {1e-10, 1e-12, 1.0};
+    struct ode_dopri5 s;
+    double x0[3] = {1, 0, 1}, x[3], worst_dense = 0, e1, e2, t;
+    int rc = ODE_OK, k, n;
+    CHECK(ode_dopri5_init(&s, &p, 3, osc, NULL, 0.0, x0) == ODE_OK, "init");
+    while (rc == ODE_OK && s.t < 10.0) {
+        rc = ode_dopri5_step(&s, 10.0);
+        for (t = s.t_old; t < s.t; t += (s.t - s.t_old) / 7) {
+            ode_dopri5_dense(&s, t, x);
+            worst_dense = fmax(worst_dense, osc_error(x, t));
+        }
+    }
+    CHECK(rc == ODE_OK && s.t == 10.0, "landed on t_end exactly: rc %d t %.17g", rc, s.t);
+    CHECK(osc_error(s.x, 10.0) < 1e-8, "DOPRI5 error at t = 10: %g", osc_error(s.x, 10.0));
+    CHECK(worst_dense < 1e-8, "dense output error %g", worst_dense);
+    CHECK(s.steps > 20 && s.steps < 2000, "%u steps", s.steps);
+    printf("  dopri5 oscillator to t=10: %u steps, %u rejected, error %.2g, dense error %.2g\n", s.steps, s.rejected,
+           osc_error(s.x, 10.0), worst_dense);
+    // A looser tolerance takes fewer steps and is less accurate: the error control is live.
+    p.rtol = 1e-5, p.atol = 1e-7;
+    ode_dopri5_init(&s, &p, 3, osc, NULL, 0.0, x0);
+    k = s.steps;
+    while (s.t < 10.0 && ode_dopri5_step(&s, 10.0) == ODE_OK)
+        k++;
+    CHECK(k < 200 && osc_error(s.x, 10.0) > 1e-9 && osc_error(s.x, 10.0) < 1e-3, "loose: %d steps error %g", k,
+          osc_error(s.x, 10.0));
+    // A right-hand side that fails beyond t = 0.5 stops the integration with ODE_ERHS before t = 0.5.
+    ode_dopri5_init(&s, &p, 1, wall, NULL, 0.0, x0);
+    rc = ODE_OK;
+    while (rc == ODE_OK && s.t < 1.0)
+        rc = ode_dopri5_step(&s, 1.0);
+    CHECK(rc == ODE_ERHS && s.t <= 0.5, "failing rhs: rc %d at t %g", rc, s.t);
+    CHECK(ode_dopri5_init(&s, &p, 0, osc, NULL, 0.0, x0) == ODE_EARGS, "n = 0");
+    p.rtol = 0;
+    CHECK(ode_dopri5_init(&s, &p, 3, osc, NULL, 0.0, x0) == ODE_EARGS, "rtol = 0");
+    // RK4 is 4th order: halving the step divides the error by ~16.
+    for (k = 0, e1 = e2 = 0; k < 2; k++) {
+        n = 100 << k;
+        x[0] = 1, x[1] = 0, x[2] = 1;
+        for (int j = 0; j < n; j++)
+            ode_rk4_step(osc, NULL, 3, j * (2.0 / n), 2.0 / n, x);
+        if (k == 0)
+            e1 = osc_error(x, 2.0);
+        else
+            e2 = osc_error(x, 2.0);
+    }
+    CHECK(e1 / e2 > 14 && e1 / e2 < 18, "RK4 error ratio %g (errors %g, %g)", e1 / e2, e1, e2);
+    CHECK(ode_rk4_step(wall, NULL, 1, 0.6, 0.1, x) == 1, "RK4 passes on the rhs failure");
+    return 0;
+}

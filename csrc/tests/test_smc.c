@@ -1,0 +1,130 @@
+// smc_init / smc_reset / smc_step: parameter errors, the law on the reference, and the output guards.
+#include <float.h>
+#include "check.h"
+#include "flat.h"
+#include "smc.h"
+
+// Returns true when v is finite and within the limit (one rounding of slack from the rescaling).
+static int bounded(const double v[2], double limit)
+{
+    return isfinite(v[0]) && isfinite(v[1]) && hypot(v[0], v[1]) <= limit * (1 + 4 * DBL_EPSILON);
+}
+
+// Returns 0; smc_init rejects each invalid group and accepts the defaults.
+static int init_checks(void)
+{
+    struct smc_params p, q;
+    struct smc s;
+    smc_params_default(&p);
+    CHECK(smc_init(&s, &p) == SMC_PARAMS_OK, "defaults are valid");
+    CHECK(s.alpha1 == 100.0 && fabs(s.alpha2 - 16.0) < 1e-14, "alpha1 %g alpha2 %g", s.alpha1, s.alpha2);
+    q = p, q.motor.J = 0;
+    CHECK(smc_init(&s, &q) == SMC_EMOTOR, "J = 0");
+    q = p, q.plan.rho1 = -0.4;
+    CHECK(smc_init(&s, &q) == SMC_EPLAN, "rho1 < 0");
+    q = p, q.gains.eps2 = 0;
+    CHECK(smc_init(&s, &q) == SMC_EGAINS, "eps2 = 0");
+    q = p, q.gains.xi = NAN;
+    CHECK(smc_init(&s, &q) == SMC_EGAINS, "xi = NaN");
+    q = p, q.measurement = 7;
+    CHECK(smc_init(&s, &q) == SMC_EMEASUREMENT, "measurement 7");
+    q = p, q.v_limit = INFINITY;
+    CHECK(smc_init(&s, &q) == SMC_ELIMITS, "v_limit = inf");
+    q = p, q.rho_min = 0;
+    CHECK(smc_init(&s, &q) == SMC_ELIMITS, "rho_min = 0");
+    return 0;
+}
+
+// Returns 0; on the planned trajectory s1 = s2 = 0 and the law gives the flat feedforward, in both modes.
+static int law_checks(void)
+{
+    struct smc_params p;
+    struct smc s;
+    double f[PLAN_FLAG_LEN], x[4], vff[2], y[5], v[2], t;
+    int i, mode;
+    smc_params_default(&p);
+    for (mode = SMC_IDEAL; mode <= SMC_MODEL; mode++) {
+        p.measurement = mode;
+        smc_init(&s, &p);
+        for (i = 0; i <= 30; i++) {
+            t = 0.015 + 0.001 * i;
+            plan_eval(&p.plan, t, f);
+            flat_to_state(&p.motor, f, 0, x, vff);
+            y[0] = x[0], y[1] = x[1], y[2] = x[2], y[3] = x[3];
+            y[4] = mode == SMC_IDEAL ? f[PLAN_DDTHETA] : NAN;  // model mode must not read y[4]
+            CHECK(smc_step(&s, t, y, v) == SMC_OK, "mode %d t %g", mode, t);
+            CHECK(fabs(v[0] - vff[0]) <= 1e-9 * (1 + fabs(vff[0])) && fabs(v[1] - vff[1]) <= 1e-9 * (1 + fabs(vff[1])),
+                  "mode %d t %g: v (%.12g, %.12g) vs feedforward (%.12g, %.12g)", mode, t, v[0], v[1], vff[0], vff[1]);
+        }
+    }
+    // Off the trajectory the law pushes rho back: too much current gives a voltage opposing the current.
+    p.measurement = SMC_IDEAL;
+    smc_init(&s, &p);
+    y[0] = 0.5, y[1] = 0, y[2] = 0, y[3] = 0, y[4] = 0;
+    smc_step(&s, 0.0, y, v);
+    // s1 = 0.1, s2 = 0: va = R rho + L Gamma1 = 8.4 * 0.5 - 0.01 * 100 * 0.1 / (0.1 + 0.005), vb = 0.
+    CHECK(fabs(v[0] - (4.2 - 0.1 / 0.105)) < 1e-12 && fabs(v[1]) < 1e-12, "rho above plan: v (%.17g, %.17g)", v[0], v[1]);
+    return 0;
+}
+
+// Returns 0; every hostile input gives a finite, bounded voltage and the right status bit.
+static int guard_checks(void)
+{
+    struct smc_params p;
+    struct smc s;
+    const double big = DBL_MAX, inf = INFINITY, nan = NAN;
+    double y[5], v[2], v2[2];
+    const double cases[][6] = {
+        // t, ia, ib, omega, theta, ddtheta -> expected status
+        {nan, 0.4, 0, 0, 0, 0},  {0, nan, 0, 0, 0, 0},  {0, 0.4, inf, 0, 0, 0}, {0, 0.4, 0, -inf, 0, 0},
+        {0, 0.4, 0, 0, nan, 0},  {0, 0.4, 0, 0, 0, inf}, {inf, 0.4, 0, 0, 0, 0},
+    };
+    uint32_t st;
+    size_t i;
+    smc_params_default(&p);
+    smc_init(&s, &p);
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        y[0] = cases[i][1], y[1] = cases[i][2], y[2] = cases[i][3], y[3] = cases[i][4], y[4] = cases[i][5];
+        v[0] = v[1] = 123;
+        st = smc_step(&s, cases[i][0], y, v);
+        CHECK(st == SMC_NONFINITE && v[0] == 0 && v[1] == 0, "case %zu: status %u v (%g, %g)", i, st, v[0], v[1]);
+    }
+    CHECK(s.status_seen == SMC_NONFINITE, "status_seen accumulates: %u", s.status_seen);
+    smc_reset(&s);
+    CHECK(s.status_seen == SMC_OK, "reset clears status_seen");
+    y[0] = 0, y[1] = 0, y[2] = 0, y[3] = 0, y[4] = 0;
+    CHECK(smc_step(&s, 0.03, y, v) == SMC_RHO && v[0] == 0 && v[1] == 0, "zero currents -> SMC_RHO, 0 V");
+    y[0] = 5e-7;
+    CHECK(smc_step(&s, 0.03, y, v) == SMC_RHO, "rho below rho_min -> SMC_RHO");
+    y[0] = 0.4, y[4] = 1e5;  // J theta'' = 0.36 N m > Km rho = 0.02 N m
+    CHECK(smc_step(&s, 0.03, y, v) == SMC_SQRT && v[0] == 0 && v[1] == 0, "out-of-reach torque -> SMC_SQRT, 0 V");
+    y[0] = 200, y[4] = 0;  // 200 A: R rho alone is 1680 V
+    st = smc_step(&s, 0.03, y, v);
+    CHECK(st == SMC_SATURATED && bounded(v, 1e3) && fabs(hypot(v[0], v[1]) - 1e3) < 1e-9, "saturated: %u |v| %.17g",
+          st, hypot(v[0], v[1]));
+    p.v_limit = 1e300;  // the same step unsaturated keeps the direction of the saturated one
+    smc_init(&s, &p);
+    CHECK(smc_step(&s, 0.03, y, v2) == SMC_OK, "unsaturated with a huge limit");
+    CHECK(fabs(v[0] / 1e3 - v2[0] / hypot(v2[0], v2[1])) < 1e-12 && fabs(v[1] / 1e3 - v2[1] / hypot(v2[0], v2[1])) < 1e-12,
+          "saturation keeps the direction");
+    // Huge finite inputs: overflow inside the law is caught, never passed on.
+    smc_params_default(&p);
+    smc_init(&s, &p);
+    for (i = 0; i < 32; i++) {
+        y[0] = (i & 1) ? big : 0.4, y[1] = (i & 2) ? -big : 0.1, y[2] = (i & 4) ? big : 1;
+        y[3] = (i & 8) ? big : 0.01, y[4] = (i & 16) ? -big : 3;
+        st = smc_step(&s, (i & 1) ? -big : 0.03, y, v);
+        CHECK(bounded(v, 1e3), "huge case %zu: v (%g, %g)", i, v[0], v[1]);
+        CHECK((st & ~(uint32_t)SMC_SATURATED) == 0 || (v[0] == 0 && v[1] == 0), "huge case %zu: fault %u gives 0 V", i, st);
+    }
+    return 0;
+}
+
+// Returns 0 after running the controller checks.
+int test_smc(void)
+{
+    init_checks();
+    law_checks();
+    guard_checks();
+    return 0;
+}
