@@ -23,3 +23,4 @@ test: venv
 
 clean:
 	rm -rf $(VENV) build $(OUT) src/*.egg-info
+include mk/embedded.mk
