@@ -29,6 +29,7 @@ MAX_ORDER = 5
 
 _PSI = Polynomial([0.0] * 5 + [r * (-1) ** i for i, r in enumerate(PAPER_R)])
 _PSI_DERIVS = [_PSI.deriv(k) for k in range(MAX_ORDER + 1)]
+_PSI_HORNER = [d.coef[::-1].copy() for d in _PSI_DERIVS]  # highest power first, for np.polyval
 
 
 def psi(t: ArrayLike, t0: float, tf: float, order: int = 0) -> NDArray[np.float64]:
@@ -44,7 +45,7 @@ def psi(t: ArrayLike, t0: float, tf: float, order: int = 0) -> NDArray[np.float6
     t = np.asarray(t, dtype=float)
     T = tf - t0
     tau = np.clip((t - t0) / T, 0.0, 1.0)
-    value = _PSI_DERIVS[order](tau) / T**order
+    value = np.polyval(_PSI_HORNER[order], tau) / T**order
     if order > 0:
         value = np.where((t > t0) & (t < tf), value, 0.0)
     return value

@@ -62,7 +62,21 @@ class SimResult:
             "max_abs_va": float(np.max(np.abs(self.va))),
             "max_abs_vb": float(np.max(np.abs(self.vb))),
             "final_theta_error": float(self.theta_error[-1]),
+            **self._window_errors(),
         }
+
+    def _window_errors(self) -> dict[str, float]:
+        """max |theta - theta*| during the move [t0, tf] and at rest after it (t > tf), when sampled."""
+        plan = self.meta.get("plan")
+        if plan is None:
+            return {}
+        err = np.abs(self.theta_error)
+        out = {}
+        for key, mask in (("max_abs_theta_error_move", (self.t >= plan["t0"]) & (self.t <= plan["tf"])),
+                          ("max_abs_theta_error_after", self.t > plan["tf"])):
+            if np.any(mask):
+                out[key] = float(np.max(err[mask]))
+        return out
 
     def to_csv(self, path: str | Path) -> None:
         """Write every series as a column of a CSV file."""

@@ -1,0 +1,156 @@
+"""Many closed-loop runs in one call: :func:`run_batch`, on all cores or on any ``concurrent.futures`` executor.
+
+Each worker receives a chunk of scenarios and returns one summary row per run (the keys of
+:meth:`~flatstep.result.SimResult.summary` plus ``index``, ``name`` and ``error``), so that only a few
+numbers per run cross process boundaries. With ``out=`` the rows are appended to a JSON-lines file as
+chunks finish; running again with the same file skips the rows already there.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from dataclasses import replace
+from itertools import product
+from pathlib import Path
+from typing import Any, Iterable, Optional, Sequence, TextIO
+
+from .scenario import Scenario
+
+
+def _run_one(index: int, scenario: Scenario, options: dict[str, Any]) -> dict[str, Any]:
+    row: dict[str, Any] = {"index": index, "name": scenario.name}
+    try:
+        row.update(scenario.run(**options).summary())
+        row["error"] = None
+    except (ValueError, RuntimeError) as exc:  # an infeasible or failed run is a result, not a crash
+        row["error"] = f"{type(exc).__name__}: {exc}"
+    return row
+
+
+def _run_chunk(chunk: list[tuple[int, Scenario]], options: dict[str, Any]) -> list[dict[str, Any]]:
+    return [_run_one(i, s, options) for i, s in chunk]
+
+
+class _Progress:
+    """A one-line progress bar on a stream (stderr), redrawn at most 10 times a second."""
+
+    def __init__(self, total: int, stream: TextIO, enabled: bool):
+        self.total, self.stream, self.enabled = total, stream, enabled
+        self.done, self.start, self.last = 0, time.perf_counter(), 0.0
+
+    def update(self, n: int) -> None:
+        self.done += n
+        now = time.perf_counter()
+        if self.enabled and (now - self.last > 0.1 or self.done == self.total):
+            self.last = now
+            rate = self.done / max(now - self.start, 1e-9)
+            eta = (self.total - self.done) / rate if rate > 0 else float("inf")
+            bar = "#" * int(30 * self.done / max(self.total, 1))
+            self.stream.write(f"\r[{bar:<30}] {self.done}/{self.total} runs, {rate:.0f} runs/s, eta {eta:.1f} s")
+            if self.done == self.total:
+                self.stream.write("\n")
+            self.stream.flush()
+
+
+def _done_indices(out: Path) -> set[int]:
+    if not out.exists():
+        return set()
+    done = set()
+    for line in out.read_text().splitlines():
+        try:
+            done.add(int(json.loads(line)["index"]))
+        except (ValueError, KeyError, TypeError):
+            continue  # a line cut by an interruption: that run is simply done again
+    return done
+
+
+def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = None, workers: Optional[int] = None,
+              chunk_size: Optional[int] = None, progress: Optional[bool] = None, out: str | Path | None = None,
+              **simulate_options: Any) -> list[dict[str, Any]]:
+    """Run every scenario and return one summary row per scenario, in input order.
+
+    Parameters
+    ----------
+    scenarios : the runs; build grids with :func:`scenario_grid`.
+    executor : any :class:`concurrent.futures.Executor` (e.g. a Dask ``distributed.Client``'s
+        ``get_executor()``); default: a process pool with ``workers`` processes (default: all cores).
+    chunk_size : scenarios per task (default: enough for about 8 tasks per worker).
+    progress : draw a progress bar on stderr; default: when stderr is a terminal and there are >= 100 runs.
+    out : a JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
+    simulate_options : passed to :func:`flatstep.simulate` (e.g. ``engine``, ``dt_out``).
+    """
+    scenarios = list(scenarios)
+    bad = [i for i, s in enumerate(scenarios) if not isinstance(s, Scenario)]
+    if bad:
+        raise ValueError(f"scenarios[{bad[0]}]={scenarios[bad[0]]!r} is not a flatstep Scenario")
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise ValueError(f"workers={workers!r} must be a positive integer")
+    if chunk_size is not None and (not isinstance(chunk_size, int) or chunk_size < 1):
+        raise ValueError(f"chunk_size={chunk_size!r} must be a positive integer")
+    out_path = Path(out) if out is not None else None
+    rows: dict[int, dict[str, Any]] = {}
+    if out_path is not None:
+        done = _done_indices(out_path)
+        for line in out_path.read_text().splitlines() if done else []:
+            try:
+                row = json.loads(line)
+                rows[int(row["index"])] = row
+            except (ValueError, KeyError, TypeError):
+                continue
+    todo = [(i, s) for i, s in enumerate(scenarios) if i not in rows]
+    n_workers = workers or os.cpu_count() or 1
+    size = chunk_size or max(1, len(todo) // (8 * n_workers))
+    chunks = [todo[k:k + size] for k in range(0, len(todo), size)]
+    bar = _Progress(len(todo), sys.stderr,
+                    progress if progress is not None else (sys.stderr.isatty() and len(todo) >= 100))
+    sink = open(out_path, "a") if out_path is not None else None
+    if sink is not None and out_path.stat().st_size and not out_path.read_bytes().endswith(b"\n"):
+        sink.write("\n")  # close a line cut by an interruption
+
+    def record(batch: list[dict[str, Any]]) -> None:
+        for row in batch:
+            rows[row["index"]] = row
+            if sink is not None:
+                sink.write(json.dumps(row) + "\n")
+        if sink is not None:
+            sink.flush()
+        bar.update(len(batch))
+
+    try:
+        if executor is None and (n_workers == 1 or len(chunks) <= 1):
+            for chunk in chunks:
+                record(_run_chunk(chunk, simulate_options))
+        else:
+            own = executor is None
+            pool = ProcessPoolExecutor(max_workers=n_workers) if own else executor
+            try:
+                futures: list[Future] = [pool.submit(_run_chunk, chunk, simulate_options) for chunk in chunks]
+                for fut in as_completed(futures):
+                    record(fut.result())
+            finally:
+                if own:
+                    pool.shutdown(cancel_futures=True)
+    finally:
+        if sink is not None:
+            sink.close()
+    return [rows[i] for i in range(len(scenarios))]
+
+
+def scenario_grid(base: Scenario, **axes: Iterable[Any]) -> list[Scenario]:
+    """Every combination of the given values of ``Scenario`` fields, e.g.
+    ``scenario_grid(base, load_torque=[0, 1e-5], control_period=[5e-5, 2.5e-5])``.
+
+    Names are ``base.name`` followed by the field values.
+    """
+    unknown = set(axes) - set(Scenario.__dataclass_fields__)
+    if unknown:
+        raise ValueError(f"unknown scenario field(s) {sorted(unknown)}; valid: {list(Scenario.__dataclass_fields__)}")
+    keys = list(axes)
+    grid = []
+    for values in product(*(list(axes[k]) for k in keys)):
+        label = ",".join(f"{k}={v!r}" if not hasattr(v, "as_dict") else f"{k}={v.as_dict()}" for k, v in zip(keys, values))
+        grid.append(replace(base, name=f"{base.name}[{label}]", **dict(zip(keys, values))))
+    return grid
