@@ -6,6 +6,8 @@ from .flat import FlatFlag, cartesian, flat_to_state, polar, polar_rhs, state_to
 from .motor import PRESETS, MotorParams, rhs
 from .plan import PAPER_PLAN, RestToRest, point_to_point, psi
 from .result import SimResult
+from .scenario import PAPER_SCENARIOS, Scenario
+from .batch import run_batch, scenario_grid
 from .simulate import simulate
 
 __version__ = "0.1.0"
@@ -17,4 +19,5 @@ __all__ = [
     "RestToRest", "PAPER_PLAN", "point_to_point", "psi",
     "FeasibilityReport", "InfeasiblePlanError", "check_feasibility",
     "FlatnessSMC", "SMCGains", "simulate", "SimResult",
+    "Scenario", "PAPER_SCENARIOS", "run_batch", "scenario_grid",
 ]
