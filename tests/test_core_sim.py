@@ -1,0 +1,141 @@
+"""The C engine's closed loops: continuous runs against the scipy reference, sampled runs against a Python
+zero-order-hold loop, and simulate()'s options and errors for engine='c'."""
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import flatstep as fs
+from flatstep.control.smc import FlatnessSMC, SMCGains
+from flatstep.motor import rhs
+
+PAPER = fs.MotorParams.preset("paper")
+W300 = SMCGains(W1=300.0, W2=300.0)
+RUNS = {  # name: (plant, controller, load); the controller's model is always the paper's motor
+    "fig1": (PAPER, FlatnessSMC(PAPER, fs.PAPER_PLAN), 0.0),
+    "fig2": (PAPER, FlatnessSMC(PAPER, fs.PAPER_PLAN, W300), 1e-5),
+    "fig2_model_measurement": (PAPER, FlatnessSMC(PAPER, fs.PAPER_PLAN, W300, "model"), 1e-5),
+    "plant_R_plus_20pc": (PAPER.replace(R=1.2 * PAPER.R), FlatnessSMC(PAPER, fs.PAPER_PLAN, W300), 0.0),
+}
+
+
+def run(name, **options):
+    plant, ctrl, load = RUNS[name]
+    return fs.simulate(plant, fs.PAPER_PLAN, ctrl, load=load, **options)
+
+
+@pytest.mark.parametrize("name", RUNS)
+def test_continuous_c_engine_matches_scipy_reference(name):
+    """Both at their defaults (rtol 1e-10, atol 1e-12): measured max |dtheta| 7.7e-10 rad (fig1),
+    4.3e-10 (fig2), 1.5e-9 (model measurement), 2.5e-9 (R + 20 %)."""
+    c, ref = run(name, engine="c"), run(name, engine="scipy")
+    np.testing.assert_array_equal(c.t, ref.t)
+    assert np.max(np.abs(c.theta - ref.theta)) < 1e-8
+    assert np.max(np.abs(c.rho - ref.rho)) < 1e-7
+
+
+def test_continuous_c_engine_converges_to_the_reference_at_tighter_tolerances():
+    """DOPRI5 and DOP853 both at rtol 1e-12, atol 1e-14: measured max |dtheta| 6.4e-12 rad, |dia| 1.1e-10 A."""
+    c = run("fig1", engine="c", rtol=1e-12, atol=1e-14)
+    ref = run("fig1", engine="scipy", method="DOP853", rtol=1e-12, atol=1e-14)
+    assert np.max(np.abs(c.theta - ref.theta)) < 3e-11
+    assert np.max(np.abs(c.ia - ref.ia)) < 1e-9
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["fig1", "fig2"])
+def test_continuous_c_engine_converges_to_the_reference_at_tight_tolerances(name):
+    """DOPRI5 and DOP853 both at rtol 1e-13, atol 1e-15: measured max |dtheta| 5.0e-13 (fig1), 1.5e-14 (fig2)."""
+    c = run(name, engine="c", rtol=1e-13, atol=1e-15)
+    ref = run(name, engine="scipy", method="DOP853", rtol=1e-13, atol=1e-15)
+    assert np.max(np.abs(c.theta - ref.theta)) < 5e-12
+    assert np.max(np.abs(c.ia - ref.ia)) < 1e-10
+
+
+def test_c_engine_result_is_the_reference_collect():
+    """Voltages on the samples come from C smc_step; they are the reference law's to rounding."""
+    r = run("fig2")
+    _, ctrl, load = RUNS["fig2"]
+    x = np.array([r.ia, r.ib, r.omega, r.theta])
+    acc = (fs.motor.torque(x, PAPER) - PAPER.B * r.omega - load) / PAPER.J
+    v = ctrl.voltages(r.t, x, acc)
+    np.testing.assert_allclose([r.va, r.vb], v, rtol=1e-12, atol=1e-12)
+    assert r.meta["engine"] == "c" and r.meta["method"] == "DOPRI5" and r.meta["controller_status"] == []
+    assert r.meta["steps"] > 100 and r.meta["rhs_evals"] >= 6 * r.meta["steps"]
+
+
+def zoh_reference(plant, ctrl, load, Ts, n):
+    """A Python sampled loop: the reference law at t = k Ts, voltage held, plant by DOP853 at rtol 1e-12."""
+    x, xs = fs.PAPER_PLAN.x0(plant.Nr), []
+    for k in range(n + 1):
+        xs.append(x)
+        if k == n:
+            break
+        acc = (fs.motor.torque(x, plant) - plant.B * x[2] - load) / plant.J
+        v = ctrl.voltages(k * Ts, x, acc if ctrl.measurement == "ideal" else None)
+        sol = solve_ivp(lambda t, y: rhs(t, y, v, plant, load), (k * Ts, (k + 1) * Ts), x, method="DOP853",
+                        rtol=1e-12, atol=1e-14)
+        x = sol.y[:, -1]
+    return np.array(xs).T
+
+
+@pytest.mark.parametrize("name, Ts, t_end", [("fig1", 5e-5, 0.06), ("fig2_model_measurement", 2e-5, 0.03)])
+def test_sampled_c_engine_matches_a_python_zoh_loop(name, Ts, t_end):
+    """10 RK4 substeps per period: measured max |dtheta| 6.3e-13 rad (fig1). (Fig. 2's loop at Ts = 50 us
+    amplifies rounding-level differences to 1e-6 A in a few periods, so it is compared at 20 us.)"""
+    plant, ctrl, load = RUNS[name]
+    n = int(round(t_end / Ts))
+    r = run(name, control_period=Ts, substeps=10, t_end=t_end)
+    assert r.t.size == n + 1 and r.t[-1] == pytest.approx(t_end) and np.all(np.diff(r.t) == pytest.approx(Ts))
+    X = zoh_reference(plant, ctrl, load, Ts, n)
+    assert np.max(np.abs(r.theta - X[3])) < 1e-10
+    assert np.max(np.abs(r.ia - X[0])) < 1e-9
+    assert r.meta["method"] == "RK4" and r.meta["control_period"] == Ts and r.meta["substeps"] == 10
+
+
+def test_sampled_loop_approaches_the_continuous_one_as_the_period_shrinks():
+    """The paper's law is a continuous-time design: under a ZOH its angle error grows quickly with Ts
+    (measured 2.5e-2, 8.4e-3, 2.6e-4 rad at Ts = 40, 10, 1 us)."""
+    cont = run("fig1")
+    errors = []
+    for Ts in (4e-5, 1e-5, 1e-6):
+        r = run("fig1", control_period=Ts, substeps=4)
+        errors.append(np.max(np.abs(np.interp(cont.t, r.t, r.theta) - cont.theta)))
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[2] < 1e-3
+
+
+def test_sampled_voltages_are_the_applied_ones():
+    r = run("fig1", control_period=1e-4, substeps=5)
+    _, ctrl, _ = RUNS["fig1"]
+    x = np.array([r.ia, r.ib, r.omega, r.theta])
+    acc = (fs.motor.torque(x, PAPER) - PAPER.B * r.omega) / PAPER.J
+    np.testing.assert_allclose([r.va, r.vb], ctrl.voltages(r.t, x, acc), rtol=1e-12, atol=1e-12)
+
+
+def test_sampled_loop_reports_controller_faults_instead_of_nan():
+    """From zero currents the law is undefined: the C controller applies 0 V and says why."""
+    r = fs.simulate(PAPER, fs.PAPER_PLAN, x0=[0.0, 0.0, 0.0, 0.0], control_period=1e-4)
+    assert r.meta["controller_status"] == ["rho"]
+    assert np.all(r.va == 0.0) and np.all(r.ia == 0.0)
+
+
+def test_continuous_loop_stops_outside_the_laws_domain():
+    with pytest.raises(RuntimeError, match="controller faulted"):
+        fs.simulate(PAPER, fs.PAPER_PLAN, x0=[0.0, 0.0, 0.0, 0.0])
+
+
+def test_c_engine_is_the_default():
+    r = fs.simulate(PAPER, fs.PAPER_PLAN, t_end=0.01, dt_out=1e-3)
+    assert r.meta["engine"] == "c" and r.t.size == 11
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(engine="scipy", control_period=1e-4), "control_period=0.0001 needs engine='c'"),
+    (dict(control_period=-1e-4), "control_period=-0.0001"),
+    (dict(control_period=1e-4, substeps=0), "substeps=0"),
+    (dict(control_period=1e-4, substeps=2.5), "substeps=2.5"),
+    (dict(load=lambda t: 0.0 * t), "engine='c' takes a constant load torque"),
+])
+def test_bad_c_engine_options(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        fs.simulate(PAPER, fs.PAPER_PLAN, **kwargs)
