@@ -60,6 +60,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import main as bench_main
+
+    return bench_main(args.which, args.repeat)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="flatstep", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -87,6 +93,12 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--out", default=None, help="write run.png, run.csv and summary.json here")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     sim.set_defaults(func=cmd_simulate)
+
+    ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
+    ben.add_argument("--which", default="a,b,c,d", help="a: planning, b: closed loop, c: controller step, "
+                     "d: batch throughput (default: a,b,c,d)")
+    ben.add_argument("--repeat", type=int, default=None, help="rounds per benchmark (default: each one's own)")
+    ben.set_defaults(func=cmd_bench)
     return parser
 
 
