@@ -27,7 +27,7 @@ def test_gains_bad_values(kwargs, match):
 def test_bad_measurement_mode(motor, plan):
     with pytest.raises(ValueError, match="measurement='perfect'"):
         fs.FlatnessSMC(motor, plan, measurement="perfect")
-    with pytest.raises(ValueError, match="needs the true acceleration"):
+    with pytest.raises(ValueError, match="needs the acceleration"):
         fs.FlatnessSMC(motor, plan).voltages(0.03, plan.x0(50))
 
 

@@ -80,7 +80,8 @@ def smc_struct(controller: FlatnessSMC, v_limit: float = V_LIMIT, rho_min: float
     params.motor = dict(R=m.R, L=m.L, Km=m.Km, J=m.J, B=m.B, Nr=m.Nr)
     params.plan = controller.plan.as_dict()
     params.gains = dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn)
-    params.measurement = lib.SMC_IDEAL if controller.measurement == "ideal" else lib.SMC_MODEL
+    # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state
+    params.measurement = lib.SMC_MODEL if controller.measurement == "model" else lib.SMC_IDEAL
     params.v_limit, params.rho_min = v_limit, rho_min
     s = ffi.new("struct smc *")
     err = lib.smc_init(s, params)
@@ -152,8 +153,9 @@ def smc_voltages(controller: FlatnessSMC, t: ArrayLike, x: ArrayLike, ddtheta: O
     """
     xr = _rows(x, 4, "x")
     n = xr.shape[0]
-    if controller.measurement == "ideal" and ddtheta is None:
-        raise ValueError("measurement='ideal' needs the true acceleration ddtheta; use measurement='model'")
+    if controller.measurement != "model" and ddtheta is None:
+        raise ValueError(f"measurement={controller.measurement!r} needs the acceleration ddtheta; "
+                         "use measurement='model' to compute it from the state")
     acc = np.zeros(n) if ddtheta is None else np.broadcast_to(np.asarray(ddtheta, dtype=np.float64).ravel(), (n,))
     y = np.ascontiguousarray(np.column_stack([xr, acc]))
     tv = np.ascontiguousarray(np.broadcast_to(_vec(t), (n,)))

@@ -20,7 +20,7 @@ from ..flat import flat_voltages, polar
 from ..motor import MotorParams, check_finite, check_positive
 from ..plan import RestToRest
 
-MEASUREMENTS = ("ideal", "model")
+MEASUREMENTS = ("ideal", "model", "observer")
 
 
 @dataclass(frozen=True)
@@ -64,9 +64,10 @@ class FlatnessSMC:
     motor : the controller's model of the motor (may differ from the plant's).
     plan : the planned flat-output trajectory.
     gains : :class:`SMCGains`.
-    measurement : ``"ideal"`` uses the true acceleration theta'' passed by the simulator (the paper's
-        assumption); ``"model"`` computes theta'' from the measured state by the zero-load model,
-        ``J theta'' = Km (ib cos Nr theta - ia sin Nr theta) - B omega``, as a real drive would have to.
+    measurement : where theta'' comes from. ``"ideal"``: the true acceleration, passed by the simulator
+        (the paper's assumption); ``"model"``: computed from the measured state by the zero-load model,
+        ``J theta'' = Km (ib cos Nr theta - ia sin Nr theta) - B omega``; ``"observer"``: the estimate of a
+        :class:`~flatstep.observers.Observer`, passed by the simulator like the ideal one.
     """
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = SMCGains(),
@@ -77,9 +78,10 @@ class FlatnessSMC:
 
     def acceleration(self, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> NDArray[np.float64]:
         """theta'' as the controller sees it: the given value in ``ideal`` mode, the zero-load model otherwise."""
-        if self.measurement == "ideal":
+        if self.measurement != "model":
             if ddtheta is None:
-                raise ValueError("measurement='ideal' needs the true acceleration ddtheta; use measurement='model'")
+                raise ValueError(f"measurement={self.measurement!r} needs the acceleration ddtheta; "
+                                 "use measurement='model' to compute it from the state")
             return np.asarray(ddtheta, dtype=float)
         ia, ib, omega, theta = np.asarray(x, dtype=float)
         m = self.motor
@@ -111,8 +113,7 @@ class FlatnessSMC:
     def step(self, state: None, measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], None]:
         """Controller step ``(state, measurement, t) -> (voltages, new state)``; this law is static.
 
-        ``measurement`` is ``(ia, ib, omega, theta)`` in ``model`` mode and ``(ia, ib, omega, theta, ddtheta)``
-        in ``ideal`` mode.
+        ``measurement`` is ``(ia, ib, omega, theta, ddtheta)``; ``ddtheta`` is not read in ``model`` mode.
         """
         y = np.asarray(measurement, dtype=float)
-        return self.voltages(t, y[:4], y[4] if self.measurement == "ideal" else None), state
+        return self.voltages(t, y[:4], None if self.measurement == "model" else y[4]), state

@@ -1,0 +1,111 @@
+"""The sampled-data drive loop, readable reference: sensors -> observer -> controller -> drive -> plant.
+
+One control period k, at ``t_k = k Ts``:
+
+1. the sensors read the plant (encoder angle, ADC currents with offset and noise), possibly ``delay``
+   periods old;
+2. the observer corrects its estimate with the encoder angle; speed and acceleration come from it (or, with
+   no observer, the speed is the encoder's backward difference and the acceleration the zero-load model);
+3. the controller computes the voltages; with ``compute_delay`` they are applied one period later;
+4. the drive saturates them at the bus (direction kept) and, in switched mode, chops them into PWM
+   segments;
+5. the plant is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
+6. the observer predicts the next angle, speed and load from the torque of the measured currents.
+
+This loop runs in Python, one period at a time: it is the specification the C engine is tested against,
+not the fast path.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from .control.smc import FlatnessSMC
+from .drive import Drive
+from .motor import MotorParams, rhs, torque
+from .observers import Observer
+from .sensors import Sensors
+
+
+@dataclass(frozen=True)
+class DriveLoop:
+    """The parts of a realistic drive around the controller; ``None`` parts are ideal."""
+
+    control_period: float = 5e-5
+    substeps: int = 4
+    compute_delay: bool = False
+    drive: Optional[Drive] = None
+    sensors: Optional[Sensors] = None
+    observer: Optional[Observer] = None
+
+
+def _rk4(x, v, h, motor, load):
+    f = lambda y: rhs(0.0, y, v, motor, load)  # noqa: E731  (load constant over the period)
+    k1 = f(x)
+    k2 = f(x + 0.5 * h * k1)
+    k3 = f(x + 0.5 * h * k2)
+    k4 = f(x + h * k3)
+    return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
+def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, x0: np.ndarray, load: float,
+                  n_periods: int) -> dict[str, np.ndarray]:
+    """Run ``n_periods`` control periods; returns the time series at the control instants: ``t``, the plant
+    state ``x`` (4, n+1), the applied voltages ``v`` (2, n+1, as averaged over the following period) and
+    what the controller saw, ``y`` (5, n+1)."""
+    Ts, model = loop.control_period, controller.motor
+    sensors, drive, observer = loop.sensors, loop.drive or Drive(v_bus=np.inf), loop.observer
+    noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
+    if observer is not None:
+        Ad, Bd, Lc = observer.matrices(model, Ts)
+    X, V, Y = np.empty((4, n_periods + 1)), np.zeros((2, n_periods + 1)), np.empty((5, n_periods + 1))
+    x = np.array(x0, dtype=float)
+    history = []  # past readings (theta_m, ia_m, ib_m) for the measurement delay
+    xh = None
+    v_hold = model.R * x[:2]  # what the bridge applies before the first command (the start equilibrium)
+    theta_prev = None
+    for k in range(n_periods + 1):
+        t = k * Ts
+        X[:, k] = x
+        if sensors is None:
+            reading = (x[3], x[0], x[1])
+        else:
+            i_m = sensors.read_currents(x[:2], noise[k])
+            reading = (float(sensors.read_angle(x[3])), float(i_m[0]), float(i_m[1]))
+        history.append(reading)
+        delay = sensors.delay if sensors else 0
+        th_m, ia_m, ib_m = history[max(0, len(history) - 1 - delay)]
+        if observer is not None:
+            xh = np.array([th_m] + [0.0] * (observer.order - 1)) if xh is None else xh + Lc * (th_m - xh[0])
+            Te = model.Km * (ib_m * np.cos(model.Nr * xh[0]) - ia_m * np.sin(model.Nr * xh[0]))
+            load_hat = xh[2] if observer.order > 2 else 0.0
+            y = (ia_m, ib_m, xh[1], xh[0], (Te - model.B * xh[1] - load_hat) / model.J)
+        elif sensors is None:
+            y = (*x, (torque(x, plant) - plant.B * x[2] - load) / plant.J)
+        else:
+            omega = 0.0 if theta_prev is None else (th_m - theta_prev) / Ts
+            y = (ia_m, ib_m, omega, th_m, 0.0)
+        theta_prev = th_m
+        Y[:, k] = y
+        v_cmd, _ = controller.step(None, np.array(y), t)
+        if not np.all(np.isfinite(v_cmd)):
+            raise RuntimeError(f"the controller returned {v_cmd} at t={t:.6g} s from measurement {y}")
+        v_new = drive.saturate(v_cmd)
+        v_apply, v_hold = (v_hold, v_new) if loop.compute_delay else (v_new, v_new)
+        V[:, k] = v_apply
+        if k == n_periods:
+            break
+        if drive.pwm == "switched":
+            durations, levels = drive.pwm_segments(v_apply, x[:2], Ts)
+            for h, lv in zip(durations, levels):
+                x = _rk4(x, lv, h, plant, load)
+        else:
+            for _ in range(loop.substeps):
+                x = _rk4(x, v_apply, Ts / loop.substeps, plant, load)
+        if not np.all(np.isfinite(x)):
+            raise RuntimeError(f"the plant state became non-finite at t={t + Ts:.6g} s")
+        if observer is not None:
+            xh = Ad @ xh + Bd * Te
+    return {"t": np.arange(n_periods + 1) * Ts, "x": X, "v": V, "y": Y}

@@ -1,0 +1,94 @@
+"""Sensors of a drive: a quantized encoder and quantized, offset, noisy phase-current sensors."""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Optional
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .motor import check_finite, check_positive
+
+
+def _check_count(name: str, value: Optional[int], low: int) -> None:
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise ValueError(f"{name}={value!r} must be an integer >= {low} (or None for an exact measurement)")
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """What the controller measures.
+
+    Parameters
+    ----------
+    encoder_counts : counts per revolution; the angle is read as the centre of its count,
+        ``q round(theta/q - offset) + q offset`` with ``q = 2 pi / counts``; ``None``: exact angle.
+    encoder_offset : where the count edges sit, as a fraction of a count in [-0.5, 0.5).
+    current_bits, current_range : ADC resolution over ``[-current_range, current_range]`` A; ``None``: exact.
+    current_offset : constant offsets (ia, ib) added before conversion [A].
+    current_noise : standard deviation of the white noise added to each phase current [A].
+    delay : measurement delay in control periods (the controller sees the samples of ``delay`` periods ago).
+    seed : seed of the noise sequence (reproducible runs).
+    """
+
+    encoder_counts: Optional[int] = 16384
+    encoder_offset: float = 0.0
+    current_bits: Optional[int] = 12
+    current_range: float = 2.0
+    current_offset: tuple[float, float] = (0.0, 0.0)
+    current_noise: float = 0.0
+    delay: int = 0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        _check_count("encoder_counts", self.encoder_counts, 4)
+        _check_count("current_bits", self.current_bits, 2)
+        _check_count("delay", self.delay, 0)
+        off = check_finite("encoder_offset", self.encoder_offset)
+        if not -0.5 <= off < 0.5:
+            raise ValueError(f"encoder_offset={off!r} must be in [-0.5, 0.5) counts")
+        check_positive("current_range", self.current_range, unit=" A")
+        if len(self.current_offset) != 2:
+            raise ValueError(f"current_offset={self.current_offset!r} must be two offsets (ia, ib) in A")
+        object.__setattr__(self, "current_offset", tuple(check_finite("current_offset", o) for o in self.current_offset))
+        noise = check_finite("current_noise", self.current_noise)
+        if noise < 0:
+            raise ValueError(f"current_noise={noise!r} A must be >= 0")
+
+    @property
+    def angle_step(self) -> float:
+        """One encoder count [rad] (0 for an exact angle)."""
+        return 0.0 if self.encoder_counts is None else 2 * math.pi / self.encoder_counts
+
+    @property
+    def current_step(self) -> float:
+        """One ADC step [A] (0 for exact currents)."""
+        return 0.0 if self.current_bits is None else 2 * self.current_range / 2**self.current_bits
+
+    def read_angle(self, theta: ArrayLike) -> NDArray[np.float64]:
+        """Encoder reading of the true angle ``theta``."""
+        theta = np.asarray(theta, dtype=float)
+        q = self.angle_step
+        if q == 0.0:
+            return theta
+        return q * (np.round(theta / q - self.encoder_offset) + self.encoder_offset)
+
+    def read_currents(self, i: ArrayLike, noise: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """ADC reading of the phase currents ``i`` (2, ...) with the given noise sample(s) added."""
+        i = np.asarray(i, dtype=float) + np.asarray(self.current_offset).reshape((2,) + (1,) * (np.ndim(i) - 1)) + noise
+        q = self.current_step
+        if q == 0.0:
+            return i
+        return np.clip(q * np.round(i / q), -self.current_range, self.current_range)
+
+    def noise(self, n: int) -> NDArray[np.float64]:
+        """The (n, 2) current-noise sequence of a run, from ``seed``."""
+        if self.current_noise == 0.0:
+            return np.zeros((n, 2))
+        return self.current_noise * np.random.default_rng(self.seed).standard_normal((n, 2))
+
+    def as_dict(self) -> dict:
+        return asdict(self)
