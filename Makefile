@@ -5,11 +5,11 @@ BIN := $(VENV)/bin
 OUT ?= out
 STAMP := $(VENV)/.installed-flatstep
 
-.PHONY: demo test venv clean
+.PHONY: demo test venv clean ctest fuzz fuzz-ci
 
 venv: $(STAMP)
 
-$(STAMP): pyproject.toml $(wildcard setup.py) $(wildcard src/flatstep/*.py src/flatstep/*/*.py)
+$(STAMP): pyproject.toml $(wildcard setup.py) $(wildcard src/flatstep/*.py src/flatstep/*/*.py csrc/*.c csrc/*.h)
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[test]'
@@ -18,8 +18,25 @@ $(STAMP): pyproject.toml $(wildcard setup.py) $(wildcard src/flatstep/*.py src/f
 demo: venv
 	$(BIN)/flatstep reproduce --out $(OUT)
 
-test: venv
+test: venv ctest
 	$(BIN)/python -m pytest -q
+
+# The C core's unit tests (ctest), then the same tests under ASan+UBSan.
+ctest:
+	cmake -S . -B build/c -DCMAKE_BUILD_TYPE=Release
+	cmake --build build/c
+	cd build/c && ctest --output-on-failure
+	cmake -S . -B build/asan -DCMAKE_BUILD_TYPE=Debug -DFS_SANITIZE=ON
+	cmake --build build/asan
+	cd build/asan && ctest --output-on-failure
+
+# Fuzz smc_step (libFuzzer + ASan/UBSan; installs clang if missing): briefly, or for FUZZ_SECONDS.
+FUZZ_SECONDS ?= 600
+fuzz-ci:
+	./fuzz/run.sh 25
+
+fuzz:
+	./fuzz/run.sh $(FUZZ_SECONDS)
 
 clean:
 	rm -rf $(VENV) build $(OUT) src/*.egg-info

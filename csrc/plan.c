@@ -10,11 +10,13 @@ static const fs_real psi_coef[4][11] = {
     {0, 0, 15120, -126000, 378000, -529200, 352800, -90720},
 };
 
-// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0.
+// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
 bool plan_valid(const struct plan *p)
 {
+    // (tf - t0)^3 > 0 as well: a span whose cube underflows would make psi's third derivative divide by 0.
     return fs_isfinite(p->theta1) && fs_isfinite(p->theta2) && fs_isfinite(p->rho1) && fs_isfinite(p->rho2)
-        && fs_isfinite(p->t0) && fs_isfinite(p->tf) && p->rho1 > 0 && p->rho2 > 0 && p->tf > p->t0;
+        && fs_isfinite(p->t0) && fs_isfinite(p->tf) && p->rho1 > 0 && p->rho2 > 0 && p->tf > p->t0
+        && fs_pow(p->tf - p->t0, 3) > 0;
 }
 
 // Returns the Horner value of the order-th derivative polynomial of psi at tau (the numpy polyval order).
@@ -29,17 +31,19 @@ static fs_real psi_horner(int order, fs_real tau)
 }
 
 // Returns the order-th time derivative (0..3) of psi(t, t0, tf) of eq. (17): held at 0 before t0 and at 1
-// after tf, derivatives 0 outside the open interval (t0, tf); 0 for an order out of range.
+// after tf, derivatives 0 outside the open interval (t0, tf); 0 for an order out of range, for tf <= t0
+// and for a span so short that (tf - t0)^order underflows.
 fs_real plan_psi(fs_real t, fs_real t0, fs_real tf, int order)
 {
-    fs_real T = tf - t0, tau;
+    fs_real T = tf - t0, Tk, tau;
     if (order < 0 || order > 3 || !(T > 0))
         return 0;
-    if (order > 0 && !(t > t0 && t < tf))
+    Tk = fs_pow(T, (fs_real)order);
+    if (!(Tk > 0) || (order > 0 && !(t > t0 && t < tf)))
         return 0;
     tau = (t - t0) / T;
     tau = tau < 0 ? 0 : (tau > 1 ? 1 : tau);
-    return psi_horner(order, tau) / fs_pow(T, (fs_real)order);
+    return psi_horner(order, tau) / Tk;
 }
 
 // Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',

@@ -15,11 +15,12 @@ struct plan {
     fs_real t0, tf;          // start and end of the move [s], tf > t0
 };
 
-// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0.
+// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
 bool plan_valid(const struct plan *p);
 
 // Returns the order-th time derivative (0..3) of psi(t, t0, tf) of eq. (17): held at 0 before t0 and at 1
-// after tf, derivatives 0 outside the open interval (t0, tf); 0 for an order out of range.
+// after tf, derivatives 0 outside the open interval (t0, tf); 0 for an order out of range, for tf <= t0
+// and for a span so short that (tf - t0)^order underflows.
 fs_real plan_psi(fs_real t, fs_real t0, fs_real tf, int order);
 
 // Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',

@@ -36,7 +36,7 @@ int smc_init(struct smc *s, const struct smc_params *p)
         return SMC_EGAINS;
     if (p->measurement != SMC_IDEAL && p->measurement != SMC_MODEL)
         return SMC_EMEASUREMENT;
-    if (!positive(p->v_limit) || !positive(p->rho_min))
+    if (!positive(p->v_limit) || p->v_limit < FS_C(1e-3) || !positive(p->rho_min))
         return SMC_ELIMITS;
     s->p = *p;
     s->alpha1 = fs_pow(g->wn, 2);

@@ -37,7 +37,7 @@ struct smc_params {
     struct plan plan;           // the planned flat outputs
     struct smc_gains gains;
     int measurement;            // enum smc_measurement
-    fs_real v_limit;            // bound on |v| = hypot(va, vb) [V], > 0
+    fs_real v_limit;            // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
     fs_real rho_min;            // smallest current magnitude the law acts on [A], > 0
 };
 

@@ -46,6 +46,8 @@ static int plan_checks(void)
     CHECK(!plan_valid(&bad), "rho2 = 0 is invalid");
     bad = p, bad.tf = bad.t0;
     CHECK(!plan_valid(&bad), "tf = t0 is invalid");
+    bad = p, bad.t0 = 0.0, bad.tf = 1e-200;  // found by the fuzzer: (tf - t0)^3 underflows to 0
+    CHECK(!plan_valid(&bad) && plan_psi(5e-201, 0.0, 1e-200, 3) == 0.0, "a span whose cube underflows is invalid");
     bad = p, bad.theta1 = NAN;
     CHECK(!plan_valid(&bad), "NaN theta1 is invalid");
     CHECK(!plan_eval(&p, 0.01, f) && f[PLAN_THETA] == 0.0 && f[PLAN_RHO] == 0.4, "held at the start");

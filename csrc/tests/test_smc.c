@@ -30,6 +30,8 @@ static int init_checks(void)
     CHECK(smc_init(&s, &q) == SMC_EMEASUREMENT, "measurement 7");
     q = p, q.v_limit = INFINITY;
     CHECK(smc_init(&s, &q) == SMC_ELIMITS, "v_limit = inf");
+    q = p, q.v_limit = 1e-309;  // found by the fuzzer: a denormal limit cannot be met after rescaling
+    CHECK(smc_init(&s, &q) == SMC_ELIMITS, "v_limit = 1e-309");
     q = p, q.rho_min = 0;
     CHECK(smc_init(&s, &q) == SMC_ELIMITS, "rho_min = 0");
     return 0;
