@@ -492,11 +492,25 @@ def main(which: str = "a,b,c,d", repeat: Optional[int] = None) -> int:
     except ImportError:
         if {"a", "b"} & set(keys):
             raise ValueError("benchmarks a and b compare with python-control: pip install 'flatstep[bench]'")
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"flatstep bench: {os.cpu_count()} cores, load average {load:.2f} at start; medians of "
-          f"{repeat or 'the default number of'} rounds; the ratios are the figures to quote\n")
+    print(f"flatstep bench: source {_revision()}, {os.cpu_count()} cores, load average {_load()} at start; "
+          f"medians of {repeat or 'the default number of'} rounds; the ratios are the figures to quote\n")
     for key in keys:
         report = BENCHMARKS[key](**({} if repeat is None else {"repeat": repeat}))
         print(report.format(), flush=True)
         print()
+    print(f"load average {_load()} at the end (a busy machine inflates times and deflates parallel speed-ups)")
     return 0
+
+
+def _load() -> str:
+    return f"{os.getloadavg()[0]:.2f}" if hasattr(os, "getloadavg") else "unknown"
+
+
+def _revision() -> str:
+    """The git revision of the checkout (``-dirty`` with uncommitted changes), or 'installed package'."""
+    try:
+        out = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True,
+                             text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return "installed package"
+    return out.stdout.strip() if out.returncode == 0 else "installed package"
