@@ -56,7 +56,7 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
     state ``x`` (4, n+1), the applied voltages ``v`` (2, n+1, as averaged over the following period) and
     what the controller saw, ``y`` (5, n+1)."""
     Ts, model = loop.control_period, controller.motor
-    sensors, drive, observer = loop.sensors, loop.drive or Drive(v_bus=np.inf), loop.observer
+    sensors, drive, observer = loop.sensors, loop.drive, loop.observer
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
     if observer is not None:
         Ad, Bd, Lc = observer.matrices(model, Ts)
@@ -92,12 +92,12 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
         v_cmd, _ = controller.step(None, np.array(y), t)
         if not np.all(np.isfinite(v_cmd)):
             raise RuntimeError(f"the controller returned {v_cmd} at t={t:.6g} s from measurement {y}")
-        v_new = drive.saturate(v_cmd)
+        v_new = drive.saturate(v_cmd) if drive is not None else v_cmd
         v_apply, v_hold = (v_hold, v_new) if loop.compute_delay else (v_new, v_new)
         V[:, k] = v_apply
         if k == n_periods:
             break
-        if drive.pwm == "switched":
+        if drive is not None and drive.pwm == "switched":
             durations, levels = drive.pwm_segments(v_apply, x[:2], Ts)
             for h, lv in zip(durations, levels):
                 x = _rk4(x, lv, h, plant, load)

@@ -13,9 +13,14 @@ from .control.smc import FlatnessSMC
 from .flat import flat_to_state, polar
 from .motor import Load, MotorParams, check_positive, load_function, rhs, torque
 from .plan import RestToRest
+from .drive import Drive
+from .observers import Observer
 from .result import SimResult
+from .sampled import DriveLoop, run_reference
+from .sensors import Sensors
 
-ENGINES = ("c", "scipy")
+ENGINES = ("c", "scipy", "python")
+CONTINUOUS_ENGINES = ("c", "scipy")
 METHODS = ("LSODA", "Radau", "BDF", "DOP853", "RK45")
 
 
@@ -26,9 +31,11 @@ def _grid(t_end: float, knots: list[float], dt_out: float) -> list[np.ndarray]:
 
 
 def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[FlatnessSMC] = None, *,
-             load: Load = 0.0, t_end: float = 0.06, x0: Optional[ArrayLike] = None, engine: str = "c",
+             load: Load = 0.0, t_end: float = 0.06, x0: Optional[ArrayLike] = None, engine: Optional[str] = None,
              method: str = "LSODA", rtol: float = 1e-10, atol: float = 1e-12, dt_out: float = 1e-5,
-             control_period: Optional[float] = None, substeps: int = 10) -> SimResult:
+             control_period: Optional[float] = None, substeps: int = 10, drive: Optional[Drive] = None,
+             sensors: Optional[Sensors] = None, observer: Optional[Observer] = None,
+             compute_delay: bool = False) -> SimResult:
     """Simulate the closed loop: continuous-time control (the law evaluated inside the right-hand side) or,
     with ``control_period``, sampled control with a zero-order hold.
 
@@ -39,13 +46,24 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
     controller : default :class:`~flatstep.control.smc.FlatnessSMC` with the paper's gains, ``ideal`` mode.
     load : load torque on the plant [N m], a constant or a function of time.
     t_end : horizon [s].
-    engine : ``"c"`` (default): the C core, adaptive Dormand-Prince 5(4) at ``rtol``/``atol`` (``method``
-        is not used); ``"scipy"``: :func:`scipy.integrate.solve_ivp` with ``method`` at ``rtol``/``atol``.
+    engine : ``"c"``: the C core, adaptive Dormand-Prince 5(4) at ``rtol``/``atol`` (``method`` is not
+        used); ``"scipy"``: :func:`scipy.integrate.solve_ivp` with ``method`` at ``rtol``/``atol``;
+        ``"python"``: the readable sampled-loop reference (:mod:`flatstep.sampled`). Default (``None``): the C
+        core, except for a drive with sensors, observer, switched PWM or computation delay, which runs on
+        the Python reference loop.
     dt_out : spacing of the returned samples [s] (continuous control).
     control_period : ``None`` for continuous control; a period ``Ts`` [s] runs the controller at
         ``t = k Ts`` with the voltage held in between (C engine only), the plant integrated by ``substeps``
         RK4 steps per period, and returns the samples at the control instants (voltages as applied).
+    drive, sensors, observer, compute_delay : a realistic drive around a sampled controller (they need
+        ``control_period``): bus saturation and PWM (:class:`~flatstep.drive.Drive`), quantized and noisy
+        measurements (:class:`~flatstep.sensors.Sensors`), estimated speed, acceleration and load
+        (:class:`~flatstep.observers.Observer`, with ``measurement="observer"``), one period of delay
+        between measuring and applying.
     """
+    loop_parts = drive is not None or sensors is not None or observer is not None or compute_delay
+    if engine is None:
+        engine = "python" if loop_parts and control_period is not None else "c"
     if engine not in ENGINES:
         raise ValueError(f"engine={engine!r} is not available; valid engines: {ENGINES}")
     if method not in METHODS:
@@ -59,6 +77,18 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
     x0 = plan.x0(motor.Nr) if x0 is None else np.asarray(x0, dtype=float)
     if x0.shape != (4,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"x0={x0!r} must be 4 finite numbers (ia, ib, omega, theta)")
+    if loop_parts and control_period is None:
+        raise ValueError("drive, sensors, observer and compute_delay model a sampled drive: give control_period")
+    if engine == "python":
+        if control_period is None:
+            raise ValueError("engine='python' is the sampled-loop reference: give control_period "
+                             "(continuous control runs on engine='c' or 'scipy')")
+        loop = DriveLoop(check_positive("control_period", control_period, unit=" s"), substeps, compute_delay,
+                         drive, sensors, observer)
+        return _simulate_python(motor, plan, controller, loop, load, t_end, x0)
+    if loop_parts:
+        raise ValueError(f"engine={engine!r} does not model drive, sensors, observer or compute_delay; use "
+                         "engine='python'")
     if engine == "c" or control_period is not None:
         return _simulate_c(motor, plan, controller, load, t_end, x0, engine, rtol, atol, dt_out,
                            control_period, substeps)
@@ -112,6 +142,28 @@ def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, l
     t = np.arange(n + 1) * Ts
     return collect(t, X, plan, controller, acc(X), {"engine": engine, "method": "RK4", "control_period": Ts,
                                                     "substeps": int(substeps), **stats}, v=V)
+
+
+def _simulate_python(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, loop: DriveLoop, load: Load,
+                     t_end: float, x0: np.ndarray) -> SimResult:
+    """The sampled drive loop reference of :mod:`flatstep.sampled`."""
+    if callable(load):
+        raise ValueError(f"load={load!r}: the sampled loop takes a constant load torque")
+    if loop.observer is not None and controller.measurement != "observer":
+        raise ValueError(f"an observer needs measurement='observer' (got {controller.measurement!r})")
+    if loop.observer is None and loop.sensors is not None and controller.measurement != "model":
+        raise ValueError(f"with sensors and no observer no acceleration is measured: use measurement='model' "
+                         f"(got {controller.measurement!r}) or add an observer")
+    tau = float(load_function(load)(0.0))
+    n = max(1, math.ceil(t_end / loop.control_period - 1e-9))
+    r = run_reference(motor, controller, loop, x0, tau, n)
+    X, Y = r["x"], r["y"]
+    meta = {"engine": "python", "method": "RK4", "control_period": loop.control_period, "substeps": loop.substeps,
+            "compute_delay": loop.compute_delay,
+            **{k: getattr(loop, k).as_dict() for k in ("drive", "sensors", "observer") if getattr(loop, k)}}
+    result = collect(r["t"], X, plan, controller, (torque(X, motor) - motor.B * X[2] - tau) / motor.J, meta, v=r["v"])
+    result.meta["measured"] = {"theta": Y[3], "omega": Y[2], "ddtheta": Y[4]}
+    return result
 
 
 def collect(t: np.ndarray, X: np.ndarray, plan: RestToRest, controller: FlatnessSMC, acc: np.ndarray,

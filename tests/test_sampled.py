@@ -1,0 +1,75 @@
+"""The sampled drive loop: the Python reference against the C engine, and what each part of the drive does."""
+import numpy as np
+import pytest
+
+import flatstep as fs
+from flatstep.drive import Drive
+from flatstep.observers import Observer
+from flatstep.sensors import Sensors
+
+TS = 5e-5
+DESIGNED = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500)
+COUNT = 2 * np.pi / 16384
+
+
+@pytest.mark.parametrize("measurement, load", [("ideal", 0.0), ("model", 1e-5)])
+def test_reference_loop_matches_the_c_sampled_engine(motor, plan, measurement, load):
+    ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, measurement=measurement)
+    plant = motor.replace(L=0.011, Km=0.048)
+    kw = dict(load=load, control_period=TS, substeps=4, t_end=0.03)
+    py = fs.simulate(plant, plan, ctrl, engine="python", **kw)
+    c = fs.simulate(plant, plan, ctrl, engine="c", **kw)
+    np.testing.assert_allclose(py.t, c.t, rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(py.theta, c.theta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.array([py.va, py.vb]), np.array([c.va, c.vb]), rtol=0, atol=1e-9)
+
+
+def test_bus_saturation_bounds_the_applied_voltage(motor, plan):
+    ctrl = fs.FlatnessSMC(motor, plan, fs.SMCGains(W1=6000, W2=3e5, eps1=0.5, eps2=50, xi=0.9, wn=1500),
+                          measurement="model")
+    free = fs.simulate(motor, plan, ctrl, control_period=TS, engine="python", x0=[0.1, 0.0, 0.0, 0.0])
+    capped = fs.simulate(motor, plan, ctrl, control_period=TS, drive=Drive(v_bus=12.0), x0=[0.1, 0.0, 0.0, 0.0])
+    assert np.max(np.abs([free.va, free.vb])) > 12.0
+    assert np.max(np.abs([capped.va, capped.vb])) <= 12.0 + 1e-12
+
+
+def test_papers_gains_lose_the_move_at_20_khz_and_designed_gains_hold_it(motor, plan):
+    """The paper's gains tuned for continuous time: W/eps = 2e4 1/s, i.e. W Ts / eps = 1 at 20 kHz."""
+    kw = dict(load=1e-5, control_period=TS, drive=Drive(), sensors=Sensors(),
+              observer=Observer(bandwidth=1500.0, load_states=2))
+    paper = fs.simulate(motor, plan, fs.FlatnessSMC(motor, plan, fs.SMCGains(), "observer"), **kw)
+    designed = fs.simulate(motor, plan, fs.FlatnessSMC(motor, plan, DESIGNED, "observer"), **kw)
+    assert paper.summary()["max_abs_theta_error"] > 10 * COUNT
+    s = designed.summary()
+    assert s["max_abs_theta_error_move"] < COUNT and max(s["max_abs_va"], s["max_abs_vb"]) <= 24.0
+
+
+def test_observer_removes_the_model_mode_bias_under_load(motor, plan):
+    kw = dict(load=2e-5, control_period=TS, drive=Drive(), t_end=0.08,
+              sensors=Sensors(encoder_counts=None, current_bits=None))
+    naive = fs.simulate(motor, plan, fs.FlatnessSMC(motor, plan, DESIGNED, "model"), **kw)
+    observed = fs.simulate(motor, plan, fs.FlatnessSMC(motor, plan, DESIGNED, "observer"),
+                           observer=Observer(bandwidth=1500.0, load_states=1), **kw)
+    # the model mode sees theta'' = tau/J at rest; inside the boundary layer (lambda2 = W2/eps2) the law
+    # settles where Gamma2 = -B theta''/J, i.e. s2 = (eps2/W2)(B tau/J^2 - alpha2 tau/J), e = (s2 - tau/J)/alpha1
+    a = 2e-5 / motor.J
+    s2 = DESIGNED.eps2 / DESIGNED.W2 * (motor.B / motor.J * a - DESIGNED.alpha2 * a)
+    bias = (s2 - a) / DESIGNED.alpha1
+    assert naive.summary()["final_theta_error"] == pytest.approx(bias, rel=0.02)
+    assert abs(observed.summary()["final_theta_error"]) < abs(bias) / 100
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(sensors=Sensors()), "give control_period"),
+    (dict(control_period=TS, observer=Observer()), "needs measurement='observer'"),
+    (dict(control_period=TS, sensors=Sensors(), engine="c"), "engine='c' does not model"),
+    (dict(engine="python"), "give control_period"),
+])
+def test_inconsistent_loops_are_refused(motor, plan, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        fs.simulate(motor, plan, fs.FlatnessSMC(motor, plan), **kwargs)
+
+
+def test_ideal_mode_with_sensors_is_refused(motor, plan):
+    with pytest.raises(ValueError, match="use measurement='model'"):
+        fs.simulate(motor, plan, fs.FlatnessSMC(motor, plan), control_period=TS, sensors=Sensors())
