@@ -17,13 +17,18 @@ from itertools import product
 from pathlib import Path
 from typing import Any, Iterable, Optional, Sequence, TextIO
 
+from .result import SimResult
 from .scenario import Scenario
 
 
 def _run_one(index: int, scenario: Scenario, options: dict[str, Any]) -> dict[str, Any]:
     row: dict[str, Any] = {"index": index, "name": scenario.name}
+    keep = options.pop("keep", ())
     try:
-        row.update(scenario.run(**options).summary())
+        result = scenario.run(**options)
+        row.update(result.summary())
+        series = result.series()
+        row.update({f"series_{k}": series[k].tolist() for k in keep})
         row["error"] = None
     except (ValueError, RuntimeError) as exc:  # an infeasible or failed run is a result, not a crash
         row["error"] = f"{type(exc).__name__}: {exc}"
@@ -31,7 +36,7 @@ def _run_one(index: int, scenario: Scenario, options: dict[str, Any]) -> dict[st
 
 
 def _run_chunk(chunk: list[tuple[int, Scenario]], options: dict[str, Any]) -> list[dict[str, Any]]:
-    return [_run_one(i, s, options) for i, s in chunk]
+    return [_run_one(i, s, dict(options)) for i, s in chunk]
 
 
 class _Progress:
@@ -69,7 +74,7 @@ def _done_indices(out: Path) -> set[int]:
 
 def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = None, workers: Optional[int] = None,
               chunk_size: Optional[int] = None, progress: Optional[bool] = None, out: str | Path | None = None,
-              **simulate_options: Any) -> list[dict[str, Any]]:
+              keep: Sequence[str] = (), **simulate_options: Any) -> list[dict[str, Any]]:
     """Run every scenario and return one summary row per scenario, in input order.
 
     Parameters
@@ -80,6 +85,8 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
     chunk_size : scenarios per task (default: enough for about 8 tasks per worker).
     progress : draw a progress bar on stderr; default: when stderr is a terminal and there are >= 100 runs.
     out : a JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
+    keep : names of time series (see :meth:`~flatstep.result.SimResult.series`) to return in each row as
+        ``series_<name>`` lists, for figures.
     simulate_options : passed to :func:`flatstep.simulate` (e.g. ``engine``, ``dt_out``).
     """
     scenarios = list(scenarios)
@@ -90,6 +97,10 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
         raise ValueError(f"workers={workers!r} must be a positive integer")
     if chunk_size is not None and (not isinstance(chunk_size, int) or chunk_size < 1):
         raise ValueError(f"chunk_size={chunk_size!r} must be a positive integer")
+    valid = set(SimResult.__dataclass_fields__) - {"meta"} | {"theta_error", "rho_error"}
+    if set(keep) - valid:
+        raise ValueError(f"keep={list(keep)!r} names unknown series; valid: {sorted(valid)}")
+    simulate_options = {**simulate_options, "keep": tuple(keep)}
     out_path = Path(out) if out is not None else None
     rows: dict[int, dict[str, Any]] = {}
     if out_path is not None:

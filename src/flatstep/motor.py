@@ -91,9 +91,15 @@ class MotorParams:
         return asdict(self)
 
 
-#: The paper's motor (Section 3).
+#: Named parameter sets. ``paper``: the motor of the paper's Section 3. ``nema17``: a NEMA 17-size hybrid
+#: stepper, Beckhoff AS1010-0000 (1.8 deg, 200 steps: Nr = 50; 1.0 A rated; R = 4.10 ohm; L = 9.50 mH;
+#: rotor inertia 0.056 kg cm^2; standstill torque 0.38 N m; cogging torque 0.014-0.016 N m), technical
+#: data at https://infosys.beckhoff.com/content/1033/as1000_ba/1426750347.html . Km is the standstill
+#: torque over the current-vector norm with both phases at rated current, 0.38 / (sqrt(2) * 1.0 A); B is
+#: not in the datasheet and is taken as 1e-4 N m s/rad, the paper's value.
 PRESETS: dict[str, dict[str, float]] = {
     "paper": dict(R=8.4, L=0.010, Km=0.05, J=3.6e-6, B=1e-4, Nr=50),
+    "nema17": dict(R=4.10, L=9.50e-3, Km=0.38 / math.sqrt(2.0), J=5.6e-6, B=1e-4, Nr=50),
 }
 
 

@@ -54,7 +54,8 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
                   n_periods: int) -> dict[str, np.ndarray]:
     """Run ``n_periods`` control periods; returns the time series at the control instants: ``t``, the plant
     state ``x`` (4, n+1), the applied voltages ``v`` (2, n+1, as averaged over the following period) and
-    what the controller saw, ``y`` (5, n+1)."""
+    what the controller saw, ``y`` (5, n+1), and the times at which the law faulted (``faults``; the
+    drive then applied 0 V for that period)."""
     Ts, model = loop.control_period, controller.motor
     sensors, drive, observer = loop.sensors, loop.drive, loop.observer
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
@@ -66,6 +67,7 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
     xh = None
     v_hold = model.R * x[:2]  # what the bridge applies before the first command (the start equilibrium)
     theta_prev = None
+    faults: list[float] = []
     for k in range(n_periods + 1):
         t = k * Ts
         X[:, k] = x
@@ -89,9 +91,12 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
             y = (ia_m, ib_m, omega, th_m, 0.0)
         theta_prev = th_m
         Y[:, k] = y
-        v_cmd, _ = controller.step(None, np.array(y), t)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            v_cmd, _ = controller.step(None, np.array(y), t)
         if not np.all(np.isfinite(v_cmd)):
-            raise RuntimeError(f"the controller returned {v_cmd} at t={t:.6g} s from measurement {y}")
+            # outside the law's domain (singular sqrt, rho = 0): de-energise, as the C smc_step does
+            v_cmd = np.zeros(2)
+            faults.append(t)
         v_new = drive.saturate(v_cmd) if drive is not None else v_cmd
         v_apply, v_hold = (v_hold, v_new) if loop.compute_delay else (v_new, v_new)
         V[:, k] = v_apply
@@ -108,4 +113,4 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
             raise RuntimeError(f"the plant state became non-finite at t={t + Ts:.6g} s")
         if observer is not None:
             xh = Ad @ xh + Bd * Te
-    return {"t": np.arange(n_periods + 1) * Ts, "x": X, "v": V, "y": Y}
+    return {"t": np.arange(n_periods + 1) * Ts, "x": X, "v": V, "y": Y, "faults": np.array(faults)}

@@ -6,10 +6,13 @@ from functools import lru_cache
 from typing import Any, Optional
 
 from .control.smc import FlatnessSMC, SMCGains
+from .drive import Drive
 from .feasibility import FeasibilityReport, check_feasibility
 from .motor import MotorParams, check_positive
+from .observers import Observer
 from .plan import PAPER_PLAN, RestToRest
 from .result import SimResult
+from .sensors import Sensors
 from .simulate import simulate
 
 
@@ -19,7 +22,9 @@ class Scenario:
 
     ``motor`` is the controller's model; ``plant`` the simulated motor (default: the same, a perfect model).
     ``control_period`` ``None`` evaluates the law continuously (the paper); a period [s] samples it with a
-    zero-order hold, the plant integrated by ``substeps`` RK4 steps per period.
+    zero-order hold, the plant integrated by ``substeps`` RK4 steps per period. ``drive``, ``sensors``,
+    ``observer`` and ``compute_delay`` describe a realistic drive around the sampled controller
+    (see :func:`flatstep.simulate`).
     """
 
     name: str = "run"
@@ -32,6 +37,10 @@ class Scenario:
     plant: Optional[MotorParams] = None
     control_period: Optional[float] = None
     substeps: int = 10
+    drive: Optional[Drive] = None
+    sensors: Optional[Sensors] = None
+    observer: Optional[Observer] = None
+    compute_delay: bool = False
 
     def __post_init__(self) -> None:
         check_positive("t_end", self.t_end, unit=" s")
@@ -57,7 +66,8 @@ class Scenario:
         self.feasibility().raise_if_infeasible()
         if self.control_period is not None:
             simulate_options = {"control_period": self.control_period, "substeps": self.substeps,
-                                **simulate_options}
+                                "drive": self.drive, "sensors": self.sensors, "observer": self.observer,
+                                "compute_delay": self.compute_delay, **simulate_options}
         return simulate(self.plant_motor, self.plan, self.controller(), load=self.load_torque, t_end=self.t_end,
                         **simulate_options)
 

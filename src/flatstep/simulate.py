@@ -163,6 +163,9 @@ def _simulate_python(motor: MotorParams, plan: RestToRest, controller: FlatnessS
             **{k: getattr(loop, k).as_dict() for k in ("drive", "sensors", "observer") if getattr(loop, k)}}
     result = collect(r["t"], X, plan, controller, (torque(X, motor) - motor.B * X[2] - tau) / motor.J, meta, v=r["v"])
     result.meta["measured"] = {"theta": Y[3], "omega": Y[2], "ddtheta": Y[4]}
+    result.meta["controller_faults"] = int(r["faults"].size)
+    if r["faults"].size:
+        result.meta["first_fault_time"] = float(r["faults"][0])
     return result
 
 

@@ -1,0 +1,152 @@
+"""Scenario files (TOML): motor, plan, controller, drive, sensors, observer, load, robustness.
+
+See examples/*.toml for every key; an unknown key or a bad value is a ValueError naming the file and key.
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Optional
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from .control.smc import SMCGains
+from .design import design_gains
+from .drive import Drive
+from .motor import MotorParams, PRESETS
+from .observers import Observer
+from .plan import PAPER_PLAN, RestToRest
+from .scenario import Scenario
+from .sensors import Sensors
+
+MOTOR_KEYS = ("preset", "R", "L", "Km", "J", "B", "Nr")
+SECTIONS: dict[str, tuple[str, ...]] = {
+    "": ("name", "description", "t_end", "motor", "plant", "plan", "controller", "drive", "sensors", "observer",
+         "load", "robustness"),
+    "motor": MOTOR_KEYS,
+    "plant": MOTOR_KEYS + ("scale",),
+    "plan": ("theta1", "theta2", "rho1", "rho2", "t0", "tf"),
+    "controller": ("measurement", "W1", "W2", "eps1", "eps2", "xi", "wn", "design", "uncertainty"),
+    "drive": ("control_rate", "substeps", "compute_delay", "v_bus", "pwm", "f_pwm", "dead_time"),
+    "sensors": ("encoder_counts", "encoder_offset", "current_bits", "current_range", "current_offset",
+                "current_noise", "delay", "seed"),
+    "observer": ("bandwidth", "load_states"),
+    "load": ("torque",),
+    "robustness": ("relative_error", "parameters", "samples", "seed"),
+}
+
+
+@dataclass(frozen=True)
+class Robustness:
+    """A parameter-error study: every sign combination of +-``relative_error`` on ``parameters`` of the
+    plant (``samples = 0``) or a seeded uniform random sample of ``samples`` plants in the same box."""
+
+    relative_error: float = 0.1
+    parameters: tuple[str, ...] = ("R", "L", "Km", "J", "B")
+    samples: int = 0
+    seed: int = 0
+
+
+def _check_keys(where: str, table: Any, section: str) -> dict:
+    if not isinstance(table, dict):
+        raise ValueError(f"{where}: [{section}] must be a table, got {table!r}")
+    unknown = sorted(set(table) - set(SECTIONS[section]))
+    if unknown:
+        label = f"[{section}]" if section else "the top level"
+        raise ValueError(f"{where}: unknown key(s) {unknown} in {label}; valid: {list(SECTIONS[section])}")
+    return table
+
+
+def _wrap(where: str, section: str, build, **kwargs):
+    try:
+        return build(**kwargs)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: [{section}] {exc}") from None
+
+
+def _motor(where: str, table: dict, section: str, base: MotorParams) -> MotorParams:
+    values = dict(base.as_dict())
+    if "preset" in table:
+        if table["preset"] not in PRESETS:
+            raise ValueError(f"{where}: [{section}] preset={table['preset']!r} is unknown; valid: {sorted(PRESETS)}")
+        values = dict(PRESETS[table["preset"]])
+    values.update({k: v for k, v in table.items() if k in MOTOR_KEYS[1:]})
+    motor = _wrap(where, section, MotorParams, **values)
+    scale = table.get("scale", {})
+    if not isinstance(scale, dict) or set(scale) - set(MOTOR_KEYS[1:6]):
+        raise ValueError(f"{where}: [{section}] scale={scale!r} must be a table of factors on R, L, Km, J, B")
+    return _wrap(where, section, motor.replace, **{k: getattr(motor, k) * float(f) for k, f in scale.items()})
+
+
+def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
+    """Read a scenario file; returns the :class:`Scenario` and its robustness study (or ``None``)."""
+    path = Path(path)
+    where = str(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{where}: no such scenario file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{where}: not valid TOML: {exc}") from None
+    _check_keys(where, doc, "")
+    sec = {name: _check_keys(where, doc.get(name, {}), name) for name in SECTIONS if name}
+    motor = _motor(where, sec["motor"], "motor", MotorParams.preset("paper"))
+    plant = _motor(where, sec["plant"], "plant", motor) if sec["plant"] else None
+    plan = _wrap(where, "plan", RestToRest, **{**PAPER_PLAN.as_dict(), **sec["plan"]})
+    load = float(sec["load"].get("torque", 0.0))
+
+    drive_t = dict(sec["drive"])
+    rate = drive_t.pop("control_rate", None)
+    substeps = drive_t.pop("substeps", 4)
+    compute_delay = drive_t.pop("compute_delay", False)
+    if rate is None and (drive_t or sec["sensors"] or sec["observer"] or compute_delay):
+        raise ValueError(f"{where}: [drive] control_rate is needed for a drive, sensors or an observer "
+                         "(without it the law runs in continuous time, as in the paper)")
+    if rate is not None and (not isinstance(rate, (int, float)) or rate <= 0):
+        raise ValueError(f"{where}: [drive] control_rate={rate!r} must be a positive rate in Hz")
+    period = None if rate is None else 1.0 / rate
+    drive = _wrap(where, "drive", Drive, **drive_t) if rate is not None else None
+    sensors = _wrap(where, "sensors", Sensors, **{**sec["sensors"], **(
+        {"current_offset": tuple(sec["sensors"]["current_offset"])} if "current_offset" in sec["sensors"] else {})}
+    ) if sec["sensors"] else None
+
+    ctrl = dict(sec["controller"])
+    design = ctrl.pop("design", False)
+    uncertainty = ctrl.pop("uncertainty", 0.1)
+    measurement = ctrl.pop("measurement", None)
+    observer = None
+    if design:
+        if period is None:
+            raise ValueError(f"{where}: [controller] design = true needs [drive] control_rate")
+        d = _wrap(where, "controller", design_gains, motor=motor, plan=plan, control_period=period,
+                  v_bus=drive.v_bus, load_torque=load, uncertainty=uncertainty, compute_delay=compute_delay,
+                  encoder_counts=sensors.encoder_counts if sensors else None,
+                  current_step=sensors.current_step if sensors else 0.0)
+        gains = _wrap(where, "controller", lambda **kw: replace(d.gains, **kw), **ctrl)
+        observer = d.observer if sensors else None
+    else:
+        gains = _wrap(where, "controller", SMCGains, **ctrl)
+    if sec["observer"]:
+        observer = _wrap(where, "observer", Observer, **{**(observer.as_dict() if observer else {}), **sec["observer"]})
+    if measurement is None:  # what the drive can give: an observer's estimate, the model, or the truth
+        measurement = "observer" if observer else "model" if sensors else "ideal"
+    scenario = _wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
+                     gains=gains, measurement=measurement, load_torque=load, t_end=doc.get("t_end", 0.06),
+                     plant=plant, control_period=period, substeps=substeps, drive=drive, sensors=sensors,
+                     observer=observer, compute_delay=compute_delay)
+    robustness = None
+    if "robustness" in doc:
+        r = dict(sec["robustness"])
+        if "parameters" in r:
+            bad = sorted(set(r["parameters"]) - set(MOTOR_KEYS[1:6]))
+            if bad:
+                raise ValueError(f"{where}: [robustness] parameters {bad} are not R, L, Km, J or B")
+            r["parameters"] = tuple(r["parameters"])
+        robustness = _wrap(where, "robustness", Robustness, **r)
+        if not 0 < robustness.relative_error < 0.5:
+            raise ValueError(f"{where}: [robustness] relative_error={robustness.relative_error!r} must be in (0, 0.5)")
+    return scenario, robustness
