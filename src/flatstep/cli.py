@@ -44,17 +44,37 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+SIM_FLAGS = ("theta1", "theta2", "rho1", "rho2", "t0", "tf", "t_end", "load_torque", "W1", "W2", "eps1", "eps2",
+             "xi", "wn", "measurement")
+
+
+def _scenario_from_flags(args: argparse.Namespace) -> Scenario:
+    p, g = PAPER_PLAN.as_dict(), SMCGains().as_dict()
+    val = {k: getattr(args, k) for k in SIM_FLAGS}
+    val = {k: v if v is not None else p.get(k, g.get(k)) for k, v in val.items()}
+    plan = RestToRest(**{k: val[k] for k in p})
+    gains = SMCGains(**{k: val[k] for k in g})
+    return Scenario("run", plan=plan, gains=gains, measurement=val["measurement"] or "ideal",
+                    load_torque=val["load_torque"] or 0.0, t_end=val["t_end"] or 0.06)
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
-    plan = RestToRest(args.theta1, args.theta2, args.rho1, args.rho2, args.t0, args.tf)
-    gains = SMCGains(W1=args.W1, W2=args.W2, eps1=args.eps1, eps2=args.eps2, xi=args.xi, wn=args.wn)
-    scenario = Scenario("run", plan=plan, gains=gains, measurement=args.measurement,
-                        load_torque=args.load_torque, t_end=args.t_end)
+    if args.scenario:
+        given = [f"--{k.replace('_', '-')}" for k in SIM_FLAGS if getattr(args, k) is not None]
+        if given:
+            raise ValueError(f"{given} cannot be combined with a scenario file: set them in {args.scenario}")
+        from .scenario_file import load_scenario
+
+        scenario, _ = load_scenario(args.scenario)
+    else:
+        scenario = _scenario_from_flags(args)
     result = scenario.run(**({} if args.x0 is None else {"x0": args.x0}))
     summary = result.summary()
     if args.out:
         out = Path(args.out)
-        _write(out, "run", scenario, result, f"theta {plan.theta1:g} -> {plan.theta2:g} rad, "
-               f"load {args.load_torque:g} N m, {args.measurement} measurement")
+        plan = scenario.plan
+        _write(out, "run", scenario, result, f"{scenario.name}: theta {plan.theta1:g} -> {plan.theta2:g} rad, "
+               f"load {scenario.load_torque:g} N m, {scenario.measurement} measurement")
         (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(json.dumps(summary, indent=2) if args.json else _table({"run": summary}))
     return 0
@@ -75,6 +95,8 @@ def build_parser() -> argparse.ArgumentParser:
     rep.set_defaults(func=cmd_reproduce)
 
     sim = sub.add_parser("simulate", help="simulate one closed-loop move (defaults: the paper's Fig. 1)")
+    sim.add_argument("scenario", nargs="?", default=None,
+                     help="a scenario file (TOML, see examples/); or give the move and gains by flags")
     p, g = PAPER_PLAN, SMCGains()
     for flag, default, help_ in (
         ("--theta1", p.theta1, "start angle [rad]"), ("--theta2", p.theta2, "end angle [rad]"),
@@ -85,14 +107,18 @@ def build_parser() -> argparse.ArgumentParser:
         ("--eps1", g.eps1, "boundary layer of s1"), ("--eps2", g.eps2, "boundary layer of s2"),
         ("--xi", g.xi, "damping of the theta error dynamics"), ("--wn", g.wn, "natural frequency [rad/s]"),
     ):
-        sim.add_argument(flag, type=float, default=default, help=f"{help_} (default {default:g})")
-    sim.add_argument("--measurement", choices=MEASUREMENTS, default="ideal",
+        sim.add_argument(flag, type=float, default=None, help=f"{help_} (default {default:g})")
+    sim.add_argument("--measurement", choices=MEASUREMENTS, default=None,
                      help="ideal: true theta'' known (the paper); model: theta'' from the zero-load model")
     sim.add_argument("--x0", type=float, nargs=4, metavar=("IA", "IB", "OMEGA", "THETA"), default=None,
                      help="initial plant state (default: the plan's start equilibrium)")
     sim.add_argument("--out", default=None, help="write run.png, run.csv and summary.json here")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     sim.set_defaults(func=cmd_simulate)
+
+    from .cli_drive import add_drive_commands
+
+    add_drive_commands(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d", help="a: planning, b: closed loop, c: controller step, "

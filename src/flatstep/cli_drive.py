@@ -1,0 +1,125 @@
+"""Command line for real drives: ``flatstep design`` and ``flatstep robustness``."""
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import replace
+from pathlib import Path
+
+from .control.smc import SMCGains
+from .design import design_gains
+from .drive import Drive
+from .robustness import REST_AFTER, run_study
+from .scenario import Scenario
+from .scenario_file import Robustness, load_scenario
+from .sensors import Sensors
+
+
+def _drive_scenario(args: argparse.Namespace) -> Scenario:
+    """The scenario file's drive, or the realistic default: paper motor and move, 24 V, 14-bit, 12-bit."""
+    if args.scenario:
+        scenario, _ = load_scenario(args.scenario)
+        if scenario.control_period is None:
+            raise ValueError(f"{args.scenario} has no [drive] control_rate: gain design is for sampled drives")
+        return scenario
+    sensors = Sensors(encoder_counts=args.encoder_counts, current_bits=args.current_bits,
+                      current_range=args.current_range)
+    return Scenario("drive", control_period=1.0 / args.control_rate, substeps=4, drive=Drive(v_bus=args.v_bus),
+                    sensors=sensors, load_torque=args.load_torque, compute_delay=args.compute_delay,
+                    measurement="observer")
+
+
+def cmd_design(args: argparse.Namespace) -> int:
+    base = _drive_scenario(args)
+    s = base.sensors
+    d = design_gains(base.motor, base.plan, control_period=base.control_period,
+                     v_bus=base.drive.v_bus if base.drive else float("inf"),
+                     encoder_counts=s.encoder_counts if s else None, current_step=s.current_step if s else 0.0,
+                     load_torque=base.load_torque, uncertainty=args.uncertainty, compute_delay=base.compute_delay)
+    report = d.as_dict()
+    if args.out:
+        from .plots import plot_compare
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        designed = replace(base, gains=d.gains, observer=d.observer if s else None)
+        paper = replace(designed, gains=SMCGains())
+        runs = {"paper's gains": paper.run(), "designed gains": designed.run()}
+        report["runs"] = {k: {**r.summary(), "controller_faults": r.meta.get("controller_faults", 0)}
+                          for k, r in runs.items()}
+        count = s.angle_step if s and s.angle_step else None
+        plot_compare(runs, count, title=f"{base.name}: {1 / base.control_period:g} Hz control, "
+                     f"load {base.load_torque:g} N m", path=out / "design.png")
+        (out / "design.json").write_text(json.dumps(report, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print("designed gains: " + ", ".join(f"{k}={v:.6g}" for k, v in report["gains"].items()))
+    print("observer: " + ", ".join(f"{k}={v:.6g}" for k, v in report["observer"].items()))
+    print("rationale: " + ", ".join(f"{k}={v:.6g}" for k, v in report["rationale"].items()))
+    for w in d.warnings:
+        print(f"warning: {w}")
+    for label, summ in report.get("runs", {}).items():
+        print(f"{label:>15}: max |theta - theta*| during the move {summ.get('max_abs_theta_error_move', float('nan')):.3e} "
+              f"rad, after it {summ.get('max_abs_theta_error_after', float('nan')):.3e} rad, peak |v| "
+              f"{max(summ['max_abs_va'], summ['max_abs_vb']):.3g} V, controller faults {summ['controller_faults']}")
+    return 0
+
+
+def cmd_robustness(args: argparse.Namespace) -> int:
+    scenario, study = load_scenario(args.scenario)
+    study = study or Robustness()
+    if args.samples is not None:
+        study = replace(study, samples=args.samples)
+    result = run_study(scenario, study, with_paper_gains=not args.no_paper_gains, progress=args.progress)
+    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else None
+    report = {label: {k: v for k, v in s.items() if k != "rows"} for label, s in result["sets"].items()}
+    report = {"scenario": scenario.name, "relative_error": study.relative_error, "parameters": list(study.parameters),
+              "runs_per_set": len(result["errors"]), "rest_starts_after_tf_s": REST_AFTER, "sets": report}
+    if args.out:
+        from .plots import plot_robustness
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_robustness(result, count, scenario.plan, title=f"{scenario.name}: plant parameters off by "
+                        f"+-{study.relative_error:.0%} ({len(result['errors'])} plants)", path=out / "robustness.png")
+        (out / "robustness.json").write_text(json.dumps(report, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    unit = "counts" if count else "rad"
+    print(f"{scenario.name}: {len(result['errors'])} plants, parameters off by +-{study.relative_error:.0%}")
+    print(f"{'gains':<14}{'runs ok':>9}{'worst move':>14}{'worst rest':>14}{'final':>12}{'peak |v|':>11}  [{unit}, V]")
+    for label, s in report["sets"].items():
+        w, wv = s.get("worst_counts", s["worst_rad"]), s["worst_rad"]
+        print(f"{label:<14}{s['runs'] - s['failed']:>5}/{s['runs']:<3}{w.get('move', float('nan')):>14.3f}"
+              f"{w.get('rest', float('nan')):>14.3f}{w.get('final', float('nan')):>12.3f}"
+              f"{wv.get('peak_voltage', float('nan')):>11.3g}")
+    return 0
+
+
+def add_drive_commands(sub) -> None:
+    des = sub.add_parser("design", help="design sliding gains and observer for a sampled drive")
+    des.add_argument("scenario", nargs="?", default=None, help="a scenario file with a [drive] (default: "
+                     "the paper's motor and move on the flags' drive)")
+    des.add_argument("--control-rate", type=float, default=20e3, help="control rate [Hz] (default 20000)")
+    des.add_argument("--v-bus", type=float, default=24.0, help="bus voltage [V] (default 24)")
+    des.add_argument("--encoder-counts", type=int, default=16384, help="counts per revolution (default 16384)")
+    des.add_argument("--current-bits", type=int, default=12, help="current ADC bits (default 12)")
+    des.add_argument("--current-range", type=float, default=2.0, help="current ADC full scale +-A (default 2)")
+    des.add_argument("--load-torque", type=float, default=1e-5, help="expected load torque [N m] (default 1e-5)")
+    des.add_argument("--uncertainty", type=float, default=0.1, help="relative parameter error (default 0.1)")
+    des.add_argument("--compute-delay", action="store_true", help="one period between measuring and applying")
+    des.add_argument("--out", default=None, help="also run the paper's and the designed gains on this drive: "
+                     "design.png, design.json")
+    des.add_argument("--json", action="store_true", help="print the design as JSON")
+    des.set_defaults(func=cmd_design)
+
+    rob = sub.add_parser("robustness", help="a scenario under plant parameter errors ([robustness] of the file)")
+    rob.add_argument("scenario", help="a scenario file (TOML)")
+    rob.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
+    rob.add_argument("--no-paper-gains", action="store_true", help="skip the paper's gains on the same drive")
+    rob.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
+    rob.add_argument("--out", default=None, help="write robustness.png and robustness.json here")
+    rob.add_argument("--json", action="store_true", help="print the report as JSON")
+    rob.set_defaults(func=cmd_robustness)
