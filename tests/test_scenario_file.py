@@ -1,0 +1,65 @@
+from pathlib import Path
+
+import pytest
+
+import flatstep as fs
+from flatstep.scenario_file import load_scenario
+
+EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_every_example_loads_and_runs(path):
+    scenario, _ = load_scenario(path)
+    s = scenario.run().summary()
+    assert abs(s["theta_final"] - scenario.plan.theta2) < 2e-3
+
+
+def test_paper_files_are_the_papers_scenarios():
+    fig2, study = load_scenario(EXAMPLES[0].parent / "paper-fig2.toml")
+    ref = fs.PAPER_SCENARIOS["fig2"]
+    assert (fig2.gains, fig2.load_torque, fig2.plan, fig2.motor, fig2.measurement) == (
+        ref.gains, ref.load_torque, ref.plan, ref.motor, ref.measurement)
+    assert study is None and fig2.control_period is None
+
+
+def test_realistic_drive_file():
+    s, study = load_scenario(EXAMPLES[0].parent / "drive-20khz-14bit.toml")
+    assert s.control_period == pytest.approx(5e-5) and s.drive.v_bus == 24.0
+    assert s.sensors.encoder_counts == 16384 and s.sensors.current_bits == 12
+    assert s.measurement == "observer" and s.observer is not None
+    assert s.plant.Km == pytest.approx(0.9 * s.motor.Km) and s.plant.J == pytest.approx(1.1 * s.motor.J)
+    assert study.samples == 0 and study.parameters == ("R", "L", "Km", "J", "B")
+
+
+def write(tmp_path, text):
+    p = tmp_path / "s.toml"
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("text, match", [
+    ("nmae = 'x'", r"unknown key\(s\) \['nmae'\] in the top level"),
+    ("[motor]\nR = -1.0", r"\[motor\] R=-1.0"),
+    ("[motor]\npreset = 'nema99'", "preset='nema99' is unknown"),
+    ("[plan]\ntheta3 = 1.0", r"unknown key\(s\) \['theta3'\] in \[plan\]"),
+    ("[plan]\nrho1 = 0.0", r"\[plan\] rho1=0.0"),
+    ("[controller]\nW1 = 0", r"\[controller\] W1=0.0"),
+    ("[sensors]\nencoder_counts = 16384", "control_rate is needed"),
+    ("[drive]\ncontrol_rate = -5.0", "control_rate=-5.0"),
+    ("[drive]\ncontrol_rate = 2e4\nv_bus = 0", r"\[drive\] v_bus=0"),
+    ("[drive]\ncontrol_rate = 2e4\n[sensors]\ncurrent_bits = 1", "current_bits=1"),
+    ("[plant]\nscale = { Nr = 2 }", "scale="),
+    ("[robustness]\nparameters = ['R', 'Q']", r"\['Q'\] are not"),
+    ("[robustness]\nrelative_error = 0.7", "relative_error=0.7"),
+    ("[controller]\ndesign = true", "design = true needs"),
+    ("t_end = = 1", "not valid TOML"),
+])
+def test_bad_files_name_the_key(tmp_path, text, match):
+    with pytest.raises(ValueError, match=match):
+        load_scenario(write(tmp_path, text))
+
+
+def test_missing_file():
+    with pytest.raises(ValueError, match="no such scenario file"):
+        load_scenario("nowhere.toml")
