@@ -68,6 +68,7 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
     v_hold = model.R * x[:2]  # what the bridge applies before the first command (the start equilibrium)
     theta_prev = None
     faults: list[float] = []
+    ctrl_state = controller.initial_state() if hasattr(controller, "initial_state") else None
     for k in range(n_periods + 1):
         t = k * Ts
         X[:, k] = x
@@ -92,7 +93,7 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
         theta_prev = th_m
         Y[:, k] = y
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            v_cmd, _ = controller.step(None, np.array(y), t)
+            v_cmd, ctrl_state = controller.step(ctrl_state, np.array(y), t)
         if not np.all(np.isfinite(v_cmd)):
             # outside the law's domain (singular sqrt, rho = 0): de-energise, as the C smc_step does
             v_cmd = np.zeros(2)
