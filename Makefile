@@ -12,7 +12,7 @@ venv: $(STAMP)
 $(STAMP): pyproject.toml $(wildcard setup.py) $(wildcard src/flatstep/*.py src/flatstep/*/*.py csrc/*.c csrc/*.h)
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e '.[test]'
+	$(BIN)/python -m pip install -q -e '.[test,bench]'
 	touch $@
 
 demo: venv
