@@ -28,7 +28,7 @@ fi
 if have_libfuzzer; then
     # shellcheck disable=SC2086
     clang $FLAGS -fsanitize=fuzzer $SAN $SRC -lm -o "$OUT/fuzz_smc"
-    ASAN_OPTIONS=detect_leaks=0 "$OUT/fuzz_smc" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 \
+    ASAN_OPTIONS=detect_leaks=0 "$OUT/fuzz_smc" -seed="${FUZZ_SEED:-1}" -max_total_time="$SECONDS_TO_RUN" -print_final_stats=1 \
         -artifact_prefix="$OUT/" "$OUT/corpus"
 else
     CC="${CC:-cc}"
