@@ -24,6 +24,16 @@ PANELS = (
 )
 
 
+def _finish(fig, title: str, path: str | Path | None):
+    """Title the figure and, when a path is given, write it (PNG, 150 dpi) and close it."""
+    if title:
+        fig.suptitle(title)
+    if path is not None:
+        fig.savefig(path, dpi=150)
+        plt.close(fig)
+    return fig
+
+
 def plot_run(result: SimResult, title: str = "", path: str | Path | None = None):
     """Plot a run in the paper's panels (solid: closed loop, dashed: plan / feedforward).
 
@@ -41,12 +51,7 @@ def plot_run(result: SimResult, title: str = "", path: str | Path | None = None)
     for ax in axes[-1]:
         ax.set_xlabel("t [s]")
     axes[0, 0].legend(loc="best", fontsize=8)
-    if title:
-        fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=150)
-        plt.close(fig)
-    return fig
+    return _finish(fig, title, path)
 
 
 def plot_compare(results: dict[str, SimResult], count: float | None = None, title: str = "",
@@ -74,12 +79,7 @@ def plot_compare(results: dict[str, SimResult], count: float | None = None, titl
     for ax in axes:
         ax.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
-    if title:
-        fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=150)
-        plt.close(fig)
-    return fig
+    return _finish(fig, title, path)
 
 
 def plot_robustness(study: dict, count: float | None, plan, title: str = "", path: str | Path | None = None):
@@ -102,9 +102,4 @@ def plot_robustness(study: dict, count: float | None, plan, title: str = "", pat
         ax.set_ylabel(rf"$\theta - \theta^*$ [{unit}]")
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("t [s] (shaded: the move)")
-    if title:
-        fig.suptitle(title)
-    if path is not None:
-        fig.savefig(path, dpi=150)
-        plt.close(fig)
-    return fig
+    return _finish(fig, title, path)
