@@ -4,9 +4,11 @@
 // Returns nothing; writes plan_eval at each of the n times t into flag (n x 6, row-major).
 void batch_plan_eval(const struct plan *p, const fs_real *t, size_t n, fs_real *flag)
 {
+    struct plan_coef c;
     size_t i;
+    plan_init(&c, p);
     for (i = 0; i < n; i++)
-        plan_eval(p, t[i], &flag[PLAN_FLAG_LEN * i]);
+        plan_flag(&c, t[i], &flag[PLAN_FLAG_LEN * i]);
 }
 
 // Returns the number of samples outside the maps' domain; flat_voltages on rows of

@@ -1,8 +1,10 @@
 // The degree-10 interpolating polynomial psi of eq. (17) and the rest-to-rest flat flag built on it.
 #include "plan.h"
 
-// Power-basis coefficients (lowest first) of psi(tau) and its first three tau-derivatives; integers, so
-// exact in float and double. psi = tau^5 (252 - 1050 tau + 1800 tau^2 - 1575 tau^3 + 700 tau^4 - 126 tau^5).
+// Power-basis coefficients (lowest first) of psi(tau) and its first three tau-derivatives, padded with zeros
+// to degree 10; integers, so exact in float and double. psi = tau^5 (252 - 1050 tau + 1800 tau^2 - 1575 tau^3
+// + 700 tau^4 - 126 tau^5). A zero leading coefficient leaves Horner's accumulator at exactly 0, so the padded
+// chains round exactly as numpy.polyval on the unpadded ones.
 static const fs_real psi_coef[4][11] = {
     {0, 0, 0, 0, 0, 252, -1050, 1800, -1575, 700, -126},
     {0, 0, 0, 0, 1260, -6300, 12600, -12600, 6300, -1260},
@@ -19,15 +21,73 @@ bool plan_valid(const struct plan *p)
         && fs_pow(p->tf - p->t0, 3) > 0;
 }
 
-// Returns the Horner value of the order-th derivative polynomial of psi at tau (the numpy polyval order).
-static fs_real psi_horner(int order, fs_real tau)
+// Returns nothing; writes (tf - t0)^k, k = 0..3, as the reference's T**k (pow), or 0 when tf <= t0.
+static void span_powers(fs_real t0, fs_real tf, fs_real Tk[4])
 {
-    const fs_real *c = psi_coef[order];
-    int j = 10 - order;
-    fs_real acc = c[j];
-    while (j-- > 0)
-        acc = c[j] + acc * tau;
-    return acc;
+    fs_real T = tf - t0;
+    int k;
+    for (k = 0; k < 4; k++)
+        Tk[k] = T > 0 ? fs_pow(T, (fs_real)k) : 0;
+}
+
+// Returns nothing; writes the four psi tau-polynomials at tau in one Horner pass (four independent chains).
+static void psi_horner(fs_real tau, fs_real d[4])
+{
+    fs_real a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    int j;
+    for (j = 10; j >= 0; j--) {
+        a0 = psi_coef[0][j] + a0 * tau;
+        a1 = psi_coef[1][j] + a1 * tau;
+        a2 = psi_coef[2][j] + a2 * tau;
+        a3 = psi_coef[3][j] + a3 * tau;
+    }
+    d[0] = a0, d[1] = a1, d[2] = a2, d[3] = a3;
+}
+
+// Returns nothing; writes psi and its first three time derivatives at t (see plan_psi) from the span powers.
+static void psi_all(fs_real t, fs_real t0, fs_real tf, const fs_real Tk[4], fs_real d[4])
+{
+    bool inside = t > t0 && t < tf;
+    fs_real tau;
+    int k;
+    if (!(tf > t0) || (!inside && (t <= t0 || t >= tf))) {
+        // tf <= t0: all 0. At rest: psi(0) = 0 and psi(1) = 1 exactly (its coefficients sum to 1), derivatives
+        // 0. Only a NaN t goes on: psi is then NaN and its derivatives 0, as in the reference.
+        d[0] = tf > t0 && t >= tf ? 1 : 0;
+        d[1] = d[2] = d[3] = 0;
+        return;
+    }
+    tau = (t - t0) / (tf - t0);
+    tau = tau < 0 ? 0 : (tau > 1 ? 1 : tau);
+    psi_horner(tau, d);
+    for (k = 1; k < 4; k++)
+        d[k] = inside && Tk[k] > 0 ? d[k] / Tk[k] : 0;  // the reference divides by T**k; an underflowed power: 0
+}
+
+// Returns plan_valid(p); fills c from p either way (for tf <= t0 plan_flag then holds the start values, and
+// a derivative whose (tf - t0)^k underflows evaluates to 0).
+bool plan_init(struct plan_coef *c, const struct plan *p)
+{
+    c->p = *p;
+    span_powers(p->t0, p->tf, c->Tk);
+    c->dtheta = p->theta2 - p->theta1;
+    c->drho = p->rho2 - p->rho1;
+    return plan_valid(p);
+}
+
+// Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
+// theta''') at time t, exactly as flatstep.plan.RestToRest.flag: one pass over the four psi polynomials.
+bool plan_flag(const struct plan_coef *c, fs_real t, fs_real flag[PLAN_FLAG_LEN])
+{
+    fs_real d[4];
+    psi_all(t, c->p.t0, c->p.tf, c->Tk, d);
+    flag[PLAN_RHO] = c->p.rho1 + d[0] * c->drho;
+    flag[PLAN_DRHO] = d[1] * c->drho;
+    flag[PLAN_THETA] = c->p.theta1 + d[0] * c->dtheta;
+    flag[PLAN_DTHETA] = d[1] * c->dtheta;
+    flag[PLAN_DDTHETA] = d[2] * c->dtheta;
+    flag[PLAN_DDDTHETA] = d[3] * c->dtheta;
+    return t > c->p.t0 && t < c->p.tf;
 }
 
 // Returns the order-th time derivative (0..3) of psi(t, t0, tf) of eq. (17): held at 0 before t0 and at 1
@@ -35,29 +95,18 @@ static fs_real psi_horner(int order, fs_real tau)
 // and for a span so short that (tf - t0)^order underflows.
 fs_real plan_psi(fs_real t, fs_real t0, fs_real tf, int order)
 {
-    fs_real T = tf - t0, Tk, tau;
-    if (order < 0 || order > 3 || !(T > 0))
+    fs_real Tk[4], d[4];
+    if (order < 0 || order > 3)
         return 0;
-    Tk = fs_pow(T, (fs_real)order);
-    if (!(Tk > 0) || (order > 0 && !(t > t0 && t < tf)))
-        return 0;
-    tau = (t - t0) / T;
-    tau = tau < 0 ? 0 : (tau > 1 ? 1 : tau);
-    return psi_horner(order, tau) / Tk;
+    span_powers(t0, tf, Tk);
+    psi_all(t, t0, tf, Tk, d);
+    return d[order];
 }
 
-// Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
-// theta''') at time t, exactly as flatstep.plan.RestToRest.flag.
+// Returns plan_flag's value for a plan used once (plan_init on the stack, then plan_flag); writes the flag.
 bool plan_eval(const struct plan *p, fs_real t, fs_real flag[PLAN_FLAG_LEN])
 {
-    fs_real dth = p->theta2 - p->theta1, drho = p->rho2 - p->rho1;
-    fs_real p0 = plan_psi(t, p->t0, p->tf, 0), p1 = plan_psi(t, p->t0, p->tf, 1);
-    fs_real p2 = plan_psi(t, p->t0, p->tf, 2), p3 = plan_psi(t, p->t0, p->tf, 3);
-    flag[PLAN_RHO] = p->rho1 + p0 * drho;
-    flag[PLAN_DRHO] = p1 * drho;
-    flag[PLAN_THETA] = p->theta1 + p0 * dth;
-    flag[PLAN_DTHETA] = p1 * dth;
-    flag[PLAN_DDTHETA] = p2 * dth;
-    flag[PLAN_DDDTHETA] = p3 * dth;
-    return t > p->t0 && t < p->tf;
+    struct plan_coef c;
+    plan_init(&c, p);
+    return plan_flag(&c, t, flag);
 }

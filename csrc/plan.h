@@ -15,16 +15,30 @@ struct plan {
     fs_real t0, tf;          // start and end of the move [s], tf > t0
 };
 
+// A plan ready to evaluate: the plan and the constants plan_flag needs, filled once by plan_init (caller-owned).
+struct plan_coef {
+    struct plan p;
+    fs_real Tk[4];         // (tf - t0)^k, k = 0..3, by pow once here so that plan_flag calls no pow
+    fs_real dtheta, drho;  // theta2 - theta1, rho2 - rho1
+};
+
 // Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
 bool plan_valid(const struct plan *p);
+
+// Returns plan_valid(p); fills c from p either way (for tf <= t0 plan_flag then holds the start values, and
+// a derivative whose (tf - t0)^k underflows evaluates to 0).
+bool plan_init(struct plan_coef *c, const struct plan *p);
+
+// Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
+// theta''') at time t, exactly as flatstep.plan.RestToRest.flag: one pass over the four psi polynomials.
+bool plan_flag(const struct plan_coef *c, fs_real t, fs_real flag[PLAN_FLAG_LEN]);
 
 // Returns the order-th time derivative (0..3) of psi(t, t0, tf) of eq. (17): held at 0 before t0 and at 1
 // after tf, derivatives 0 outside the open interval (t0, tf); 0 for an order out of range, for tf <= t0
 // and for a span so short that (tf - t0)^order underflows.
 fs_real plan_psi(fs_real t, fs_real t0, fs_real tf, int order);
 
-// Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
-// theta''') at time t, exactly as flatstep.plan.RestToRest.flag.
+// Returns plan_flag's value for a plan used once (plan_init on the stack, then plan_flag); writes the flag.
 bool plan_eval(const struct plan *p, fs_real t, fs_real flag[PLAN_FLAG_LEN]);
 
 #endif

@@ -39,6 +39,7 @@ int smc_init(struct smc *s, const struct smc_params *p)
     if (!positive(p->v_limit) || p->v_limit < FS_C(1e-3) || !positive(p->rho_min))
         return SMC_ELIMITS;
     s->p = *p;
+    plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
     s->alpha2 = 2 * g->xi * g->wn;
     smc_reset(s);
@@ -58,7 +59,7 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
     const struct smc_gains *g = &s->p.gains;
     fs_real ref[PLAN_FLAG_LEN], rho, phi, acc, e, de, dde, s1, s2, gamma1, gamma2;
     int flat;
-    plan_eval(&s->p.plan, t, ref);
+    plan_flag(&s->plan, t, ref);
     rho = fs_hypot(y[0], y[1]);
     phi = fs_atan2(y[0], y[1]);
     if (!(rho >= s->p.rho_min))

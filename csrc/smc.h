@@ -43,6 +43,7 @@ struct smc_params {
 
 struct smc {
     struct smc_params p;
+    struct plan_coef plan;   // p.plan ready to evaluate (plan_init)
     fs_real alpha1, alpha2;  // wn^2, 2 xi wn
     uint32_t status_seen;    // OR of every status since the last reset
 };

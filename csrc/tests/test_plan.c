@@ -36,6 +36,30 @@ static int psi_checks(void)
     return 0;
 }
 
+// Returns 0; plan_init + plan_flag give plan_psi's values, and a NaN time a NaN angle with zero derivatives.
+static int coef_checks(const struct plan *p)
+{
+    struct plan_coef c, tiny;
+    struct plan bad = *p;
+    double f[PLAN_FLAG_LEN], t;
+    int i, k;
+    CHECK(plan_init(&c, p), "plan_init accepts a valid plan");
+    for (i = 0; i <= 40; i++) {
+        t = 0.015 + 0.03 * i / 40.0;
+        CHECK(plan_flag(&c, t, f) == (t > p->t0 && t < p->tf), "inside flag at t=%g", t);
+        CHECK(f[PLAN_THETA] == p->theta1 + plan_psi(t, p->t0, p->tf, 0) * (p->theta2 - p->theta1), "theta at %g", t);
+        for (k = 1; k <= 3; k++)
+            CHECK(f[PLAN_THETA + k] == plan_psi(t, p->t0, p->tf, k) * (p->theta2 - p->theta1), "order %d at %g", k, t);
+    }
+    plan_flag(&c, NAN, f);
+    CHECK(isnan(f[PLAN_THETA]) && f[PLAN_DTHETA] == 0 && f[PLAN_DDDTHETA] == 0, "NaN t: theta NaN, derivatives 0");
+    bad.t0 = 0.0, bad.tf = 1e-200;  // the fuzzer's span: its cube underflows, so its derivatives must give 0
+    CHECK(!plan_init(&tiny, &bad), "plan_init reports the invalid span");
+    plan_flag(&tiny, 5e-201, f);
+    CHECK(isfinite(f[PLAN_DTHETA]) && f[PLAN_DDDTHETA] == 0 && f[PLAN_DDTHETA] == 0, "tiny span: no division by 0");
+    return 0;
+}
+
 // Returns 0; plan validity, the flag at the knots and the moving flag.
 static int plan_checks(void)
 {
@@ -57,7 +81,7 @@ static int plan_checks(void)
               && fabs(f[PLAN_RHO] - (0.4 - 0.1 * 638 / 1024)) < 1e-15,
           "halfway: theta %.17g rho %.17g", f[PLAN_THETA], f[PLAN_RHO]);
     CHECK(f[PLAN_DRHO] < 0 && f[PLAN_DTHETA] > 0, "moving: rho' %g theta' %g", f[PLAN_DRHO], f[PLAN_DTHETA]);
-    return 0;
+    return coef_checks(&p);
 }
 
 // Returns 0; the motor model and the flat maps against each other.
