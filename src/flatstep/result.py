@@ -4,7 +4,7 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
@@ -14,7 +14,10 @@ Array = NDArray[np.float64]
 
 @dataclass
 class SimResult:
-    """Closed-loop time series (SI units). ``*_ref`` are the planned values, errors are actual - planned."""
+    """Closed-loop time series (SI units). ``*_ref`` are the planned values, errors are actual - planned.
+
+    ``s1``, ``s2`` are the sliding variables of eq. (12); ``None`` for a controller without them (the
+    baselines), and then left out of :meth:`series`."""
 
     t: Array
     ia: Array
@@ -32,8 +35,8 @@ class SimResult:
     ib_ref: Array
     va_ref: Array
     vb_ref: Array
-    s1: Array
-    s2: Array
+    s1: Optional[Array]
+    s2: Optional[Array]
     meta: dict[str, Any]
 
     @property
@@ -46,7 +49,8 @@ class SimResult:
 
     def series(self) -> dict[str, Array]:
         """All time series by name, errors included."""
-        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "meta"}
+        out = {f.name: getattr(self, f.name) for f in fields(self)
+               if f.name != "meta" and getattr(self, f.name) is not None}
         out.update(theta_error=self.theta_error, rho_error=self.rho_error)
         return out
 

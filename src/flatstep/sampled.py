@@ -9,7 +9,8 @@ One control period k, at ``t_k = k Ts``:
 3. the controller computes the voltages; with ``compute_delay`` they are applied one period later;
 4. the drive saturates them at the bus (direction kept) and, in switched mode, chops them into PWM
    segments;
-5. the plant is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
+5. the plant (eq. (1) plus any :class:`~flatstep.plant.PlantEffects`: detent, Coulomb friction, iron loss)
+   is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
 6. the observer predicts the next angle, speed and load from the torque of the measured currents.
 
 This loop runs in Python, one period at a time: it is the specification the C engine is tested against,
@@ -22,10 +23,10 @@ from typing import Optional
 
 import numpy as np
 
-from .control.smc import FlatnessSMC
 from .drive import Drive
-from .motor import MotorParams, rhs, torque
+from .motor import MotorParams
 from .observers import Observer
+from .plant import PlantEffects, plant_acceleration, plant_rhs
 from .sensors import Sensors
 
 
@@ -41,8 +42,8 @@ class DriveLoop:
     observer: Optional[Observer] = None
 
 
-def _rk4(x, v, h, motor, load):
-    f = lambda y: rhs(0.0, y, v, motor, load)  # noqa: E731  (load constant over the period)
+def _rk4(x, v, h, motor, load, effects=None):
+    f = lambda y: plant_rhs(y, v, motor, load, effects)  # noqa: E731  (load constant over the period)
     k1 = f(x)
     k2 = f(x + 0.5 * h * k1)
     k3 = f(x + 0.5 * h * k2)
@@ -50,12 +51,16 @@ def _rk4(x, v, h, motor, load):
     return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
-def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, x0: np.ndarray, load: float,
-                  n_periods: int) -> dict[str, np.ndarray]:
+def run_reference(plant: MotorParams, controller, loop: DriveLoop, x0: np.ndarray, load: float,
+                  n_periods: int, effects: Optional[PlantEffects] = None) -> dict[str, np.ndarray]:
     """Run ``n_periods`` control periods; returns the time series at the control instants: ``t``, the plant
     state ``x`` (4, n+1), the applied voltages ``v`` (2, n+1, as averaged over the following period) and
     what the controller saw, ``y`` (5, n+1), and the times at which the law faulted (``faults``; the
-    drive then applied 0 V for that period)."""
+    drive then applied 0 V for that period).
+
+    ``controller`` is any object with ``motor`` (its nominal model, also the observer's) and
+    ``step(state, y, t) -> (v, new_state)``, and optionally ``initial_state()``; ``effects`` act on the
+    plant only."""
     Ts, model = loop.control_period, controller.motor
     sensors, drive, observer = loop.sensors, loop.drive, loop.observer
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
@@ -86,7 +91,7 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
             load_hat = xh[2] if observer.order > 2 else 0.0
             y = (ia_m, ib_m, xh[1], xh[0], (Te - model.B * xh[1] - load_hat) / model.J)
         elif sensors is None:
-            y = (*x, (torque(x, plant) - plant.B * x[2] - load) / plant.J)
+            y = (*x, float(plant_acceleration(x, plant, load, effects)))
         else:
             omega = 0.0 if theta_prev is None else (th_m - theta_prev) / Ts
             y = (ia_m, ib_m, omega, th_m, 0.0)
@@ -106,10 +111,10 @@ def run_reference(plant: MotorParams, controller: FlatnessSMC, loop: DriveLoop, 
         if drive is not None and drive.pwm == "switched":
             durations, levels = drive.pwm_segments(v_apply, x[:2], Ts)
             for h, lv in zip(durations, levels):
-                x = _rk4(x, lv, h, plant, load)
+                x = _rk4(x, lv, h, plant, load, effects)
         else:
             for _ in range(loop.substeps):
-                x = _rk4(x, v_apply, Ts / loop.substeps, plant, load)
+                x = _rk4(x, v_apply, Ts / loop.substeps, plant, load, effects)
         if not np.all(np.isfinite(x)):
             raise RuntimeError(f"the plant state became non-finite at t={t + Ts:.6g} s")
         if observer is not None:

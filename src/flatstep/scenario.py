@@ -1,15 +1,18 @@
 """A closed-loop scenario: the motor, the move, the controller settings and the load, run in one call."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, Optional
 
-from .control.smc import FlatnessSMC, SMCGains
+from .control.smc import SMCGains
+from .control.tuning import make_controller
 from .drive import Drive
 from .feasibility import FeasibilityReport, check_feasibility
 from .motor import MotorParams, check_positive
 from .observers import Observer
+from .plant import PlantEffects
 from .plan import PAPER_PLAN, RestToRest
 from .result import SimResult
 from .sensors import Sensors
@@ -24,7 +27,10 @@ class Scenario:
     ``control_period`` ``None`` evaluates the law continuously (the paper); a period [s] samples it with a
     zero-order hold, the plant integrated by ``substeps`` RK4 steps per period. ``drive``, ``sensors``,
     ``observer`` and ``compute_delay`` describe a realistic drive around the sampled controller
-    (see :func:`flatstep.simulate`).
+    (see :func:`flatstep.simulate`). ``controller_type`` names the law (:data:`flatstep.control.CONTROLLER_TYPES`):
+    the paper's ``"smc"`` with ``gains``, or a baseline tuned for this drive by
+    :func:`flatstep.control.make_controller` (``bandwidth_scale`` scales its bandwidths). ``effects`` are the
+    plant's detent, Coulomb friction and iron loss (sampled loop only; the controllers do not know them).
     """
 
     name: str = "run"
@@ -41,6 +47,9 @@ class Scenario:
     sensors: Optional[Sensors] = None
     observer: Optional[Observer] = None
     compute_delay: bool = False
+    controller_type: str = "smc"
+    effects: Optional[PlantEffects] = None
+    bandwidth_scale: float = 1.0
 
     def __post_init__(self) -> None:
         check_positive("t_end", self.t_end, unit=" s")
@@ -48,14 +57,21 @@ class Scenario:
             check_positive("control_period", self.control_period, unit=" s")
         if isinstance(self.substeps, bool) or not isinstance(self.substeps, int) or self.substeps < 1:
             raise ValueError(f"substeps={self.substeps!r} must be a positive integer (RK4 steps per period)")
-        self.controller()  # validates the measurement mode
+        if self.effects is not None and self.effects.active and self.control_period is None:
+            raise ValueError("plant effects (detent, Coulomb friction, iron loss) are modelled on the sampled "
+                             "drive loop only: give a control_period")
+        self.controller()  # validates the measurement mode and the controller type
 
     @property
     def plant_motor(self) -> MotorParams:
         return self.motor if self.plant is None else self.plant
 
-    def controller(self) -> FlatnessSMC:
-        return FlatnessSMC(self.motor, self.plan, self.gains, self.measurement)
+    def controller(self):
+        """The scenario's controller: :class:`~flatstep.control.smc.FlatnessSMC` or a tuned baseline."""
+        return make_controller(self.controller_type, self.motor, self.plan, control_period=self.control_period,
+                               measurement=self.measurement, smc_gains=self.gains,
+                               v_limit=self.drive.v_bus if self.drive is not None else math.inf,
+                               bandwidth_scale=self.bandwidth_scale, compute_delay=self.compute_delay)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""
@@ -67,7 +83,7 @@ class Scenario:
         if self.control_period is not None:
             simulate_options = {"control_period": self.control_period, "substeps": self.substeps,
                                 "drive": self.drive, "sensors": self.sensors, "observer": self.observer,
-                                "compute_delay": self.compute_delay, **simulate_options}
+                                "compute_delay": self.compute_delay, "effects": self.effects, **simulate_options}
         return simulate(self.plant_motor, self.plan, self.controller(), load=self.load_torque, t_end=self.t_end,
                         **simulate_options)
 

@@ -1,7 +1,7 @@
 """One entry point for closed-loop runs: :func:`simulate`."""
 from __future__ import annotations
 
-from typing import Optional
+from typing import Any, Optional
 
 import math
 
@@ -15,6 +15,7 @@ from .motor import Load, MotorParams, check_positive, load_function, rhs, torque
 from .plan import RestToRest
 from .drive import Drive
 from .observers import Observer
+from .plant import PlantEffects, plant_acceleration
 from .result import SimResult
 from .sampled import DriveLoop, run_reference
 from .sensors import Sensors
@@ -30,12 +31,12 @@ def _grid(t_end: float, knots: list[float], dt_out: float) -> list[np.ndarray]:
     return [np.linspace(a, b, max(2, int(round((b - a) / dt_out)) + 1)) for a, b in zip(edges[:-1], edges[1:])]
 
 
-def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[FlatnessSMC] = None, *,
+def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = None, *,
              load: Load = 0.0, t_end: float = 0.06, x0: Optional[ArrayLike] = None, engine: Optional[str] = None,
              method: str = "LSODA", rtol: float = 1e-10, atol: float = 1e-12, dt_out: float = 1e-5,
              control_period: Optional[float] = None, substeps: int = 10, drive: Optional[Drive] = None,
              sensors: Optional[Sensors] = None, observer: Optional[Observer] = None,
-             compute_delay: bool = False) -> SimResult:
+             compute_delay: bool = False, effects: Optional[PlantEffects] = None) -> SimResult:
     """Simulate the closed loop: continuous-time control (the law evaluated inside the right-hand side) or,
     with ``control_period``, sampled control with a zero-order hold.
 
@@ -44,6 +45,8 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
     motor : the plant's parameters (the controller keeps its own model, ``controller.motor``).
     plan : the planned move; the run starts at t = 0 from ``x0`` (default: the plan's start equilibrium).
     controller : default :class:`~flatstep.control.smc.FlatnessSMC` with the paper's gains, ``ideal`` mode.
+        The baselines of :mod:`flatstep.control` (microstepping, cascade, exact linearization) run on the
+        sampled loop only (``engine="python"``, the default for them).
     load : load torque on the plant [N m], a constant or a function of time.
     t_end : horizon [s].
     engine : ``"c"``: the C core, adaptive Dormand-Prince 5(4) at ``rtol``/``atol`` (``method`` is not
@@ -60,8 +63,14 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
         measurements (:class:`~flatstep.sensors.Sensors`), estimated speed, acceleration and load
         (:class:`~flatstep.observers.Observer`, with ``measurement="observer"``), one period of delay
         between measuring and applying.
+    effects : detent torque, Coulomb friction, iron loss of the plant (:class:`~flatstep.plant.PlantEffects`);
+        sampled loop only; the controller and observer do not know them.
     """
-    loop_parts = drive is not None or sensors is not None or observer is not None or compute_delay
+    if effects is not None and not effects.active:
+        effects = None
+    baseline = controller is not None and not isinstance(controller, FlatnessSMC)
+    loop_parts = (drive is not None or sensors is not None or observer is not None or compute_delay
+                  or effects is not None or baseline)
     if engine is None:
         engine = "python" if loop_parts and control_period is not None else "c"
     if engine not in ENGINES:
@@ -78,17 +87,18 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Flatness
     if x0.shape != (4,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"x0={x0!r} must be 4 finite numbers (ia, ib, omega, theta)")
     if loop_parts and control_period is None:
-        raise ValueError("drive, sensors, observer and compute_delay model a sampled drive: give control_period")
+        raise ValueError("drive, sensors, observer, compute_delay, plant effects and the baseline controllers "
+                         "run on the sampled drive loop: give control_period")
     if engine == "python":
         if control_period is None:
             raise ValueError("engine='python' is the sampled-loop reference: give control_period "
                              "(continuous control runs on engine='c' or 'scipy')")
         loop = DriveLoop(check_positive("control_period", control_period, unit=" s"), substeps, compute_delay,
                          drive, sensors, observer)
-        return _simulate_python(motor, plan, controller, loop, load, t_end, x0)
+        return _simulate_python(motor, plan, controller, loop, load, t_end, x0, effects)
     if loop_parts:
-        raise ValueError(f"engine={engine!r} does not model drive, sensors, observer or compute_delay; use "
-                         "engine='python'")
+        raise ValueError(f"engine={engine!r} does not model drive, sensors, observer, compute_delay, plant effects "
+                         f"or run {type(controller).__name__}; use engine='python'")
     if engine == "c" or control_period is not None:
         return _simulate_c(motor, plan, controller, load, t_end, x0, engine, rtol, atol, dt_out,
                            control_period, substeps)
@@ -144,8 +154,8 @@ def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, l
                                                     "substeps": int(substeps), **stats}, v=V)
 
 
-def _simulate_python(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, loop: DriveLoop, load: Load,
-                     t_end: float, x0: np.ndarray) -> SimResult:
+def _simulate_python(motor: MotorParams, plan: RestToRest, controller: Any, loop: DriveLoop, load: Load,
+                     t_end: float, x0: np.ndarray, effects: Optional[PlantEffects] = None) -> SimResult:
     """The sampled drive loop reference of :mod:`flatstep.sampled`."""
     if callable(load):
         raise ValueError(f"load={load!r}: the sampled loop takes a constant load torque")
@@ -156,12 +166,13 @@ def _simulate_python(motor: MotorParams, plan: RestToRest, controller: FlatnessS
                          f"(got {controller.measurement!r}) or add an observer")
     tau = float(load_function(load)(0.0))
     n = max(1, math.ceil(t_end / loop.control_period - 1e-9))
-    r = run_reference(motor, controller, loop, x0, tau, n)
+    r = run_reference(motor, controller, loop, x0, tau, n, effects)
     X, Y = r["x"], r["y"]
     meta = {"engine": "python", "method": "RK4", "control_period": loop.control_period, "substeps": loop.substeps,
             "compute_delay": loop.compute_delay,
-            **{k: getattr(loop, k).as_dict() for k in ("drive", "sensors", "observer") if getattr(loop, k)}}
-    result = collect(r["t"], X, plan, controller, (torque(X, motor) - motor.B * X[2] - tau) / motor.J, meta, v=r["v"])
+            **{k: getattr(loop, k).as_dict() for k in ("drive", "sensors", "observer") if getattr(loop, k)},
+            **({"effects": effects.as_dict()} if effects is not None else {})}
+    result = collect(r["t"], X, plan, controller, plant_acceleration(X, motor, tau, effects), meta, v=r["v"])
     result.meta["measured"] = {"theta": Y[3], "omega": Y[2], "ddtheta": Y[4]}
     result.meta["controller_faults"] = int(r["faults"].size)
     if r["faults"].size:
@@ -169,17 +180,17 @@ def _simulate_python(motor: MotorParams, plan: RestToRest, controller: FlatnessS
     return result
 
 
-def collect(t: np.ndarray, X: np.ndarray, plan: RestToRest, controller: FlatnessSMC, acc: np.ndarray,
+def collect(t: np.ndarray, X: np.ndarray, plan: RestToRest, controller: Any, acc: np.ndarray,
             meta: dict, v: Optional[np.ndarray] = None) -> SimResult:
     """Assemble a :class:`SimResult` from sampled states, recomputing voltages (unless the applied ``v``
-    is given) and references vectorized."""
+    is given) and references vectorized; the sliding variables only for a controller that has them."""
     v = controller.voltages(t, X, acc) if v is None else v
     ref = plan.flag(t)
     x_ref, v_ref = flat_to_state(ref, controller.motor)
     rho, phi = polar(X[0], X[1])
-    s1, s2 = controller.sliding_variables(t, X, acc)
-    meta = {**meta, "measurement": controller.measurement, "gains": controller.gains.as_dict(),
-            "plan": plan.as_dict()}
+    s1, s2 = controller.sliding_variables(t, X, acc) if hasattr(controller, "sliding_variables") else (None, None)
+    meta = {**meta, "controller": type(controller).__name__, "measurement": controller.measurement,
+            "gains": controller.gains.as_dict(), "plan": plan.as_dict()}
     return SimResult(t=t, ia=X[0], ib=X[1], omega=X[2], theta=X[3], rho=rho, phi=phi, va=v[0], vb=v[1],
                      theta_ref=ref.theta, omega_ref=ref.dtheta, rho_ref=ref.rho, ia_ref=x_ref[0], ib_ref=x_ref[1],
                      va_ref=v_ref[0], vb_ref=v_ref[1], s1=s1, s2=s2, meta=meta)

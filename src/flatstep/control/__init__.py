@@ -1,4 +1,10 @@
-"""Controllers: the paper's flatness + sliding-mode law first."""
+"""Controllers: the paper's flatness + sliding-mode law first, the baselines beside it."""
+from .cascade import CascadeFOC, CascadeGains
+from .exact_linearization import ExactLinearization, LinearizationGains
+from .microstep import MicrostepGains, Microstepping
 from .smc import MEASUREMENTS, FlatnessSMC, SMCGains
+from .tuning import CONTROLLER_TYPES, LABELS, make_controller
 
-__all__ = ["FlatnessSMC", "SMCGains", "MEASUREMENTS"]
+__all__ = ["FlatnessSMC", "SMCGains", "MEASUREMENTS", "Microstepping", "MicrostepGains", "CascadeFOC",
+           "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "LABELS",
+           "make_controller"]

@@ -1,0 +1,121 @@
+r"""Cascaded field-oriented control: PI current loops in d-q, a position-velocity loop with feedforward.
+
+The structure of the common open-source servo firmwares: a proportional position loop gives a velocity
+command, a PI velocity loop a torque (q-current) command, and PI loops regulate :math:`i_d \to 0` and
+:math:`i_q \to i_q^*` in the rotor frame (Park transform by :math:`N_r\hat\theta`,
+:mod:`flatstep.control.loops`); the plan supplies velocity and acceleration feedforward:
+
+.. math::
+    \omega_c = \dot\theta^* + k_\theta(\theta^* - \hat\theta),\qquad
+    i_q^* = \frac{J\ddot\theta^* + B\dot\theta^*}{K_m} + \frac{J}{K_m}\Big(k_\omega(\omega_c - \hat\omega)
+            + k_{i\omega}\int(\omega_c - \hat\omega)\,dt\Big),\qquad i_d^* = 0,
+
+    v_d = \mathrm{PI}(i_d^* - i_d) - L N_r\hat\omega i_q,\qquad
+    v_q = \mathrm{PI}(i_q^* - i_q) + L N_r\hat\omega i_d + K_m\hat\omega
+
+(the last terms decouple the axes and cancel the back-emf, as the firmwares' optional feedforwards do).
+
+**Tuning.** Current PIs by pole-zero cancellation at :math:`\omega_c = \lambda = 0.3/T_s`, the sliding
+controller's inner bandwidth. With an ideal current loop the mechanical error obeys
+:math:`s^3 + k_\omega s^2 + (k_\omega k_\theta + k_{i\omega})s + k_{i\omega}k_\theta`; a P-PI cascade can place
+its three poles only where :math:`(k_\omega k_\theta + k_{i\omega})^2 \ge 4k_\omega k_{i\omega}k_\theta`, and the
+fastest such set with a double pole at :math:`w` is :math:`\{w, w, w/4\}` (the integrator's pole, a quarter
+of the bandwidth, the usual rule): :math:`k_\omega = 2.25w`, :math:`k_\theta = w/3`,
+:math:`k_{i\omega} = 0.75w^2`, with :math:`w = \omega_n = \lambda/4`, the sliding controller's error
+bandwidth. Anti-windup: every integrator holds while the bus limits.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Optional
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..motor import MotorParams, check_positive
+from ..plan import RestToRest
+from .loops import PIGains, bus_scale, check_v_limit, inverse_park, park, pi_integrate, pi_output
+from .smc import MEASUREMENTS
+
+
+@dataclass(frozen=True)
+class CascadeGains:
+    """Bandwidths of the cascade [rad/s]: current loops, and ``position_bandwidth`` ``w`` of the P-PI loop."""
+
+    current_bandwidth: float
+    position_bandwidth: float
+    decoupling: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("current_bandwidth", "position_bandwidth"):
+            object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=" rad/s"))
+
+    @property
+    def k_theta(self) -> float:
+        """Position gain :math:`w/3` [1/s]."""
+        return self.position_bandwidth / 3.0
+
+    @property
+    def k_omega(self) -> float:
+        """Velocity gain :math:`2.25 w` [1/s]."""
+        return 2.25 * self.position_bandwidth
+
+    @property
+    def ki_omega(self) -> float:
+        """Velocity integral gain :math:`0.75 w^2` [1/s^2]."""
+        return 0.75 * self.position_bandwidth**2
+
+    def as_dict(self) -> dict[str, float]:
+        return {**asdict(self), "k_theta": self.k_theta, "k_omega": self.k_omega, "ki_omega": self.ki_omega}
+
+
+class CascadeFOC:
+    """Cascaded P-PI position-velocity loop over d-q PI current loops, with feedforward from the plan.
+
+    Parameters
+    ----------
+    motor : the controller's nominal model.
+    plan : the move.
+    gains : :class:`CascadeGains`.
+    control_period : Ts [s].
+    measurement : where speed and angle come from (``"observer"``, ``"model"``: encoder and its difference,
+        ``"ideal"``), as for :class:`~flatstep.control.smc.FlatnessSMC`; the acceleration is not used.
+    v_limit : the bus voltage its anti-windup knows [V].
+    """
+
+    def __init__(self, motor: MotorParams, plan: RestToRest, gains: CascadeGains, *, control_period: float,
+                 measurement: str = "observer", v_limit: float = math.inf):
+        if measurement not in MEASUREMENTS:
+            raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
+        self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
+        self.control_period = check_positive("control_period", control_period, unit=" s")
+        self.v_limit = check_v_limit(v_limit)
+        self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
+        self.pi_omega = PIGains(gains.k_omega, gains.ki_omega)
+
+    def initial_state(self) -> NDArray[np.float64]:
+        """Integrals (velocity loop [rad/s^2], d and q current loops [V]), all zero: the loops start from
+        the plan's start equilibrium and bring its d current to 0."""
+        return np.zeros(3)
+
+    def step(self, state: Optional[ArrayLike], measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """One period of the cascade; ``measurement = (ia, ib, omega, theta, ddtheta)``."""
+        m, g, Ts = self.motor, self.gains, self.control_period
+        integral = self.initial_state() if state is None else np.asarray(state, dtype=float)
+        ia, ib, omega, theta = np.asarray(measurement, dtype=float)[:4]
+        ref = self.plan.flag(t)
+        e_omega = float(ref.dtheta + g.k_theta * (ref.theta - theta) - omega)
+        accel = pi_output(self.pi_omega, e_omega, integral[0])
+        iq_ref = (m.J * ref.ddtheta + m.B * ref.dtheta + m.J * accel) / m.Km
+        p = m.Nr * theta
+        i_d, i_q = park(ia, ib, p)
+        e_i = np.array([0.0 - i_d, iq_ref - i_q], dtype=float)
+        v_dq = pi_output(self.pi, e_i, integral[1:])
+        if g.decoupling:
+            v_dq = v_dq + np.array([-m.L * m.Nr * omega * i_q, m.L * m.Nr * omega * i_d + m.Km * omega])
+        v = np.array(inverse_park(v_dq[0], v_dq[1], p))
+        hold = bus_scale(v, self.v_limit) < 1.0
+        new = np.concatenate([[pi_integrate(self.pi_omega, e_omega, integral[0], Ts, hold)],
+                              pi_integrate(self.pi, e_i, integral[1:], Ts, hold)])
+        return v, new

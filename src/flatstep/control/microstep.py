@@ -1,0 +1,89 @@
+r"""Open-loop microstepping, as a current-controlled stepper driver does it: no position feedback.
+
+The driver turns the commanded angle :math:`\theta^*(t)` of the plan into sine/cosine current references at
+the run current :math:`\rho^*` (the plan's current norm),
+
+.. math::
+    i_a^* = \rho^*\cos N_r\theta^*,\qquad i_b^* = \rho^*\sin N_r\theta^*,
+
+whose stable rest angle is :math:`\theta^*` (the rotor aligns with the current vector, eq. (2) corrected,
+docs/paper-notes.md), and tracks them with one PI loop per phase in the stationary a-b frame, tuned by
+pole-zero cancellation at the current bandwidth :math:`\omega_c` (:class:`~flatstep.control.loops.PIGains`).
+It reads the two phase currents and nothing else: no encoder, no speed, no back-emf compensation. The rotor
+lags :math:`\theta^*` by the load angle :math:`\arcsin(T/(K_m\rho^*))/N_r` for a torque demand :math:`T`, and
+rings at the stiffness :math:`\sqrt{K_m N_r\rho^*/J}` with only the motor's own damping.
+
+**Tuning.** :math:`\omega_c = \lambda = 0.3/T_s`, the bandwidth of the sliding controller's current-norm loop
+(:func:`flatstep.design.design_gains`); the run current is the plan's, the same current norm the sliding
+controller holds. Anti-windup: the integrators hold while the bus limits.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..motor import MotorParams, check_positive
+from ..plan import RestToRest
+from .loops import PIGains, bus_scale, check_v_limit, pi_integrate, pi_output
+from .smc import MEASUREMENTS
+
+
+@dataclass(frozen=True)
+class MicrostepGains:
+    """Current-loop bandwidth [rad/s] of the microstepping driver (PI gains by pole-zero cancellation)."""
+
+    current_bandwidth: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "current_bandwidth",
+                           check_positive("current_bandwidth", self.current_bandwidth, unit=" rad/s"))
+
+    def as_dict(self) -> dict[str, float]:
+        return {"current_bandwidth": self.current_bandwidth}
+
+
+class Microstepping:
+    """Open-loop microstepping driver following a :class:`~flatstep.plan.RestToRest` plan.
+
+    Parameters
+    ----------
+    motor : the driver's nominal model (only ``R``, ``L`` and ``Nr`` are used).
+    plan : the move; its :math:`\\theta^*(t)` is the commanded angle, its :math:`\\rho^*(t)` the run current.
+    gains : :class:`MicrostepGains`.
+    control_period : Ts [s] of the current loops.
+    measurement : accepted for the drive's bookkeeping (which speed/acceleration the loop computes); the
+        driver reads only the currents.
+    v_limit : the bus voltage its anti-windup knows [V].
+    """
+
+    def __init__(self, motor: MotorParams, plan: RestToRest, gains: MicrostepGains, *, control_period: float,
+                 measurement: str = "model", v_limit: float = math.inf):
+        if measurement not in MEASUREMENTS:
+            raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
+        self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
+        self.control_period = check_positive("control_period", control_period, unit=" s")
+        self.v_limit = check_v_limit(v_limit)
+        self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
+
+    def current_reference(self, t: ArrayLike) -> NDArray[np.float64]:
+        r"""``(ia*, ib*) = rho* (cos N_r theta*, sin N_r theta*)`` at times ``t`` (vectorized)."""
+        ref = self.plan.flag(t)
+        p = self.motor.Nr * ref.theta
+        return np.array([ref.rho * np.cos(p), ref.rho * np.sin(p)])
+
+    def initial_state(self) -> NDArray[np.float64]:
+        """The two PI integrals, preset to the resistive voltage of the start current (a driver at rest)."""
+        return self.motor.R * self.current_reference(self.plan.t0 - 1.0)
+
+    def step(self, state: Optional[ArrayLike], measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(ia*, ib*) - (ia, ib)`` through the PI loops; ``measurement = (ia, ib, omega, theta, ddtheta)``."""
+        integral = self.initial_state() if state is None else np.asarray(state, dtype=float)
+        y = np.asarray(measurement, dtype=float)
+        error = self.current_reference(t) - y[:2]
+        v = pi_output(self.pi, error, integral)
+        hold = bus_scale(v, self.v_limit) < 1.0
+        return v, pi_integrate(self.pi, error, integral, self.control_period, hold)

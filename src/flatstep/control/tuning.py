@@ -1,0 +1,68 @@
+r"""Every controller built for one drive: the sliding controller with its gains, the baselines tuned by rule.
+
+The baselines take their bandwidths from the same design quantities :func:`flatstep.design.design_gains`
+uses for the sliding controller on that drive, so that none is faster or slower by choice:
+
+* inner (current) bandwidth :math:`\lambda = 0.3/T_s` (0.15/T_s with a computation delay), the sliding
+  controller's :math:`W/\epsilon`;
+* outer (position) bandwidth :math:`\omega_n = \lambda/4`, its error dynamics' natural frequency, with
+  :math:`\xi = 0.9`;
+* the same bus voltage for the anti-windup, the same measurement (observer or encoder) as the scenario's.
+
+``bandwidth_scale`` multiplies every bandwidth of a baseline; docs/comparison.md runs 0.5 and 2 to show
+that none of them is crippled by the rule (halving or doubling does not make it much better).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ..motor import MotorParams, check_positive
+from ..plan import RestToRest
+from .cascade import CascadeFOC, CascadeGains
+from .exact_linearization import ExactLinearization, LinearizationGains
+from .microstep import MicrostepGains, Microstepping
+from .smc import FlatnessSMC, SMCGains
+
+#: The controllers a scenario can name (``[controller] type``), the paper's first.
+CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization")
+#: Short labels for tables and figures.
+LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
+          "exact_linearization": "exact linearization"}
+
+
+def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
+    r"""``(lambda, omega_n)`` [rad/s] for a control period: :math:`\lambda T_s = 0.3` (0.15 delayed),
+    :math:`\omega_n = \lambda/4`."""
+    from ..design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA  # design imports control: import late
+
+    Ts = check_positive("control_period", control_period, unit=" s")
+    lam = (LAMBDA_TS_DELAYED if compute_delay else LAMBDA_TS) / Ts
+    return lam, WN_OVER_LAMBDA * lam
+
+
+def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_period: float | None,
+                    measurement: str, smc_gains: SMCGains = SMCGains(), v_limit: float = math.inf,
+                    bandwidth_scale: float = 1.0, compute_delay: bool = False) -> Any:
+    """The controller ``kind`` (one of :data:`CONTROLLER_TYPES`) for this motor model, plan and drive.
+
+    ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` with ``smc_gains`` (the scenario's, designed or
+    given); the baselines are tuned by the rules above and need ``control_period``.
+    """
+    if kind not in CONTROLLER_TYPES:
+        raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
+    if kind == "smc":
+        return FlatnessSMC(motor, plan, smc_gains, measurement)
+    if control_period is None:
+        raise ValueError(f"controller type {kind!r} is a sampled controller: give a control period "
+                         "([drive] control_rate); only 'smc' runs in continuous time")
+    scale = check_positive("bandwidth_scale", bandwidth_scale)
+    lam, wn = (scale * w for w in bandwidths(control_period, compute_delay))
+    common = dict(control_period=control_period, measurement=measurement, v_limit=v_limit)
+    if kind == "microstep":
+        return Microstepping(motor, plan, MicrostepGains(lam), **common)
+    if kind == "cascade":
+        return CascadeFOC(motor, plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn), **common)
+    from ..design import XI
+
+    return ExactLinearization(motor, plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam), **common)
