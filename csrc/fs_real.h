@@ -15,6 +15,7 @@ typedef float fs_real;
 #define fs_hypot hypotf
 #define fs_fabs fabsf
 #define fs_pow powf
+#define fs_rint rintf
 #define FS_REAL_MAX 3.402823466e+38f
 #else
 typedef double fs_real;
@@ -27,6 +28,7 @@ typedef double fs_real;
 #define fs_hypot hypot
 #define fs_fabs fabs
 #define fs_pow pow
+#define fs_rint rint
 #define FS_REAL_MAX 1.7976931348623157e+308
 #endif
 

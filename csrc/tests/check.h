@@ -29,5 +29,6 @@ int test_plan(void);
 int test_smc(void);
 int test_ode(void);
 int test_sim(void);
+int test_drive(void);
 
 #endif

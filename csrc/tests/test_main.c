@@ -18,8 +18,10 @@ int main(int argc, char **argv)
         test_ode();
     else if (strcmp(suite, "sim") == 0)
         test_sim();
+    else if (strcmp(suite, "drive") == 0)
+        test_drive();
     else {
-        printf("usage: %s vectors FILE | plan | smc | ode | sim\n", argv[0]);
+        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive\n", argv[0]);
         return 2;
     }
     printf("%s: %d checks, %d failed\n", suite, check_count, check_failures);

@@ -10,7 +10,7 @@ from pathlib import Path
 from cffi import FFI
 
 ROOT = Path(__file__).resolve().parents[2]
-MODULES = ("motor", "plan", "flat", "smc", "ode", "sim", "batch")
+MODULES = ("motor", "plan", "flat", "smc", "ode", "sim", "batch", "sensors", "observer", "drive", "sampled")
 
 CDEF = """
 typedef double fs_real;
@@ -46,6 +46,19 @@ size_t batch_state_to_flat(const struct motor_params *m, const fs_real *x, const
                            fs_real load, fs_real *flag);
 uint32_t batch_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_t n, fs_real *v, uint32_t *status);
 
+struct sensors_params { fs_real angle_step; fs_real encoder_offset; fs_real current_step; fs_real current_range;
+                        fs_real current_offset[2]; uint32_t delay; };
+struct observer_params { uint32_t order; fs_real Ad[4][4]; fs_real Bd[4]; fs_real Lc[4]; };
+struct drive_params { fs_real v_bus; bool compute_delay; };
+struct sampled_params { fs_real Ts; uint32_t substeps; bool sensed; bool observed; struct sensors_params sensors;
+                        struct observer_params observer; struct drive_params drive; };
+struct sampled { ...; };
+#define SENSORS_MAX_DELAY ...
+
+int sampled_init(struct sampled *s, const struct sampled_params *p);
+int sampled_run(struct sampled *s, struct smc *ctrl, const struct sim_plant *plant, const fs_real x0[4],
+                size_t n_periods, const fs_real *noise, fs_real *x_out, fs_real *v_out, fs_real *y_out,
+                uint32_t *status_out, struct sim_stats *st);
 int sim_continuous(struct smc *ctrl, const struct sim_plant *plant, const fs_real x0[4], const fs_real *t_out,
                    size_t n_out, const struct sim_continuous_params *p, fs_real *x_out, struct sim_stats *st);
 int sim_sampled(struct smc *ctrl, const struct sim_plant *plant, const fs_real x0[4], fs_real t_start,

@@ -210,3 +210,71 @@ def run_sampled(controller: FlatnessSMC, motor: MotorParams, load: float, x0: Ar
                          n_periods, params, _out(X), _out(V), st)
     _check(rc, st, "sampled")
     return np.ascontiguousarray(X.T), np.ascontiguousarray(V.T), _stats(st, "controller_status")
+
+
+def drive_unsupported(drive=None, sensors=None) -> Optional[str]:
+    """Why C ``sampled_run`` cannot run this drive (``None`` when it can): switched PWM, or a measurement
+    delay beyond its ring."""
+    if drive is not None and drive.pwm != "averaged":
+        return f"pwm={drive.pwm!r} (switched PWM runs on the Python reference loop only)"
+    if sensors is not None and sensors.delay > lib.SENSORS_MAX_DELAY:
+        return f"sensors.delay={sensors.delay} periods (the C loop holds at most {lib.SENSORS_MAX_DELAY})"
+    return None
+
+
+def _sampled_params(controller: FlatnessSMC, Ts: float, substeps: int, drive, sensors, observer,
+                    compute_delay: bool):
+    """A ``struct sampled_params`` for the parts of :class:`flatstep.sampled.DriveLoop`."""
+    p = ffi.new("struct sampled_params *")
+    p.Ts, p.substeps = Ts, substeps
+    p.sensed, p.observed = sensors is not None, observer is not None
+    if sensors is not None:
+        p.sensors = dict(angle_step=sensors.angle_step, encoder_offset=sensors.encoder_offset,
+                         current_step=sensors.current_step, current_range=sensors.current_range,
+                         current_offset=list(sensors.current_offset), delay=sensors.delay)
+    if observer is not None:
+        Ad, Bd, Lc = observer.matrices(controller.motor, Ts)
+        n = observer.order
+        p.observer.order = n
+        for i in range(n):
+            p.observer.Bd[i], p.observer.Lc[i] = Bd[i], Lc[i]
+            for j in range(n):
+                p.observer.Ad[i][j] = Ad[i, j]
+    p.drive = dict(v_bus=drive.v_bus if drive is not None else np.inf, compute_delay=bool(compute_delay))
+    return p
+
+
+def run_drive(controller: FlatnessSMC, motor: MotorParams, load: float, x0: ArrayLike, n_periods: int, *,
+              Ts: float, substeps: int, drive=None, sensors=None, observer=None, compute_delay: bool = False,
+              noise: Optional[ArrayLike] = None, v_limit: float = V_LIMIT,
+              rho_min: float = RHO_MIN) -> tuple[Array, Array, Array, NDArray[np.uint32], dict]:
+    """C ``sampled_run``: the drive loop of :func:`flatstep.sampled.run_reference` (averaged bridge) with the
+    :class:`~flatstep.drive.Drive`, :class:`~flatstep.sensors.Sensors` and :class:`~flatstep.observers.Observer`
+    parts (``None``: ideal) and the (n_periods + 1, 2) current noise (default ``sensors.noise``).
+
+    Returns the (4, n + 1) plant states, (2, n + 1) applied voltages and (5, n + 1) measurements the controller
+    saw at the control instants ``k Ts``, the (n + 1,) smc_step status of each period, and the run's stats.
+    """
+    why = drive_unsupported(drive, sensors)
+    if why is not None:
+        raise ValueError(f"the C drive loop does not model {why}; use engine='python'")
+    n1 = n_periods + 1
+    if noise is None:
+        noise = sensors.noise(n1) if sensors is not None else np.zeros((n1, 2))
+    noise = np.ascontiguousarray(noise, dtype=np.float64)
+    if noise.shape != (n1, 2):
+        raise ValueError(f"noise has shape {noise.shape}; expected ({n1}, 2), one (ia, ib) sample per period")
+    s = ffi.new("struct sampled *")
+    if lib.sampled_init(s, _sampled_params(controller, Ts, substeps, drive, sensors, observer, compute_delay)):
+        raise ValueError(f"sampled_init rejected the loop (control_period={Ts!r}, substeps={substeps!r}, "
+                         f"sensors={sensors!r}, observer={observer!r}, drive={drive!r})")
+    x0 = _vec(x0)
+    X, V, Y = np.empty((n1, 4)), np.empty((n1, 2)), np.empty((n1, 5))
+    status = np.empty(n1, dtype=np.uint32)
+    st = ffi.new("struct sim_stats *")
+    rc = lib.sampled_run(s, smc_struct(controller, v_limit, rho_min), _plant(motor, load), _in(x0), n_periods,
+                         _in(noise), _out(X), _out(V), _out(Y),
+                         ffi.from_buffer("uint32_t[]", status, require_writable=True), st)
+    _check(rc, st, "drive loop")
+    return (np.ascontiguousarray(X.T), np.ascontiguousarray(V.T), np.ascontiguousarray(Y.T), status,
+            _stats(st, "controller_status"))

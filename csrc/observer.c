@@ -1,0 +1,66 @@
+// The observer update of flatstep.sampled in the same operation order (no BLAS reordering, no FMA).
+#include "observer.h"
+
+// Returns 0, or -1 when the order is not 2..4 or an entry is not finite (o is then left unusable).
+int observer_init(struct observer *o, const struct observer_params *p)
+{
+    uint32_t i, j;
+    if (p->order < 2 || p->order > OBSERVER_MAX_ORDER)
+        return -1;
+    for (i = 0; i < p->order; i++) {
+        if (!fs_isfinite(p->Bd[i]) || !fs_isfinite(p->Lc[i]))
+            return -1;
+        for (j = 0; j < p->order; j++)
+            if (!fs_isfinite(p->Ad[i][j]))
+                return -1;
+    }
+    o->p = *p;
+    observer_reset(o);
+    return 0;
+}
+
+// Returns nothing; forgets the estimate (the next correction starts from its angle at rest).
+void observer_reset(struct observer *o)
+{
+    uint32_t i;
+    for (i = 0; i < OBSERVER_MAX_ORDER; i++)
+        o->x[i] = 0;
+    o->started = false;
+}
+
+// Returns nothing; corrects the estimate with the measured angle: x <- x + Lc (theta_m - x0), or, on the
+// first call, x <- (theta_m, 0, ...).
+void observer_correct(struct observer *o, fs_real theta_m)
+{
+    fs_real innovation = theta_m - o->x[0];
+    uint32_t i;
+    if (!o->started) {
+        o->x[0] = theta_m;
+        o->started = true;
+        return;
+    }
+    for (i = 0; i < o->p.order; i++)
+        o->x[i] = o->x[i] + o->p.Lc[i] * innovation;
+}
+
+// Returns nothing; predicts the next period's estimate under the torque Te held over it: x <- Ad x + Bd Te.
+void observer_predict(struct observer *o, fs_real torque)
+{
+    fs_real next[OBSERVER_MAX_ORDER], acc;
+    uint32_t i, j, n = o->p.order;
+    for (i = 0; i < n; i++) {
+        // left to right over the columns, as flatstep.sampled sums them
+        acc = o->p.Ad[i][0] * o->x[0];
+        for (j = 1; j < n; j++)
+            acc = acc + o->p.Ad[i][j] * o->x[j];
+        next[i] = acc + o->p.Bd[i] * torque;
+    }
+    for (i = 0; i < n; i++)
+        o->x[i] = next[i];
+}
+
+// Returns the estimated load torque [N m] (0 for a speed-only observer of order 2).
+fs_real observer_load(const struct observer *o)
+{
+    return o->p.order > 2 ? o->x[2] : 0;
+}

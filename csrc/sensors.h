@@ -1,0 +1,52 @@
+// Drive sensors: a quantized encoder, offset/noisy/quantized ADC phase currents, a measurement delay ring.
+#ifndef FS_SENSORS_H
+#define FS_SENSORS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include "fs_real.h"
+
+// Longest measurement delay the ring holds [control periods].
+#define SENSORS_MAX_DELAY 8
+
+// What the sensors do; the same fields as flatstep.sensors.Sensors, with the steps precomputed.
+struct sensors_params {
+    fs_real angle_step;         // one encoder count [rad] (2 pi / counts), or 0 for the exact angle
+    fs_real encoder_offset;     // where the count edges sit, in counts, in [-0.5, 0.5)
+    fs_real current_step;       // one ADC step [A] (2 range / 2^bits), or 0 for exact currents
+    fs_real current_range;      // ADC full scale [A], > 0: readings are clipped to +-current_range
+    fs_real current_offset[2];  // offsets added to (ia, ib) before conversion [A]
+    uint32_t delay;             // the controller sees the reading of `delay` periods ago, <= SENSORS_MAX_DELAY
+};
+
+// Caller-owned state: the parameters and the last delay + 1 readings (theta_m, ia_m, ib_m).
+struct sensors {
+    struct sensors_params p;
+    fs_real ring[SENSORS_MAX_DELAY + 1][3];
+    uint32_t head;   // slot of the newest reading
+    uint32_t taken;  // readings taken since the last reset, saturating at SENSORS_MAX_DELAY + 1
+};
+
+// Returns true when every parameter is finite and in range.
+bool sensors_params_valid(const struct sensors_params *p);
+
+// Returns 0, or -1 when p is invalid (s is then left unusable); copies p and resets s.
+int sensors_init(struct sensors *s, const struct sensors_params *p);
+
+// Returns nothing; forgets the readings taken so far.
+void sensors_reset(struct sensors *s);
+
+// Returns the encoder reading q (round(theta / q - offset) + offset) of the true angle theta (rounding half to
+// even, as NumPy; theta itself when angle_step is 0).
+fs_real sensors_angle(const struct sensors_params *p, fs_real theta);
+
+// Returns nothing; writes the ADC readings of the phase currents i with the noise sample added:
+// clip(q round((i + offset + noise) / q), +-range), or i + offset + noise when current_step is 0.
+void sensors_currents(const struct sensors_params *p, const fs_real i[2], const fs_real noise[2], fs_real out[2]);
+
+// Returns nothing; reads the plant state x = (ia, ib, omega, theta) with the noise sample, stores the reading,
+// and writes the one of `delay` periods ago (the first one while fewer have been taken) as
+// (theta_m, ia_m, ib_m).
+void sensors_step(struct sensors *s, const fs_real x[4], const fs_real noise[2], fs_real reading[3]);
+
+#endif
