@@ -120,6 +120,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_drive_commands(sub)
 
+    from .cli_compare import add_compare_command
+
+    add_compare_command(sub)
+
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d", help="a: planning, b: closed loop, c: controller step, "
                      "d: batch throughput (default: a,b,c,d)")

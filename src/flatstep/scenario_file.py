@@ -15,22 +15,26 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from .control.smc import SMCGains
+from .control.tuning import CONTROLLER_TYPES
 from .design import design_gains
 from .drive import Drive
 from .motor import MotorParams, PRESETS
 from .observers import Observer
 from .plan import PAPER_PLAN, RestToRest
+from .plant import PlantEffects
 from .scenario import Scenario
 from .sensors import Sensors
 
 MOTOR_KEYS = ("preset", "R", "L", "Km", "J", "B", "Nr")
+EFFECT_KEYS = ("detent_torque", "coulomb_torque", "coulomb_speed", "magnetizing_resistance")
 SECTIONS: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "t_end", "motor", "plant", "plan", "controller", "drive", "sensors", "observer",
          "load", "robustness"),
     "motor": MOTOR_KEYS,
-    "plant": MOTOR_KEYS + ("scale",),
+    "plant": MOTOR_KEYS + ("scale",) + EFFECT_KEYS,
     "plan": ("theta1", "theta2", "rho1", "rho2", "t0", "tf"),
-    "controller": ("measurement", "W1", "W2", "eps1", "eps2", "xi", "wn", "design", "uncertainty"),
+    "controller": ("type", "bandwidth_scale", "measurement", "W1", "W2", "eps1", "eps2", "xi", "wn", "design",
+                   "uncertainty"),
     "drive": ("control_rate", "substeps", "compute_delay", "v_bus", "pwm", "f_pwm", "dead_time"),
     "sensors": ("encoder_counts", "encoder_offset", "current_bits", "current_range", "current_offset",
                 "current_noise", "delay", "seed"),
@@ -95,7 +99,10 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     _check_keys(where, doc, "")
     sec = {name: _check_keys(where, doc.get(name, {}), name) for name in SECTIONS if name}
     motor = _motor(where, sec["motor"], "motor", MotorParams.preset("paper"))
-    plant = _motor(where, sec["plant"], "plant", motor) if sec["plant"] else None
+    plant_t = {k: v for k, v in sec["plant"].items() if k not in EFFECT_KEYS}
+    plant = _motor(where, plant_t, "plant", motor) if plant_t else None
+    effects_t = {k: v for k, v in sec["plant"].items() if k in EFFECT_KEYS}
+    effects = _wrap(where, "plant", PlantEffects, **effects_t) if effects_t else None
     plan = _wrap(where, "plan", RestToRest, **{**PAPER_PLAN.as_dict(), **sec["plan"]})
     load = float(sec["load"].get("torque", 0.0))
 
@@ -115,6 +122,10 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     ) if sec["sensors"] else None
 
     ctrl = dict(sec["controller"])
+    controller_type = ctrl.pop("type", "smc")
+    if controller_type not in CONTROLLER_TYPES:
+        raise ValueError(f"{where}: [controller] type={controller_type!r} is unknown; valid: {list(CONTROLLER_TYPES)}")
+    bandwidth_scale = ctrl.pop("bandwidth_scale", 1.0)
     design = ctrl.pop("design", False)
     uncertainty = ctrl.pop("uncertainty", 0.1)
     measurement = ctrl.pop("measurement", None)
@@ -123,7 +134,8 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
         if period is None:
             raise ValueError(f"{where}: [controller] design = true needs [drive] control_rate")
         d = _wrap(where, "controller", design_gains, motor=motor, plan=plan, control_period=period,
-                  v_bus=drive.v_bus, load_torque=load, uncertainty=uncertainty, compute_delay=compute_delay,
+                  v_bus=drive.v_bus, load_torque=load + (effects.detent_torque + effects.coulomb_torque if effects else 0.0),
+                  uncertainty=uncertainty, compute_delay=compute_delay,
                   encoder_counts=sensors.encoder_counts if sensors else None,
                   current_step=sensors.current_step if sensors else 0.0)
         gains = _wrap(where, "controller", lambda **kw: replace(d.gains, **kw), **ctrl)
@@ -137,7 +149,8 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     scenario = _wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
                      gains=gains, measurement=measurement, load_torque=load, t_end=doc.get("t_end", 0.06),
                      plant=plant, control_period=period, substeps=substeps, drive=drive, sensors=sensors,
-                     observer=observer, compute_delay=compute_delay)
+                     observer=observer, compute_delay=compute_delay, controller_type=controller_type,
+                     effects=effects, bandwidth_scale=bandwidth_scale)
     robustness = None
     if "robustness" in doc:
         r = dict(sec["robustness"])

@@ -1,0 +1,128 @@
+"""Command line: ``flatstep compare SCENARIO.toml``: every controller on the same plant, drive and sensors."""
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Optional
+
+from .compare import METRICS, bandwidth_sweep, compare, compare_worst, default_band
+from .control.tuning import CONTROLLER_TYPES, LABELS
+from .scenario_file import load_scenario
+
+#: (metric, column head, scale of the printed value: "angle" uses counts or rad)
+COLUMNS = (("move_max", "max err", "angle"), ("move_rms", "rms err", "angle"), ("final", "final", "angle"),
+           ("settling_time", "settle[ms]", 1e3), ("peak_voltage", "peak V", 1.0), ("peak_current", "peak A", 1.0),
+           ("rms_current", "rms A", 1.0), ("copper_loss", "Cu [mJ]", 1e3))
+
+
+def _cell(value: Optional[float], scale: Any, count: Optional[float]) -> str:
+    if value is None:
+        return f"{'unsettled':>11}"
+    if scale == "angle":
+        return f"{value / count:>11.3f}" if count else f"{value:>11.3e}"
+    return f"{value * scale:>11.4g}"
+
+
+def table(rows: dict[str, dict[str, Optional[float]]], count: Optional[float]) -> str:
+    """The metrics as a fixed-width table, one row per controller (angles in encoder counts when ``count``)."""
+    unit = "counts" if count else "rad"
+    lines = [f"{'controller':<22}" + "".join(f"{head:>11}" for _, head, _ in COLUMNS) + f"   [angles in {unit}]"]
+    for kind, m in rows.items():
+        lines.append(f"{LABELS.get(kind, kind):<22}" + "".join(_cell(m[k], s, count) for k, _, s in COLUMNS))
+    return "\n".join(lines)
+
+
+def _target_line(rows: dict[str, dict[str, Optional[float]]]) -> Optional[str]:
+    if "smc" not in rows or "cascade" not in rows:
+        return None
+    s, c = rows["smc"], rows["cascade"]
+    ratio = s["move_max"] / c["move_max"]
+    met = ratio <= 1 / 3 and s["peak_voltage"] <= c["peak_voltage"]
+    return (f"flatness + SMC / cascaded PID: max error during the move x{ratio:.3g}, peak voltage "
+            f"{s['peak_voltage']:.3g} V vs {c['peak_voltage']:.3g} V (target <= 1/3 at no higher voltage: "
+            f"{'met' if met else 'missed'})")
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    scenario, study = load_scenario(args.scenario)
+    if scenario.control_period is None:
+        raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
+    kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else CONTROLLER_TYPES
+    band = args.band if args.band is not None else default_band(scenario)
+    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else None
+    nominal = compare(scenario, kinds, band=band)
+    report: dict[str, Any] = {"scenario": scenario.name, "band_rad": band, "count_rad": count,
+                              "controllers": {k: {"label": LABELS[k], "metrics": v["metrics"], "faults": v["faults"],
+                                                  "gains": v["result"].meta["gains"]} for k, v in nominal.items()}}
+    worst = None
+    if study is not None and not args.no_robustness:
+        study = replace(study, samples=args.samples) if args.samples is not None else study
+        worst = compare_worst(scenario, study, kinds, band=band, progress=args.progress)
+        report["robustness"] = {"relative_error": study.relative_error, "parameters": list(study.parameters),
+                                "plants": len(next(iter(worst.values()))["rows"]),
+                                "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"]}
+                                          for k, v in worst.items()}}
+    if args.scales:
+        scales = [float(x) for x in args.scales.split(",")]
+        baselines = [k for k in kinds if k != "smc"]
+        sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,
+                                progress=args.progress)
+        report["bandwidth_sweep"] = {str(s): v for s, v in sweep.items()}
+    if args.out:
+        from .plots_compare import plot_overlay, plot_plants
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_overlay({LABELS[k]: v["result"] for k, v in nominal.items()}, scenario.plan, count,
+                     title=f"{scenario.name}: every controller on the scenario's plant", path=out / "overlay.png")
+        if worst is not None:
+            plot_plants(worst, LABELS, scenario.plan, count, path=out / "plants.png",
+                        title=f"{scenario.name}: {report['robustness']['plants']} plants, parameters off by "
+                              f"+-{study.relative_error:.0%}")
+        (out / "compare.json").write_text(json.dumps(report, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    print(f"{scenario.name}: the scenario's plant (settling band {band:.3g} rad)")
+    rows = {k: v["metrics"] for k, v in nominal.items()}
+    print(table(rows, count))
+    for kind, v in nominal.items():
+        if v["faults"]:
+            print(f"warning: {LABELS[kind]}: {v['faults']} controller faults (0 V applied for those periods)")
+    line = _target_line(rows)
+    if worst is not None:
+        r = report["robustness"]
+        print(f"\nworst over {r['plants']} plants, {', '.join(r['parameters'])} off by +-{r['relative_error']:.0%}")
+        rows = {k: v["worst"] for k, v in worst.items() if v["worst"]}
+        print(table(rows, count))
+        for kind, v in worst.items():
+            if v["failed"]:
+                print(f"warning: {LABELS[kind]}: {v['failed']} of {v['runs']} runs failed: {v['failures'][0]}")
+        line = _target_line(rows) or line
+    if args.scales:
+        where = "worst over the plants" if worst is not None else "the scenario's plant"
+        print(f"\nbaselines with every bandwidth scaled ({where}): max error during the move, peak voltage")
+        for s, res in report["bandwidth_sweep"].items():
+            print(f"  x{float(s):<5g}" + "".join(f"{LABELS[k]:>24}: {_cell(m['move_max'], 'angle', count).strip():>8}"
+                                                 f" {m['peak_voltage']:6.3g} V" for k, m in res.items()))
+    if line:
+        print("\n" + line)
+    return 0
+
+
+def add_compare_command(sub) -> None:
+    cmp_ = sub.add_parser("compare", help="every controller (flatness + SMC and the baselines) on one scenario")
+    cmp_.add_argument("scenario", help="a scenario file (TOML) with a [drive]; its [robustness], if any, is run too")
+    cmp_.add_argument("--controllers", default=None,
+                      help=f"comma-separated controller types (default: all of {','.join(CONTROLLER_TYPES)})")
+    cmp_.add_argument("--band", type=float, default=None, help="settling band [rad] (default: one encoder count)")
+    cmp_.add_argument("--no-robustness", action="store_true", help="skip the file's [robustness] study")
+    cmp_.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
+    cmp_.add_argument("--scales", default=None, help="also run the baselines with every bandwidth scaled by these "
+                      "comma-separated factors (e.g. 0.5,2): the check that their tuning does not cripple them")
+    cmp_.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
+    cmp_.add_argument("--out", default=None, help="write overlay.png, plants.png and compare.json here")
+    cmp_.add_argument("--json", action="store_true", help="print the report as JSON")
+    cmp_.set_defaults(func=cmd_compare)

@@ -1,0 +1,156 @@
+r"""Every controller on one scenario: the same plant, drive, sensors and observer; the numbers a user compares.
+
+Metrics of a run (:func:`metrics`), with :math:`e = \theta - \theta^*` and the plan's move :math:`[t_0, t_f]`:
+
+* ``move_max``, ``move_rms``: :math:`\max|e|` and :math:`\sqrt{\overline{e^2}}` over the control instants in
+  :math:`[t_0, t_f]` [rad];
+* ``final``: :math:`|e|` at the end of the horizon [rad];
+* ``settling_time``: the time after :math:`t_f` from which :math:`|e|` stays within ``band`` to the end of
+  the horizon [s] (``None`` if it is still outside at the end); ``band`` is one encoder count when the
+  scenario has an encoder;
+* ``peak_voltage``: :math:`\max(|v_a|, |v_b|)` as applied [V]; ``peak_current``: :math:`\max(|i_a|, |i_b|)` [A];
+* ``rms_current``: the RMS phase current :math:`\sqrt{\frac{1}{T}\int\frac{i_a^2 + i_b^2}{2}dt}` [A];
+* ``copper_loss``: :math:`R\int(i_a^2 + i_b^2)\,dt` [J], with the plant's :math:`R`.
+
+The voltage, current and loss figures are taken from :math:`t_0` on: every run starts at the plan's start
+equilibrium (current :math:`\rho_1` along the rotor's d axis), and the d-q controllers first bring
+:math:`i_d` to 0, a start-up transient of the simulation that says nothing about the move. Time integrals are
+trapezoids over the control instants.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from .batch import run_batch
+from .control.tuning import CONTROLLER_TYPES
+from .plan import RestToRest
+from .result import SimResult
+from .robustness import perturbed, plant_errors
+from .scenario import Scenario
+from .scenario_file import Robustness
+
+METRICS = ("move_max", "move_rms", "final", "settling_time", "peak_voltage", "peak_current", "rms_current",
+           "copper_loss")
+#: Series a robustness run keeps for the metrics and the figures.
+KEEP = ("t", "theta_error", "ia", "ib", "va", "vb")
+
+
+def _trapezoid(f: np.ndarray, t: np.ndarray) -> float:
+    return float(0.5 * np.sum((f[1:] + f[:-1]) * np.diff(t))) if t.size > 1 else 0.0
+
+
+def metrics(t, theta_error, ia, ib, va, vb, plan: RestToRest, *, band: float, R: float) -> dict[str, Optional[float]]:
+    """The comparison metrics (module docstring) of one run's time series (arrays over the control instants)."""
+    t, e = np.asarray(t, dtype=float), np.abs(np.asarray(theta_error, dtype=float))
+    ia, ib, va, vb = (np.asarray(a, dtype=float) for a in (ia, ib, va, vb))
+    if not band > 0:
+        raise ValueError(f"band={band!r} rad must be > 0 (the settling band)")
+    move = (t >= plan.t0) & (t <= plan.tf)
+    if not np.any(move):
+        raise ValueError(f"no sample in the move [t0, tf] = [{plan.t0}, {plan.tf}] s: the horizon ends at {t[-1]} s")
+    after = t >= plan.tf
+    outside = np.flatnonzero(e[after] > band)
+    t_after = t[after]
+    if outside.size == 0:
+        settling: Optional[float] = 0.0
+    elif outside[-1] == t_after.size - 1:
+        settling = None
+    else:
+        settling = float(t_after[outside[-1] + 1] - plan.tf)
+    w = t >= plan.t0
+    i2 = ia[w] ** 2 + ib[w] ** 2
+    duration = t[w][-1] - t[w][0]
+    return {
+        "move_max": float(np.max(e[move])),
+        "move_rms": float(np.sqrt(np.mean(e[move] ** 2))),
+        "final": float(e[-1]),
+        "settling_time": settling,
+        "peak_voltage": float(np.max(np.abs(np.concatenate([va[w], vb[w]])))),
+        "peak_current": float(np.max(np.abs(np.concatenate([ia[w], ib[w]])))),
+        "rms_current": float(np.sqrt(_trapezoid(i2 / 2, t[w]) / duration)) if duration > 0 else float(np.sqrt(np.mean(i2 / 2))),
+        "copper_loss": R * _trapezoid(i2, t[w]),
+    }
+
+
+def result_metrics(result: SimResult, plan: RestToRest, *, band: float, R: float) -> dict[str, Optional[float]]:
+    """:func:`metrics` of a :class:`~flatstep.result.SimResult`."""
+    return metrics(result.t, result.theta_error, result.ia, result.ib, result.va, result.vb, plan, band=band, R=R)
+
+
+def default_band(scenario: Scenario) -> float:
+    """One encoder count, or 1e-3 of the move (at least 1e-6 rad) without an encoder."""
+    s = scenario.sensors
+    if s is not None and s.angle_step:
+        return s.angle_step
+    return max(1e-3 * abs(scenario.plan.theta2 - scenario.plan.theta1), 1e-6)
+
+
+def _check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
+    bad = [k for k in kinds if k not in CONTROLLER_TYPES]
+    if bad or not kinds:
+        raise ValueError(f"controllers {bad or list(kinds)!r} are not controller types; valid: {list(CONTROLLER_TYPES)}")
+    return tuple(kinds)
+
+
+def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band: Optional[float] = None,
+            bandwidth_scale: float = 1.0) -> dict[str, dict[str, Any]]:
+    """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects);
+    returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n}}``."""
+    band = default_band(scenario) if band is None else band
+    out = {}
+    for kind in _check_kinds(kinds):
+        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
+        r = sc.run()
+        out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.plant_motor.R),
+                     "result": r, "faults": int(r.meta.get("controller_faults", 0))}
+    return out
+
+
+def _worse(a: Optional[float], b: Optional[float], key: str) -> Optional[float]:
+    if key == "settling_time" and (a is None or b is None):
+        return None  # not settled on some plant: the worst case does not settle
+    return max(a, b)
+
+
+def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = CONTROLLER_TYPES, *,
+                  band: Optional[float] = None, bandwidth_scale: float = 1.0,
+                  **batch_options: Any) -> dict[str, dict[str, Any]]:
+    """Each controller on every plant of the study (the controllers keep the nominal model); returns per
+    kind the worst of each metric over the plants (``"worst"``), the failed runs, and the rows with the
+    series of :data:`KEEP` for figures."""
+    band = default_band(scenario) if band is None else band
+    errors = plant_errors(study)
+    out = {}
+    for kind in _check_kinds(kinds):
+        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
+        runs = perturbed(sc, errors, f"/{kind}")
+        rows = run_batch(runs, keep=KEEP, **batch_options)
+        worst: dict[str, Optional[float]] = {}
+        for row, run in zip(rows, runs):
+            if row["error"] is not None:
+                continue
+            m = metrics(*(row[f"series_{k}"] for k in KEEP), scenario.plan, band=band, R=run.plant_motor.R)
+            row["metrics"] = m
+            worst = m if not worst else {k: _worse(worst[k], m[k], k) for k in METRICS}
+        failed = [r["error"] for r in rows if r["error"] is not None]
+        out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed, "rows": rows}
+    return out
+
+
+def bandwidth_sweep(scenario: Scenario, kinds: Sequence[str], scales: Sequence[float], *,
+                    study: Optional[Robustness] = None, band: Optional[float] = None,
+                    **batch_options: Any) -> dict[float, dict[str, dict[str, Optional[float]]]]:
+    """The baselines' metrics (worst over the study's plants, or on the scenario's plant) with every bandwidth
+    scaled by each factor: the check that the tuning rule does not cripple them."""
+    out = {}
+    for scale in scales:
+        if study is None:
+            res = compare(scenario, kinds, band=band, bandwidth_scale=scale)
+            out[float(scale)] = {k: v["metrics"] for k, v in res.items()}
+        else:
+            res = compare_worst(scenario, study, kinds, band=band, bandwidth_scale=scale, **batch_options)
+            out[float(scale)] = {k: v["worst"] for k, v in res.items()}
+    return out

@@ -1,0 +1,53 @@
+"""Figures of a controller comparison: overlaid runs on one plant, and every plant of a robustness study."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .plots import _finish, plt
+from .plan import RestToRest
+from .result import SimResult
+
+
+def plot_overlay(results: dict[str, SimResult], plan: RestToRest, count: float | None = None, title: str = "",
+                 path: str | Path | None = None):
+    """Overlay the controllers' runs: tracking error (whole and zoomed to +-5 counts, or to 3x the smallest
+    error), current norm and phase voltage va; shaded: the move."""
+    fig, axes = plt.subplots(4, 1, figsize=(9, 11), sharex=True, constrained_layout=True)
+    scale, unit = (count, "counts") if count else (1.0, "rad")
+    for label, r in results.items():
+        for ax in axes[:2]:
+            ax.plot(r.t, r.theta_error / scale, lw=1.1, label=label)
+        axes[2].plot(r.t, r.rho, lw=1.1, label=label)
+        axes[3].plot(r.t, r.va, lw=0.9, label=label)
+    lim = 5.0 if count else 3 * min(max(np.max(np.abs(r.theta_error)), 1e-12) for r in results.values())
+    axes[1].set_ylim(-lim, lim)
+    for ax, label in zip(axes, (rf"$\theta - \theta^*$ [{unit}]", f"zoom [{unit}]", r"$\rho = |i|$ [A]", "$v_a$ [V]")):
+        ax.axvspan(plan.t0, plan.tf, color="0.92", zorder=0)
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+    axes[3].set_xlabel("t [s] (shaded: the move)")
+    axes[0].legend(fontsize=8)
+    return _finish(fig, title, path)
+
+
+def plot_plants(study: dict[str, dict], labels: dict[str, str], plan: RestToRest, count: float | None = None,
+                title: str = "", path: str | Path | None = None):
+    """One panel per controller: the tracking error on every plant of a :func:`flatstep.compare.compare_worst`
+    study, with its worst move error in the title."""
+    fig, axes = plt.subplots(len(study), 1, figsize=(9, 2.8 * len(study)), sharex=True, constrained_layout=True,
+                             squeeze=False)
+    scale, unit = (count, "counts") if count else (1.0, "rad")
+    for ax, (kind, s) in zip(axes[:, 0], study.items()):
+        for row in s["rows"]:
+            if row["error"] is None:
+                ax.plot(row["series_t"], np.asarray(row["series_theta_error"]) / scale, lw=0.6, alpha=0.7)
+        ax.axvspan(plan.t0, plan.tf, color="0.92", zorder=0)
+        worst = s["worst"].get("move_max", np.nan) if s["worst"] else np.nan
+        ax.set_title(f"{labels.get(kind, kind)}: {s['runs'] - s['failed']}/{s['runs']} runs, worst max error "
+                     f"during the move {worst / scale:.3g} {unit}", fontsize=10)
+        ax.set_ylabel(rf"$\theta - \theta^*$ [{unit}]")
+        ax.grid(True, alpha=0.3)
+    axes[-1, 0].set_xlabel("t [s] (shaded: the move)")
+    return _finish(fig, title, path)
