@@ -62,7 +62,7 @@ def test_observer_removes_the_model_mode_bias_under_load(motor, plan):
 @pytest.mark.parametrize("kwargs, match", [
     (dict(sensors=Sensors()), "give control_period"),
     (dict(control_period=TS, observer=Observer()), "needs measurement='observer'"),
-    (dict(control_period=TS, sensors=Sensors(), engine="c"), "engine='c' does not model"),
+    (dict(control_period=TS, drive=Drive(pwm="switched"), engine="c"), "engine='c' does not model pwm='switched'"),
     (dict(engine="python"), "give control_period"),
 ])
 def test_inconsistent_loops_are_refused(motor, plan, kwargs, match):

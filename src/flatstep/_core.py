@@ -22,6 +22,8 @@ Array = NDArray[np.float64]
 #: smc_step status bits by name; every bit but ``saturated`` is a fault (the step then outputs 0 V).
 STATUS_BITS = {"nonfinite": lib.SMC_NONFINITE, "rho": lib.SMC_RHO, "sqrt": lib.SMC_SQRT,
                "overflow": lib.SMC_OVERFLOW, "saturated": lib.SMC_SATURATED}
+#: The status bits that are faults (the step then outputs 0 V): all but ``saturated``.
+FAULT_BITS = lib.SMC_NONFINITE | lib.SMC_RHO | lib.SMC_SQRT | lib.SMC_OVERFLOW
 _SIM_ERRORS = {lib.SIM_EARGS: "invalid arguments", lib.SIM_ECONTROL: "the controller faulted",
                lib.SIM_EHMIN: "the step size fell below rounding level",
                lib.SIM_EMAXSTEPS: "more than max_steps steps", lib.SIM_ENONFINITE: "the state became non-finite"}

@@ -52,8 +52,9 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
     engine : ``"c"``: the C core, adaptive Dormand-Prince 5(4) at ``rtol``/``atol`` (``method`` is not
         used); ``"scipy"``: :func:`scipy.integrate.solve_ivp` with ``method`` at ``rtol``/``atol``;
         ``"python"``: the readable sampled-loop reference (:mod:`flatstep.sampled`). Default (``None``): the C
-        core, except for a drive with sensors, observer, switched PWM or computation delay, which runs on
-        the Python reference loop.
+        core, which runs the sampled drive loop too (sensors, observer, bus saturation, delays: C
+        ``sampled_run``, held to the reference by ``tests/test_core_drive.py``), except for switched PWM,
+        plant effects and the baseline controllers, which run on the Python reference loop.
     dt_out : spacing of the returned samples [s] (continuous control).
     control_period : ``None`` for continuous control; a period ``Ts`` [s] runs the controller at
         ``t = k Ts`` with the voltage held in between (C engine only), the plant integrated by ``substeps``
@@ -71,8 +72,9 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
     baseline = controller is not None and not isinstance(controller, FlatnessSMC)
     loop_parts = (drive is not None or sensors is not None or observer is not None or compute_delay
                   or effects is not None or baseline)
+    why_not_c = _c_unsupported(controller, drive, sensors, effects) if loop_parts else None
     if engine is None:
-        engine = "python" if loop_parts and control_period is not None else "c"
+        engine = "python" if why_not_c is not None and control_period is not None else "c"
     if engine not in ENGINES:
         raise ValueError(f"engine={engine!r} is not available; valid engines: {ENGINES}")
     if method not in METHODS:
@@ -96,9 +98,14 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
         loop = DriveLoop(check_positive("control_period", control_period, unit=" s"), substeps, compute_delay,
                          drive, sensors, observer)
         return _simulate_python(motor, plan, controller, loop, load, t_end, x0, effects)
+    if loop_parts and (engine != "c" or why_not_c is not None):
+        what = why_not_c if engine == "c" else ("drive, sensors, observer, compute_delay, plant effects or "
+                                                f"{type(controller).__name__}")
+        raise ValueError(f"engine={engine!r} does not model {what}; use engine='python'")
     if loop_parts:
-        raise ValueError(f"engine={engine!r} does not model drive, sensors, observer, compute_delay, plant effects "
-                         f"or run {type(controller).__name__}; use engine='python'")
+        loop = DriveLoop(check_positive("control_period", control_period, unit=" s"), substeps, compute_delay,
+                         drive, sensors, observer)
+        return _simulate_drive_c(motor, plan, controller, loop, load, t_end, x0)
     if engine == "c" or control_period is not None:
         return _simulate_c(motor, plan, controller, load, t_end, x0, engine, rtol, atol, dt_out,
                            control_period, substeps)
@@ -157,6 +164,41 @@ def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, l
 def _simulate_python(motor: MotorParams, plan: RestToRest, controller: Any, loop: DriveLoop, load: Load,
                      t_end: float, x0: np.ndarray, effects: Optional[PlantEffects] = None) -> SimResult:
     """The sampled drive loop reference of :mod:`flatstep.sampled`."""
+    tau, n = _check_loop(controller, loop, load, t_end)
+    r = run_reference(motor, controller, loop, x0, tau, n, effects)
+    return _loop_result("python", motor, plan, controller, loop, tau, effects, r)
+
+
+def _simulate_drive_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, loop: DriveLoop, load: Load,
+                      t_end: float, x0: np.ndarray) -> SimResult:
+    """The sampled drive loop on the C engine (``sampled_run``), returned as the reference returns it."""
+    from . import _core
+
+    tau, n = _check_loop(controller, loop, load, t_end)
+    if isinstance(loop.substeps, bool) or not isinstance(loop.substeps, (int, np.integer)) or loop.substeps < 1:
+        raise ValueError(f"substeps={loop.substeps!r} must be a positive integer (RK4 steps per control period)")
+    X, V, Y, status, stats = _core.run_drive(controller, motor, tau, x0, n, Ts=loop.control_period,
+                                             substeps=int(loop.substeps), drive=loop.drive, sensors=loop.sensors,
+                                             observer=loop.observer, compute_delay=loop.compute_delay)
+    t = np.arange(n + 1) * loop.control_period
+    r = {"t": t, "x": X, "v": V, "y": Y, "faults": t[(status & _core.FAULT_BITS) != 0]}
+    return _loop_result("c", motor, plan, controller, loop, tau, None, r, stats)
+
+
+def _c_unsupported(controller: Any, drive: Optional[Drive], sensors: Optional[Sensors],
+                   effects: Optional[PlantEffects]) -> Optional[str]:
+    """What of a sampled drive loop the C engine does not model (``None`` when it runs all of it)."""
+    if controller is not None and not isinstance(controller, FlatnessSMC):
+        return f"the {type(controller).__name__} controller"
+    if effects is not None:
+        return "plant effects (detent, Coulomb friction, iron loss)"
+    from . import _core
+
+    return _core.drive_unsupported(drive, sensors)
+
+
+def _check_loop(controller: Any, loop: DriveLoop, load: Load, t_end: float) -> tuple[float, int]:
+    """Refuse a measurement the loop's sensors cannot provide; return the constant load and the periods."""
     if callable(load):
         raise ValueError(f"load={load!r}: the sampled loop takes a constant load torque")
     if loop.observer is not None and controller.measurement != "observer":
@@ -164,14 +206,17 @@ def _simulate_python(motor: MotorParams, plan: RestToRest, controller: Any, loop
     if loop.observer is None and loop.sensors is not None and controller.measurement != "model":
         raise ValueError(f"with sensors and no observer no acceleration is measured: use measurement='model' "
                          f"(got {controller.measurement!r}) or add an observer")
-    tau = float(load_function(load)(0.0))
-    n = max(1, math.ceil(t_end / loop.control_period - 1e-9))
-    r = run_reference(motor, controller, loop, x0, tau, n, effects)
+    return float(load_function(load)(0.0)), max(1, math.ceil(t_end / loop.control_period - 1e-9))
+
+
+def _loop_result(engine: str, motor: MotorParams, plan: RestToRest, controller: Any, loop: DriveLoop, tau: float,
+                 effects: Optional[PlantEffects], r: dict, stats: Optional[dict] = None) -> SimResult:
+    """The :class:`SimResult` of a sampled drive loop run ``r`` (``t``, ``x``, ``v``, ``y``, ``faults``)."""
     X, Y = r["x"], r["y"]
-    meta = {"engine": "python", "method": "RK4", "control_period": loop.control_period, "substeps": loop.substeps,
+    meta = {"engine": engine, "method": "RK4", "control_period": loop.control_period, "substeps": loop.substeps,
             "compute_delay": loop.compute_delay,
             **{k: getattr(loop, k).as_dict() for k in ("drive", "sensors", "observer") if getattr(loop, k)},
-            **({"effects": effects.as_dict()} if effects is not None else {})}
+            **({"effects": effects.as_dict()} if effects is not None else {}), **(stats or {})}
     result = collect(r["t"], X, plan, controller, plant_acceleration(X, motor, tau, effects), meta, v=r["v"])
     result.meta["measured"] = {"theta": Y[3], "omega": Y[2], "ddtheta": Y[4]}
     result.meta["controller_faults"] = int(r["faults"].size)
