@@ -1,12 +1,11 @@
 // The flat maps of eqs. (7)-(10), in the operation order of flatstep.flat so that results agree to rounding.
 #include "flat.h"
 
-// Returns FLAT_OK, or a FLAT_E* flag with v = (0, 0); writes the voltages that give rho' = drho and
-// theta''' = dddtheta at (rho, phi, theta, theta', theta'') for the torque demand A (eqs. 9 and 13).
-int flat_voltages(const struct motor_params *m, fs_real rho, fs_real drho, fs_real theta, fs_real dtheta,
-                  fs_real ddtheta, fs_real dddtheta, fs_real phi, fs_real A, fs_real v[2])
+// Returns FLAT_OK, or a FLAT_E* flag with v = (0, 0); flat_voltages with the angles given as sines and cosines.
+int flat_voltages_trig(const struct motor_params *m, fs_real rho, fs_real drho, fs_real dtheta, fs_real ddtheta,
+                       fs_real dddtheta, const struct flat_angles *a, fs_real A, fs_real v[2])
 {
-    fs_real S2, S, dphi, delta, X, Y, sp, cp;
+    fs_real S2, S, dphi, X, Y;
     v[0] = v[1] = 0;
     if (!(rho > 0))
         return FLAT_ERHO;
@@ -18,14 +17,25 @@ int flat_voltages(const struct motor_params *m, fs_real rho, fs_real drho, fs_re
         return FLAT_ESQRT;  // rho S underflowed: the division below would be by zero
     // phi' from the theta''' row of eq. (8) solved for phi'; the polar-frame voltages X, Y follow.
     dphi = -((m->J * dddtheta + m->B * ddtheta) * rho - A * drho) / (rho * S) - m->Nr * dtheta;
-    delta = m->Nr * theta + phi;
-    X = m->L * drho + m->R * rho + m->Km * dtheta * fs_cos(delta);
-    Y = m->L * rho * dphi - m->Km * dtheta * fs_sin(delta);
-    sp = fs_sin(phi);
-    cp = fs_cos(phi);
-    v[0] = X * sp + Y * cp;
-    v[1] = X * cp - Y * sp;
+    X = m->L * drho + m->R * rho + m->Km * dtheta * a->cdelta;
+    Y = m->L * rho * dphi - m->Km * dtheta * a->sdelta;
+    v[0] = X * a->sphi + Y * a->cphi;
+    v[1] = X * a->cphi - Y * a->sphi;
     return FLAT_OK;
+}
+
+// Returns FLAT_OK, or a FLAT_E* flag with v = (0, 0); writes the voltages that give rho' = drho and
+// theta''' = dddtheta at (rho, phi, theta, theta', theta'') for the torque demand A (eqs. 9 and 13).
+int flat_voltages(const struct motor_params *m, fs_real rho, fs_real drho, fs_real theta, fs_real dtheta,
+                  fs_real ddtheta, fs_real dddtheta, fs_real phi, fs_real A, fs_real v[2])
+{
+    fs_real delta = m->Nr * theta + phi;
+    struct flat_angles a;
+    a.sphi = fs_sin(phi);
+    a.cphi = fs_cos(phi);
+    a.sdelta = fs_sin(delta);
+    a.cdelta = fs_cos(delta);
+    return flat_voltages_trig(m, rho, drho, dtheta, ddtheta, dddtheta, &a, A, v);
 }
 
 // Returns FLAT_OK, or a FLAT_E* flag with x and v zeroed; writes the state x and inputs v along the flat

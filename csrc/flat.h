@@ -18,6 +18,17 @@ enum {
 int flat_voltages(const struct motor_params *m, fs_real rho, fs_real drho, fs_real theta, fs_real dtheta,
                   fs_real ddtheta, fs_real dddtheta, fs_real phi, fs_real A, fs_real v[2]);
 
+// The angles flat_voltages_trig takes, by sine and cosine: the current vector's phase phi and delta = Nr theta
+// + phi (a controller gets them from the measured currents without atan2, sin or cos of phi).
+struct flat_angles {
+    fs_real sphi, cphi;      // sin phi = ia / rho, cos phi = ib / rho
+    fs_real sdelta, cdelta;  // sin and cos of Nr theta + phi
+};
+
+// Returns FLAT_OK, or a FLAT_E* flag with v = (0, 0); flat_voltages with the angles given as sines and cosines.
+int flat_voltages_trig(const struct motor_params *m, fs_real rho, fs_real drho, fs_real dtheta, fs_real ddtheta,
+                       fs_real dddtheta, const struct flat_angles *a, fs_real A, fs_real v[2]);
+
 // Returns FLAT_OK, or a FLAT_E* flag with x and v zeroed; writes the state x and inputs v along the flat
 // flag for a known load torque (eqs. 9-10).
 int flat_to_state(const struct motor_params *m, const fs_real flag[PLAN_FLAG_LEN], fs_real load, fs_real x[4],

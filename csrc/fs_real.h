@@ -17,6 +17,7 @@ typedef float fs_real;
 #define fs_pow powf
 #define fs_rint rintf
 #define FS_REAL_MAX 3.402823466e+38f
+#define FS_REAL_EPSILON 1.1920928955078125e-07f
 #else
 typedef double fs_real;
 #define FS_C(x) x
@@ -30,6 +31,7 @@ typedef double fs_real;
 #define fs_pow pow
 #define fs_rint rint
 #define FS_REAL_MAX 1.7976931348623157e+308
+#define FS_REAL_EPSILON 2.220446049250313e-16
 #endif
 
 // isfinite is a type-generic macro in C99 <math.h>; this names it once for the whole core.

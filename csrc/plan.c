@@ -1,15 +1,23 @@
 // The degree-10 interpolating polynomial psi of eq. (17) and the rest-to-rest flat flag built on it.
 #include "plan.h"
 
-// Power-basis coefficients (lowest first) of psi(tau) and its first three tau-derivatives, padded with zeros
-// to degree 10; integers, so exact in float and double. psi = tau^5 (252 - 1050 tau + 1800 tau^2 - 1575 tau^3
-// + 700 tau^4 - 126 tau^5). A zero leading coefficient leaves Horner's accumulator at exactly 0, so the padded
-// chains round exactly as numpy.polyval on the unpadded ones.
-static const fs_real psi_coef[4][11] = {
-    {0, 0, 0, 0, 0, 252, -1050, 1800, -1575, 700, -126},
-    {0, 0, 0, 0, 1260, -6300, 12600, -12600, 6300, -1260},
-    {0, 0, 0, 5040, -31500, 75600, -88200, 50400, -11340},
-    {0, 0, 15120, -126000, 378000, -529200, 352800, -90720},
+// Power-basis coefficients of psi(tau) and its first three tau-derivatives, row j holding the tau^j
+// coefficient of each (so one Horner step reads one row); integers, so exact in float and double.
+// psi = tau^5 (252 - 1050 tau + 1800 tau^2 - 1575 tau^3 + 700 tau^4 - 126 tau^5). The derivatives are padded
+// with zero leading coefficients, which leave Horner's accumulator at exactly 0, so every chain rounds
+// exactly as numpy.polyval on the unpadded polynomial.
+static const fs_real psi_coef[11][4] = {
+    {0, 0, 0, 0},
+    {0, 0, 0, 0},
+    {0, 0, 0, 15120},
+    {0, 0, 5040, -126000},
+    {0, 1260, -31500, 378000},
+    {252, -6300, 75600, -529200},
+    {-1050, 12600, -88200, 352800},
+    {1800, -12600, 50400, -90720},
+    {-1575, 6300, -11340, 0},
+    {700, -1260, 0, 0},
+    {-126, 0, 0, 0},
 };
 
 // Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
@@ -33,15 +41,12 @@ static void span_powers(fs_real t0, fs_real tf, fs_real Tk[4])
 // Returns nothing; writes the four psi tau-polynomials at tau in one Horner pass (four independent chains).
 static void psi_horner(fs_real tau, fs_real d[4])
 {
-    fs_real a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-    int j;
-    for (j = 10; j >= 0; j--) {
-        a0 = psi_coef[0][j] + a0 * tau;
-        a1 = psi_coef[1][j] + a1 * tau;
-        a2 = psi_coef[2][j] + a2 * tau;
-        a3 = psi_coef[3][j] + a3 * tau;
-    }
-    d[0] = a0, d[1] = a1, d[2] = a2, d[3] = a3;
+    int j, k;
+    for (k = 0; k < 4; k++)
+        d[k] = 0;
+    for (j = 10; j >= 0; j--)
+        for (k = 0; k < 4; k++)
+            d[k] = psi_coef[j][k] + d[k] * tau;
 }
 
 // Returns nothing; writes psi and its first three time derivatives at t (see plan_psi) from the span powers.
@@ -64,14 +69,30 @@ static void psi_all(fs_real t, fs_real t0, fs_real tf, const fs_real Tk[4], fs_r
         d[k] = inside && Tk[k] > 0 ? d[k] / Tk[k] : 0;  // the reference divides by T**k; an underflowed power: 0
 }
 
+// Returns nothing; writes the flag for psi and its time derivatives d.
+static void flag_of_psi(const struct plan_coef *c, const fs_real d[4], fs_real flag[PLAN_FLAG_LEN])
+{
+    flag[PLAN_RHO] = c->p.rho1 + d[0] * c->drho;
+    flag[PLAN_DRHO] = d[1] * c->drho;
+    flag[PLAN_THETA] = c->p.theta1 + d[0] * c->dtheta;
+    flag[PLAN_DTHETA] = d[1] * c->dtheta;
+    flag[PLAN_DDTHETA] = d[2] * c->dtheta;
+    flag[PLAN_DDDTHETA] = d[3] * c->dtheta;
+}
+
 // Returns plan_valid(p); fills c from p either way (for tf <= t0 plan_flag then holds the start values, and
 // a derivative whose (tf - t0)^k underflows evaluates to 0).
 bool plan_init(struct plan_coef *c, const struct plan *p)
 {
+    fs_real d[4];
     c->p = *p;
     span_powers(p->t0, p->tf, c->Tk);
     c->dtheta = p->theta2 - p->theta1;
     c->drho = p->rho2 - p->rho1;
+    psi_all(p->t0, p->t0, p->tf, c->Tk, d);
+    flag_of_psi(c, d, c->rest[0]);
+    psi_all(p->tf, p->t0, p->tf, c->Tk, d);
+    flag_of_psi(c, d, c->rest[1]);
     return plan_valid(p);
 }
 
@@ -79,14 +100,16 @@ bool plan_init(struct plan_coef *c, const struct plan *p)
 // theta''') at time t, exactly as flatstep.plan.RestToRest.flag: one pass over the four psi polynomials.
 bool plan_flag(const struct plan_coef *c, fs_real t, fs_real flag[PLAN_FLAG_LEN])
 {
+    const fs_real *rest;
     fs_real d[4];
+    if (t <= c->p.t0 || t >= c->p.tf) {  // at rest: the flag held since t0 or from tf on
+        rest = c->rest[t >= c->p.tf];
+        flag[0] = rest[0], flag[1] = rest[1], flag[2] = rest[2];
+        flag[3] = rest[3], flag[4] = rest[4], flag[5] = rest[5];
+        return false;
+    }
     psi_all(t, c->p.t0, c->p.tf, c->Tk, d);
-    flag[PLAN_RHO] = c->p.rho1 + d[0] * c->drho;
-    flag[PLAN_DRHO] = d[1] * c->drho;
-    flag[PLAN_THETA] = c->p.theta1 + d[0] * c->dtheta;
-    flag[PLAN_DTHETA] = d[1] * c->dtheta;
-    flag[PLAN_DDTHETA] = d[2] * c->dtheta;
-    flag[PLAN_DDDTHETA] = d[3] * c->dtheta;
+    flag_of_psi(c, d, flag);
     return t > c->p.t0 && t < c->p.tf;
 }
 

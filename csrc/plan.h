@@ -20,6 +20,7 @@ struct plan_coef {
     struct plan p;
     fs_real Tk[4];         // (tf - t0)^k, k = 0..3, by pow once here so that plan_flag calls no pow
     fs_real dtheta, drho;  // theta2 - theta1, rho2 - rho1
+    fs_real rest[2][PLAN_FLAG_LEN];  // the flag held up to t0 and from tf on
 };
 
 // Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.

@@ -2,6 +2,50 @@
 #include "smc.h"
 #include "flat.h"
 
+// Where ia^2 + ib^2 neither underflows nor overflows, so that sqrt(ia^2 + ib^2) is as good as hypot(ia, ib).
+#define RHO2_SAFE_MIN FS_C(1e-30)
+#define RHO2_SAFE_MAX FS_C(1e30)
+
+#ifndef FS_SINGLE
+// fdlibm's minimax coefficients for sin and cos on [-pi/4, pi/4] (__kernel_sin, __kernel_cos), and pi/2 in
+// three parts whose first two have trailing zero bits, so n * part is exact for |n| < 2^16 (Cody-Waite).
+static const double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
+                    S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
+                    S5 = -2.50507602534068634195e-08, S6 = 1.58969099521155010221e-10;
+static const double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
+                    C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
+                    C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
+static const double INV_PIO2 = 6.36619772367581382433e-01, PIO2_1 = 1.57079632673412561417e+00,
+                    PIO2_2 = 6.07710050630396597660e-11, PIO2_3 = 2.02226624871116645580e-21;
+#endif
+
+// Returns nothing; writes sin x and cos x (within 2 ulp of libm's; libm itself beyond |x| = 1e5 and in float).
+static void sin_cos(fs_real x, fs_real *s, fs_real *c)
+{
+#ifndef FS_SINGLE
+    long n;
+    fs_real r, z, hz, w, sr, cr;
+    if (fs_fabs(x) < 1e5) {
+        // x = n pi/2 + r with |r| <= pi/4; then the quadrant n mod 4 permutes and negates sin r, cos r.
+        n = (long)(x * INV_PIO2 + (x >= 0 ? 0.5 : -0.5));
+        r = ((x - (fs_real)n * PIO2_1) - (fs_real)n * PIO2_2) - (fs_real)n * PIO2_3;
+        z = r * r;
+        sr = r + z * r * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
+        hz = 0.5 * z;
+        w = 1 - hz;
+        cr = w + (((1 - w) - hz) + z * z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6))))));
+        switch (n & 3) {
+        case 0: *s = sr, *c = cr; return;
+        case 1: *s = cr, *c = -sr; return;
+        case 2: *s = -sr, *c = -cr; return;
+        default: *s = -cr, *c = sr; return;
+        }
+    }
+#endif
+    *s = fs_sin(x);
+    *c = fs_cos(x);
+}
+
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
 // v_limit = 1e3 V and rho_min = 1e-6 A.
 void smc_params_default(struct smc_params *p)
@@ -42,6 +86,9 @@ int smc_init(struct smc *s, const struct smc_params *p)
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
     s->alpha2 = 2 * g->xi * g->wn;
+    // v_limit^2 less a margin of 16 rounding units (v0^2 + v1^2 is within 2 of |v|^2), capped below overflow.
+    s->v_limit2_below = p->v_limit < fs_sqrt(FS_REAL_MAX) ? p->v_limit * p->v_limit * (1 - 16 * FS_REAL_EPSILON)
+                                                             : FS_REAL_MAX;
     smc_reset(s);
     return SMC_PARAMS_OK;
 }
@@ -57,14 +104,23 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
 {
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
-    fs_real ref[PLAN_FLAG_LEN], rho, phi, acc, e, de, dde, s1, s2, gamma1, gamma2;
+    fs_real ref[PLAN_FLAG_LEN], rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2;
+    struct flat_angles a;
     int flat;
     plan_flag(&s->plan, t, ref);
-    rho = fs_hypot(y[0], y[1]);
-    phi = fs_atan2(y[0], y[1]);
+    // rho = hypot(ia, ib); the square root of the sum of squares is as accurate unless it over- or underflows.
+    rho = y[0] * y[0] + y[1] * y[1];
+    rho = rho > RHO2_SAFE_MIN && rho < RHO2_SAFE_MAX ? fs_sqrt(rho) : fs_hypot(y[0], y[1]);
     if (!(rho >= s->p.rho_min))
         return SMC_RHO;
-    acc = s->p.measurement == SMC_IDEAL ? y[4] : motor_acceleration(m, y, 0);
+    // phi = atan2(ia, ib) by its sine and cosine; delta = Nr theta + phi by the angle-addition formulas.
+    a.sphi = y[0] / rho;
+    a.cphi = y[1] / rho;
+    sin_cos(m->Nr * y[3], &sN, &cN);
+    a.sdelta = sN * a.cphi + cN * a.sphi;
+    a.cdelta = cN * a.cphi - sN * a.sphi;
+    // theta'' measured, or from the zero-load model in motor_acceleration's operation order.
+    acc = s->p.measurement == SMC_IDEAL ? y[4] : (m->Km * (y[1] * cN - y[0] * sN) - m->B * y[2]) / m->J;
     e = y[3] - ref[PLAN_THETA];
     de = y[2] - ref[PLAN_DTHETA];
     dde = acc - ref[PLAN_DDTHETA];
@@ -72,7 +128,7 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
     s2 = dde + s->alpha2 * de + s->alpha1 * e;
     gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
     gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
-    flat = flat_voltages(m, rho, gamma1, y[3], y[2], acc, gamma2, phi, m->J * acc + m->B * y[2], v);
+    flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2], v);
     if (flat & FLAT_ERHO)
         return SMC_RHO;
     if (flat & FLAT_ESQRT)
@@ -87,22 +143,20 @@ uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
     // Law (12)-(14): s1 = rho - rho*, s2 = e'' + a2 e' + a1 e; Gamma1 = rho*' - W1 s1/(|s1| + eps1),
     // Gamma2 = theta*''' - a2 e'' - a1 e' - W2 s2/(|s2| + eps2); v = flat inverse (13) with rho' -> Gamma1,
     // theta''' -> Gamma2 at the measured (rho, phi, theta, theta', theta'').
-    uint32_t status = SMC_OK;
-    fs_real norm, big;
-    int n = s->p.measurement == SMC_IDEAL ? 5 : 4, k;
+    uint32_t status;
+    fs_real norm, big, z;
     v[0] = v[1] = 0;
-    for (k = 0; k < n; k++)
-        if (!fs_isfinite(y[k]))
-            status = SMC_NONFINITE;
-    if (!fs_isfinite(t))
-        status = SMC_NONFINITE;
-    if (status == SMC_OK)
-        status = smc_law(s, t, y, v);
+    // x - x is 0 for a finite x and NaN for an infinite or NaN one: one test covers every input used.
+    z = (t - t) + (y[0] - y[0]) + (y[1] - y[1]) + (y[2] - y[2]) + (y[3] - y[3]);
+    if (s->p.measurement == SMC_IDEAL)
+        z += y[4] - y[4];
+    status = z == 0 ? smc_law(s, t, y, v) : SMC_NONFINITE;
     if (status == SMC_OK && !(fs_isfinite(v[0]) && fs_isfinite(v[1])))
         status = SMC_OVERFLOW;
     if (status != SMC_OK) {
         v[0] = v[1] = 0;
-    } else {
+    } else if (v[0] * v[0] + v[1] * v[1] > s->v_limit2_below) {
+        // Near or over the limit (or the squares overflowed): decide on hypot, as the contract states.
         if (fs_hypot(v[0], v[1]) > s->p.v_limit) {
             // Scale by the larger component first so that hypot cannot overflow; big > v_limit / 2 > 0.
             big = fs_fabs(v[0]) > fs_fabs(v[1]) ? fs_fabs(v[0]) : fs_fabs(v[1]);

@@ -45,6 +45,7 @@ struct smc {
     struct smc_params p;
     struct plan_coef plan;   // p.plan ready to evaluate (plan_init)
     fs_real alpha1, alpha2;  // wn^2, 2 xi wn
+    fs_real v_limit2_below;  // just below v_limit^2: va^2 + vb^2 under it needs no hypot
     uint32_t status_seen;    // OR of every status since the last reset
 };
 
