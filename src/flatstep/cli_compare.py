@@ -47,6 +47,8 @@ def _target_line(rows: dict[str, dict[str, Optional[float]]]) -> Optional[str]:
 
 def cmd_compare(args: argparse.Namespace) -> int:
     scenario, study = load_scenario(args.scenario)
+    if args.clean:
+        scenario = replace(scenario, name=f"{scenario.name} (clean)", load_torque=0.0, effects=None, plant=None)
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
     kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else CONTROLLER_TYPES
@@ -118,6 +120,8 @@ def add_compare_command(sub) -> None:
     cmp_.add_argument("--controllers", default=None,
                       help=f"comma-separated controller types (default: all of {','.join(CONTROLLER_TYPES)})")
     cmp_.add_argument("--band", type=float, default=None, help="settling band [rad] (default: one encoder count)")
+    cmp_.add_argument("--clean", action="store_true", help="no load, no plant effects, the plant equal to the "
+                      "model (the file's drive, sensors and gains otherwise)")
     cmp_.add_argument("--no-robustness", action="store_true", help="skip the file's [robustness] study")
     cmp_.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
     cmp_.add_argument("--scales", default=None, help="also run the baselines with every bandwidth scaled by these "

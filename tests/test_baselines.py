@@ -1,0 +1,114 @@
+"""Baseline controllers: microstepping, cascaded FOC, exact linearization, on the same sampled loop."""
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import flatstep as fs
+from flatstep.control import (CONTROLLER_TYPES, CascadeFOC, CascadeGains, ExactLinearization, LinearizationGains,
+                              Microstepping, MicrostepGains, make_controller)
+from flatstep.control.loops import PIGains, bus_scale, inverse_park, park, pi_integrate
+
+TS = 5e-5
+SLOW = fs.RestToRest(0.0, 0.02, 0.4, 0.4, t0=0.005, tf=0.045)
+
+
+@pytest.mark.parametrize("kind", CONTROLLER_TYPES)
+def test_every_controller_tracks_a_slow_move_with_exact_sensors(motor, kind):
+    ctrl = make_controller(kind, motor, SLOW, control_period=TS, measurement="ideal", v_limit=24.0,
+                           smc_gains=fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500))
+    r = fs.simulate(motor, SLOW, ctrl, control_period=TS, substeps=4, t_end=0.05)
+    assert r.meta["controller"] == type(ctrl).__name__ and r.meta["engine"] == ("c" if kind == "smc" else "python")
+    err = np.max(np.abs(r.theta_error[r.t >= SLOW.t0]))
+    # microstepping lags by the load angle J theta''/(Km Nr rho) and rings; the closed loops follow closely
+    bound = 2e-3 if kind == "microstep" else 2e-5
+    assert err < bound and abs(r.theta[-1] - SLOW.theta2) < bound
+    if kind != "smc":
+        assert r.s1 is None and "s1" not in r.series()
+
+
+def test_microstepping_lags_by_the_load_angle(motor):
+    """A constant load tau at rest: Km rho sin(Nr e) = -tau, with no position feedback to remove it (the
+    rotor rings at sqrt(Km Nr rho / J) = 527 rad/s, damped only by B/2J = 14 1/s: wait 0.3 s)."""
+    hold = fs.RestToRest(0.0, 0.02, 0.4, 0.4, t0=1.0, tf=1.1)
+    ctrl = Microstepping(motor, hold, MicrostepGains(6000.0), control_period=2 * TS)
+    r = fs.simulate(motor, hold, ctrl, control_period=2 * TS, load=2e-3, t_end=0.3)
+    e = np.arcsin(-2e-3 / (motor.Km * 0.4)) / motor.Nr
+    assert r.theta_error[-1] == pytest.approx(e, rel=0.03)
+    assert np.min(r.theta_error) < 1.5 * e  # it overshot: an undamped second-order response
+
+
+def test_park_round_trip_and_torque_axis(motor):
+    rng = np.random.default_rng(1)
+    ia, ib, th = rng.normal(size=(3, 50))
+    d, q = park(ia, ib, motor.Nr * th)
+    np.testing.assert_allclose(inverse_park(d, q, motor.Nr * th), [ia, ib], atol=1e-14)
+    np.testing.assert_allclose(motor.Km * q, fs.motor.torque(np.array([ia, ib, 0 * ia, th]), motor), atol=1e-14)
+
+
+def test_pi_anti_windup_holds_the_integral_while_the_bus_limits(motor):
+    g = PIGains.current_loop(motor, 6000.0)
+    assert (g.kp, g.ki) == pytest.approx((motor.L * 6000.0, motor.R * 6000.0))
+    assert pi_integrate(g, 0.5, 1.0, TS, hold=True) == 1.0
+    assert pi_integrate(g, 0.5, 1.0, TS, hold=False) == pytest.approx(1.0 + g.ki * TS * 0.5)
+    assert bus_scale([30.0, -12.0], 24.0) == pytest.approx(0.8) and bus_scale([3.0, 1.0], 24.0) == 1.0
+    # a current step the bus cannot deliver at once: the microstepping integrals stay put while it saturates
+    ctrl = Microstepping(motor, SLOW, MicrostepGains(6000.0, feedforward=False), control_period=TS, v_limit=4.0)
+    state = ctrl.initial_state()
+    v, new = ctrl.step(state, np.array([-0.4, 0.0, 0.0, 0.0, 0.0]), 0.0)
+    assert np.max(np.abs(v)) > 4.0 and np.array_equal(new, state)
+    v, new = ctrl.step(state, np.array([0.399, 0.0, 0.0, 0.0, 0.0]), 0.0)
+    assert np.max(np.abs(v)) < 4.0 and not np.array_equal(new, state)
+
+
+def test_cascade_gains_place_the_poles_w_w_w_over_4():
+    g = CascadeGains(current_bandwidth=6000.0, position_bandwidth=1500.0)
+    poly = [1.0, g.k_omega, g.k_omega * g.k_theta + g.ki_omega, g.ki_omega * g.k_theta]
+    np.testing.assert_allclose(np.sort(np.roots(poly).real), [-1500.0, -1500.0, -375.0], rtol=1e-4)
+
+
+def test_cascade_windup_is_bounded_under_a_low_bus(motor):
+    """A 3 V bus cannot hold the fast plan; with the integrators held the loop recovers after the move."""
+    ctrl = CascadeFOC(motor, SLOW, CascadeGains(6000.0, 1500.0), control_period=TS, measurement="ideal", v_limit=3.0)
+    r = fs.simulate(motor, SLOW, ctrl, control_period=TS, drive=fs.drive.Drive(v_bus=3.0), t_end=0.06)
+    assert np.max(np.abs([r.va, r.vb])) == pytest.approx(3.0)  # the bus did limit
+    assert abs(r.theta_error[-1]) < 1e-5
+
+
+def test_exact_linearization_error_obeys_the_placed_poles(motor):
+    """With the exact model and exact measurements the angle error is the linear ODE
+    e''' + k2 e'' + k1 e' + k0 e = 0 (fine sampling: the poles are 100x below 1/Ts)."""
+    Ts = 1e-5
+    gains = LinearizationGains(wn=300.0, xi=0.9, p3=1000.0, pd=1000.0)
+    ctrl = ExactLinearization(motor, SLOW, gains, measurement="ideal")
+    x0 = np.array([*SLOW.x0(motor.Nr)[:2], 0.0, 2e-4])  # the rotor 2e-4 rad off, at rest, before the move
+    r = fs.simulate(motor, SLOW, ctrl, control_period=Ts, substeps=2, t_end=0.004, x0=x0, engine="python")
+    e0 = [2e-4, 0.0, float(fs.motor.torque(x0, motor) - 0.0) / motor.J]
+    k0, k1, k2 = gains.k
+    lin = solve_ivp(lambda t, z: [z[1], z[2], -k2 * z[2] - k1 * z[1] - k0 * z[0]], (0, r.t[-1]), e0,
+                    t_eval=r.t, rtol=1e-10, atol=1e-14)
+    assert np.max(np.abs(r.theta_error - lin.y[0])) < 0.02 * np.max(np.abs(lin.y[0]))
+    i_d = park(r.ia, r.ib, motor.Nr * r.theta)[0]
+    np.testing.assert_allclose(i_d[r.t <= 2e-3], 0.4 * np.exp(-gains.pd * r.t[r.t <= 2e-3]), atol=0.01 * 0.4)
+
+
+@pytest.mark.parametrize("build, match", [
+    (lambda m: make_controller("pid", m, SLOW, control_period=TS, measurement="ideal"), "controller type 'pid'"),
+    (lambda m: make_controller("cascade", m, SLOW, control_period=None, measurement="ideal"), "sampled controller"),
+    (lambda m: CascadeGains(6000.0, -1.0), "position_bandwidth=-1.0"),
+    (lambda m: MicrostepGains(0.0), "current_bandwidth=0.0"),
+    (lambda m: LinearizationGains(300.0, 0.0, 1e3, 1e3), "xi=0.0"),
+    (lambda m: Microstepping(m, SLOW, MicrostepGains(1e3), control_period=TS, measurement="x"), "measurement='x'"),
+    (lambda m: make_controller("microstep", m, SLOW, control_period=TS, measurement="ideal", bandwidth_scale=0),
+     "bandwidth_scale=0"),
+])
+def test_bad_baseline_settings_are_refused(motor, build, match):
+    with pytest.raises(ValueError, match=match):
+        build(motor)
+
+
+def test_baselines_need_the_sampled_loop(motor):
+    ctrl = make_controller("exact_linearization", motor, SLOW, control_period=TS, measurement="ideal")
+    with pytest.raises(ValueError, match="give control_period"):
+        fs.simulate(motor, SLOW, ctrl)
+    with pytest.raises(ValueError, match="use engine='python'"):
+        fs.simulate(motor, SLOW, ctrl, control_period=TS, engine="c")
