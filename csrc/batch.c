@@ -60,3 +60,65 @@ uint32_t batch_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_
     }
     return all;
 }
+
+// Returns the number of samples outside the flat maps' domain; plan_eval and flat_to_state in one pass: the
+// flag (n x 6), state (n x 4) and voltages (n x 2) of the plan at the n times t for a known load.
+size_t batch_plan_flat(const struct plan *p, const struct motor_params *m, const fs_real *t, size_t n,
+                       fs_real load, fs_real *flag, fs_real *x, fs_real *v)
+{
+    struct plan_coef c;
+    size_t i, bad = 0;
+    plan_init(&c, p);
+    for (i = 0; i < n; i++) {
+        plan_flag(&c, t[i], &flag[PLAN_FLAG_LEN * i]);
+        bad += flat_to_state(m, &flag[PLAN_FLAG_LEN * i], load, &x[4 * i], &v[2 * i]) != FLAT_OK;
+    }
+    return bad;
+}
+
+// Returns the number of samples where the plan leaves the flat maps' domain (their reference currents and
+// voltages are 0); writes one RES_LEN row (out, n x RES_LEN) and the controller's status bits (status, may be
+// NULL) for each of the n plant states x (n x 4) at times t: smc_step on (x, the plant's acceleration).
+size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real load, const fs_real *t,
+                    const fs_real *x, size_t n, fs_real *out, uint32_t *status)
+{
+    fs_real y[5], flag[PLAN_FLAG_LEN], prev[PLAN_FLAG_LEN], xr[4] = {0, 0, 0, 0}, vr[2] = {0, 0}, *row, acc;
+    size_t i, bad = 0;
+    uint32_t one;
+    int k, ok = FLAT_OK, same;
+    for (i = 0; i < n; i++) {
+        row = &out[RES_LEN * i];
+        for (k = 0; k < 4; k++)
+            y[k] = x[4 * i + k];
+        y[4] = motor_acceleration(plant, y, load);
+        one = smc_step(s, t[i], y, &row[RES_VA]);
+        if (status)
+            status[i] = one;
+        row[RES_ACC] = y[4];
+        row[RES_RHO] = fs_hypot(y[0], y[1]);
+        row[RES_PHI] = fs_atan2(y[0], y[1]);
+        plan_flag(&s->plan, t[i], flag);
+        row[RES_THETA_REF] = flag[PLAN_THETA];
+        row[RES_OMEGA_REF] = flag[PLAN_DTHETA];
+        row[RES_RHO_REF] = flag[PLAN_RHO];
+        // The reference state is the previous one while the flag holds still (before t0 and after tf).
+        for (k = 0, same = i > 0; k < PLAN_FLAG_LEN && same; k++)
+            same = flag[k] == prev[k];
+        if (!same) {
+            ok = flat_to_state(&s->p.motor, flag, 0, xr, vr);
+            for (k = 0; k < PLAN_FLAG_LEN; k++)
+                prev[k] = flag[k];
+        }
+        bad += ok != FLAT_OK;
+        row[RES_IA_REF] = xr[0];
+        row[RES_IB_REF] = xr[1];
+        row[RES_VA_REF] = vr[0];
+        row[RES_VB_REF] = vr[1];
+        // The sliding variables of eq. (12), as smc_step and FlatnessSMC.sliding_variables form them.
+        acc = s->p.measurement == SMC_IDEAL ? y[4] : motor_acceleration(&s->p.motor, y, 0);
+        row[RES_S1] = row[RES_RHO] - flag[PLAN_RHO];
+        row[RES_S2] = acc - flag[PLAN_DDTHETA] + s->alpha2 * (y[2] - flag[PLAN_DTHETA])
+                    + s->alpha1 * (y[3] - flag[PLAN_THETA]);
+    }
+    return bad;
+}

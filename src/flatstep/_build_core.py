@@ -45,6 +45,12 @@ size_t batch_flat_to_state(const struct motor_params *m, const fs_real *flag, si
 size_t batch_state_to_flat(const struct motor_params *m, const fs_real *x, const fs_real *v, size_t n,
                            fs_real load, fs_real *flag);
 uint32_t batch_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_t n, fs_real *v, uint32_t *status);
+size_t batch_plan_flat(const struct plan *p, const struct motor_params *m, const fs_real *t, size_t n,
+                       fs_real load, fs_real *flag, fs_real *x, fs_real *v);
+enum { RES_VA, RES_VB, RES_ACC, RES_RHO, RES_PHI, RES_THETA_REF, RES_OMEGA_REF, RES_RHO_REF, RES_IA_REF,
+       RES_IB_REF, RES_VA_REF, RES_VB_REF, RES_S1, RES_S2, RES_LEN };
+size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real load, const fs_real *t,
+                    const fs_real *x, size_t n, fs_real *out, uint32_t *status);
 
 struct sensors_params { fs_real angle_step; fs_real encoder_offset; fs_real current_step; fs_real current_range;
                         fs_real current_offset[2]; uint32_t delay; };

@@ -167,6 +167,42 @@ def smc_voltages(controller: FlatnessSMC, t: ArrayLike, x: ArrayLike, ddtheta: O
     return np.ascontiguousarray(v.T), status
 
 
+def plan_to_state(plan: RestToRest, motor: MotorParams, t: ArrayLike, load_torque: float = 0.0) -> tuple[Array, Array]:
+    """C ``batch_plan_flat``: the planned state (4, n) and feedforward voltages (2, n) at the times ``t`` (1-D),
+    plan and flat map in one C loop; the values of ``flat_to_state(plan_flag(plan, t), motor)``."""
+    tv = _vec(t)
+    flag, x, v = np.empty((tv.size, 6)), np.empty((tv.size, 4)), np.empty((tv.size, 2))
+    bad = lib.batch_plan_flat(plan_struct(plan), motor_struct(motor), _in(tv), tv.size, float(load_torque),
+                              _out(flag), _out(x), _out(v))
+    if bad:
+        raise ValueError(f"{bad} sample(s) of the plan are outside the domain of the flat maps "
+                         "(|J theta'' + B theta' + tau| >= Km rho): the move is infeasible for this motor")
+    return x.T, v.T
+
+
+#: Names of the columns of :func:`result_columns`, in the order of ``RES_*`` in csrc/batch.h.
+RESULT_COLUMNS = ("va", "vb", "acc", "rho", "phi", "theta_ref", "omega_ref", "rho_ref", "ia_ref", "ib_ref",
+                  "va_ref", "vb_ref", "s1", "s2")
+
+
+def result_columns(controller: FlatnessSMC, motor: MotorParams, load: float, t: ArrayLike, x: ArrayLike, *,
+                   v_limit: float = V_LIMIT, rho_min: float = RHO_MIN) -> tuple[dict[str, Array], NDArray[np.uint32]]:
+    """C ``batch_result``: every series of a closed-loop result at the plant states ``x`` (4, n) and times ``t``
+    in one C loop (the controller's voltages on the plant's acceleration, polar currents, references and
+    sliding variables; :data:`RESULT_COLUMNS`), and the controller's status bits per sample."""
+    xr, tv = _rows(x, 4, "x"), _vec(t)
+    if tv.size != xr.shape[0]:
+        raise ValueError(f"t has {tv.size} samples but x has {xr.shape[0]}")
+    out, status = np.empty((tv.size, lib.RES_LEN)), np.empty(tv.size, dtype=np.uint32)
+    bad = lib.batch_result(smc_struct(controller, v_limit, rho_min), motor_struct(motor), float(load), _in(tv),
+                           _in(xr), tv.size, _out(out), ffi.from_buffer("uint32_t[]", status, require_writable=True))
+    if bad:
+        raise ValueError(f"{bad} sample(s) of the plan are outside the domain of the flat maps "
+                         "(|J theta'' + B theta' + tau| >= Km rho): no reference state there")
+    cols = out.T
+    return {name: cols[k] for k, name in enumerate(RESULT_COLUMNS)}, status
+
+
 def _plant(motor: MotorParams, load: float):
     return ffi.new("struct sim_plant *", dict(motor=dict(R=motor.R, L=motor.L, Km=motor.Km, J=motor.J, B=motor.B,
                                                          Nr=motor.Nr), load=float(load)))

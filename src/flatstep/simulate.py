@@ -146,11 +146,12 @@ def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, l
         segs = _grid(t_end, [plan.t0, plan.tf], dt_out)
         t = np.concatenate([segs[0]] + [s[1:] for s in segs[1:]])
         X, stats = _core.run_continuous(controller, motor, tau, x0, t, rtol=rtol, atol=atol)
-        # The voltages (and status) on the returned samples; stats["stage_status"] also counts trial stages.
-        v, status = _core.smc_voltages(controller, t, X, acc(X))
+        # Voltages, references and sliding variables on the returned samples in one C call; the status is the
+        # controller's on these samples (stats["stage_status"] also counts trial stages).
+        cols, status = _core.result_columns(controller, motor, tau, t, X)
         stats = {**stats, "controller_status": _core.status_names(np.bitwise_or.reduce(status))}
-        return collect(t, X, plan, controller, acc(X), {"engine": engine, "method": "DOPRI5", "rtol": rtol,
-                                                        "atol": atol, **stats}, v=v)
+        return _collect_columns(t, X, plan, controller, cols, {"engine": engine, "method": "DOPRI5", "rtol": rtol,
+                                                                "atol": atol, **stats})
     Ts = check_positive("control_period", control_period, unit=" s")
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
         raise ValueError(f"substeps={substeps!r} must be a positive integer (RK4 steps per control period)")
@@ -223,6 +224,17 @@ def _loop_result(engine: str, motor: MotorParams, plan: RestToRest, controller: 
     if r["faults"].size:
         result.meta["first_fault_time"] = float(r["faults"][0])
     return result
+
+
+def _collect_columns(t: np.ndarray, X: np.ndarray, plan: RestToRest, controller: FlatnessSMC, cols: dict,
+                     meta: dict) -> SimResult:
+    """The :class:`SimResult` of :func:`collect` from the series the C core computed (``_core.result_columns``)."""
+    meta = {**meta, "controller": type(controller).__name__, "measurement": controller.measurement,
+            "gains": controller.gains.as_dict(), "plan": plan.as_dict()}
+    return SimResult(t=t, ia=X[0], ib=X[1], omega=X[2], theta=X[3], rho=cols["rho"], phi=cols["phi"], va=cols["va"],
+                     vb=cols["vb"], theta_ref=cols["theta_ref"], omega_ref=cols["omega_ref"], rho_ref=cols["rho_ref"],
+                     ia_ref=cols["ia_ref"], ib_ref=cols["ib_ref"], va_ref=cols["va_ref"], vb_ref=cols["vb_ref"],
+                     s1=cols["s1"], s2=cols["s2"], meta=meta)
 
 
 def collect(t: np.ndarray, X: np.ndarray, plan: RestToRest, controller: Any, acc: np.ndarray,
