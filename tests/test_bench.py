@@ -61,12 +61,24 @@ def test_bench_plan_runs_and_both_planners_agree():
     assert "(a)" in report.format()
 
 
-def test_bench_closed_loop_engines_meet_the_accuracy_bound():
+def test_loosest_tolerance_takes_the_first_passing_rung():
+    runs = []
+    rtol, err, result = bench.loosest_tolerance(lambda r: runs.append(r) or r * 10, lambda res: res, 1e-8,
+                                                (1e-6, 1e-7, 1e-9, 1e-10))
+    assert (rtol, err, result, runs) == (1e-9, 1e-8, 1e-8, [1e-6, 1e-7, 1e-9])
+    with pytest.raises(ValueError, match="no rtol in"):
+        bench.loosest_tolerance(lambda r: r, lambda res: 1.0, 1e-8, (1e-6, 1e-7))
+
+
+def test_bench_closed_loop_compares_engines_at_equal_accuracy():
     pytest.importorskip("control")
-    report = bench.bench_closed_loop(repeat=1, dt_out=1e-4, min_time=0.0)
+    report = bench.bench_closed_loop(repeat=1, dt_out=1e-4, min_time=0.0, ladder=(1e-7, 1e-8, 1e-9, 1e-10))
     errors = [t for t in report.targets if t.what.endswith("theta error")]
-    assert len(errors) == 3
+    assert len(errors) >= 5  # baseline, LSODA and python-control at their loosest, C end to end, C run loop
     assert all(t.met for t in errors), [t.describe() for t in errors]
+    chosen = [what for what, _, _ in report.checks if "loosest rtol" in what]
+    assert len(chosen) == 3 and report.baseline == "scipy LSODA, rtol 1e-10 (baseline)"
+    assert any(t.what.startswith("speed-up of the C engine (end to end, equal accuracy)") for t in report.targets)
 
 
 def test_bench_step_driver_counts_instructions():
