@@ -219,11 +219,12 @@ def bench_plan(repeat: int = 7, n: int = 401, min_time: float = 0.02, stock_basi
     cases: dict[str, Callable[[], Any]] = {}
     notes = []
     core = _core_module()
-    if core is not None and hasattr(core, "plan_flag") and hasattr(core, "flat_to_state"):
-        cases["flatstep C core, binding"] = lambda: core.flat_to_state(core.plan_flag(plan, t), motor)
-        cases["flatstep C core, raw lib calls"] = _raw_core_plan(core, motor, plan, t)
+    if core is not None:
+        cases["flatstep C core, binding (one call)"] = lambda: core.plan_to_state(plan, motor, t)
+        cases["flatstep C core, raw lib call"] = _raw_core_plan(core, motor, plan, t)
+        cases["flatstep C core, binding (two calls)"] = lambda: core.flat_to_state(core.plan_flag(plan, t), motor)
     else:
-        notes.append("the C binding (flatstep._core.plan_flag/flat_to_state) is not available: NumPy path only")
+        notes.append("the C binding (flatstep._core) is not available: NumPy path only")
     cases["flatstep NumPy reference"] = lambda: flat_to_state(plan.flag(t), motor)
     baseline = "python-control flatsys, psi basis"
     cases[baseline] = lambda: pc(t)
@@ -233,8 +234,8 @@ def bench_plan(repeat: int = 7, n: int = 401, min_time: float = 0.02, stock_basi
     x_ref, v_ref = results["flatstep NumPy reference"]
     x_pc, v_pc = results[baseline]
     checks = _state_differences("python-control vs flatstep", x_pc, v_pc, x_ref, v_ref)
-    if "flatstep C core, binding" in results:
-        x_c, v_c = results["flatstep C core, binding"]
+    if "flatstep C core, binding (one call)" in results:
+        x_c, v_c = results["flatstep C core, binding (one call)"]
         checks += _state_differences("C core vs NumPy", x_c, v_c, x_ref, v_ref)[:1]
         checks.append(("max |v_C - v_NumPy|", float(np.abs(v_c - v_ref).max()), " V"))
     notes.append("python-control meets the endpoint flags by a least-squares solve whose derivative rows scale "
@@ -253,18 +254,17 @@ def bench_plan(repeat: int = 7, n: int = 401, min_time: float = 0.02, stock_basi
 
 
 def _raw_core_plan(core, motor: MotorParams, plan: RestToRest, t: np.ndarray) -> Callable[[], tuple]:
-    """The C work of (a) alone: batch_plan_eval + batch_flat_to_state into buffers allocated once."""
+    """The C work of (a) alone: one batch_plan_flat call into buffers allocated once."""
     ffi, lib = core.ffi, core.lib
     m, p = core.motor_struct(motor), core.plan_struct(plan)
     tv, flag = np.ascontiguousarray(t), np.empty((t.size, 6))
     x, v = np.empty((t.size, 4)), np.empty((t.size, 2))
-    t_in, flag_io = ffi.from_buffer("double[]", tv), ffi.from_buffer("double[]", flag, require_writable=True)
+    t_in, flag_out = ffi.from_buffer("double[]", tv), ffi.from_buffer("double[]", flag, require_writable=True)
     x_out = ffi.from_buffer("double[]", x, require_writable=True)
     v_out = ffi.from_buffer("double[]", v, require_writable=True)
 
     def run() -> tuple:
-        lib.batch_plan_eval(p, t_in, t.size, flag_io)
-        lib.batch_flat_to_state(m, flag_io, t.size, 0.0, x_out, v_out)
+        lib.batch_plan_flat(p, m, t_in, t.size, 0.0, flag_out, x_out, v_out)
         return x.T, v.T
 
     return run
