@@ -17,7 +17,7 @@ static bool state_finite(const fs_real x[4])
 }
 
 // Returns nothing; writes the controller's measurement of the plant state x: (ia, ib, omega, theta, theta'')
-// with the true acceleration. The hook for sensor models (quantised encoder, noisy currents, observers).
+// with the true acceleration: ideal sensors (sampled.c has the drive's encoder, ADC and observer).
 static void sense(const struct sim_plant *plant, const fs_real x[4], fs_real y[5])
 {
     int k;
@@ -26,8 +26,8 @@ static void sense(const struct sim_plant *plant, const fs_real x[4], fs_real y[5
     y[4] = motor_acceleration(&plant->motor, x, plant->load);
 }
 
-// Returns nothing; writes the voltage the phases see for a commanded v. The hook for drive models (bus
-// saturation, PWM); for now an ideal drive.
+// Returns nothing; writes the voltage the phases see for a commanded v: an ideal bridge (drive.c has the bus
+// saturation and computation delay that sampled_run applies).
 static void drive(const fs_real v[2], fs_real v_applied[2])
 {
     v_applied[0] = v[0];
@@ -166,7 +166,7 @@ int sim_sampled(struct smc *ctrl, const struct sim_plant *plant, const fs_real x
             st->smc_status = c.status;
             return SIM_ENONFINITE;
         }
-        // One period: sense -> control -> drive -> plant. Sensor, drive and observer models plug in here.
+        // One period: sense -> control -> drive -> plant, all ideal; sampled_run (sampled.c) models the drive.
         sense(plant, x, y);
         c.status |= smc_step(ctrl, t, y, v);
         drive(v, c.v);
