@@ -122,3 +122,72 @@ size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real loa
     }
     return bad;
 }
+
+// Returns the larger of a and |b|.
+static fs_real max_abs(fs_real a, fs_real b)
+{
+    b = fs_fabs(b);
+    return b > a ? b : a;
+}
+
+// Returns nothing; writes the summary of a successful run from its states x and applied voltages v at the
+// n + 1 instants k Ts against the plan.
+static void summarize(const struct plan_coef *plan, fs_real Ts, size_t n, const fs_real *x, const fs_real *v,
+                      struct batch_summary *o)
+{
+    fs_real flag[PLAN_FLAG_LEN], t, err;
+    size_t k;
+    o->max_abs_theta_error = o->max_abs_rho_error = o->max_abs_va = o->max_abs_vb = 0;
+    o->max_abs_theta_error_move = o->max_abs_theta_error_after = 0;
+    o->n_move = o->n_after = 0;
+    for (k = 0; k <= n; k++) {
+        t = (fs_real)k * Ts;
+        plan_flag(plan, t, flag);
+        err = x[4 * k + 3] - flag[PLAN_THETA];
+        o->max_abs_theta_error = max_abs(o->max_abs_theta_error, err);
+        o->max_abs_rho_error = max_abs(o->max_abs_rho_error, fs_hypot(x[4 * k], x[4 * k + 1]) - flag[PLAN_RHO]);
+        o->max_abs_va = max_abs(o->max_abs_va, v[2 * k]);
+        o->max_abs_vb = max_abs(o->max_abs_vb, v[2 * k + 1]);
+        if (t >= plan->p.t0 && t <= plan->p.tf) {
+            o->max_abs_theta_error_move = max_abs(o->max_abs_theta_error_move, err);
+            o->n_move++;
+        } else if (t > plan->p.tf) {
+            o->max_abs_theta_error_after = max_abs(o->max_abs_theta_error_after, err);
+            o->n_after++;
+        }
+        if (k == n)
+            o->final_theta_error = err;
+    }
+    o->ia_final = x[4 * n];
+    o->ib_final = x[4 * n + 1];
+    o->omega_final = x[4 * n + 2];
+    o->theta_final = x[4 * n + 3];
+}
+
+// Returns the number of runs whose status is not SIM_OK; runs the n sampled scenarios one after another
+// (sim_sampled), using scratch (at least 6 (n_periods + 1) values for the longest run) for each run's states
+// and voltages, and writes each run's summary into out[i].
+size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, size_t scratch_len,
+                     struct batch_summary *out)
+{
+    struct smc ctrl;
+    struct sim_stats st;
+    size_t i, failed = 0, m;
+    for (i = 0; i < n; i++) {
+        m = runs[i].n_periods + 1;
+        out[i].controller_status = 0;
+        if (runs[i].n_periods > scratch_len / 6 - 1 || scratch_len < 6)
+            out[i].status = SIM_EARGS;  // the scratch cannot hold this run
+        else if (smc_init(&ctrl, &runs[i].ctrl) != SMC_PARAMS_OK)
+            out[i].status = -1;
+        else {
+            out[i].status = sim_sampled(&ctrl, &runs[i].plant, runs[i].x0, 0, runs[i].n_periods, &runs[i].sp,
+                                        scratch, scratch + 4 * m, &st);
+            out[i].controller_status = st.smc_status;
+            if (out[i].status == SIM_OK)
+                summarize(&ctrl.plan, runs[i].sp.Ts, runs[i].n_periods, scratch, scratch + 4 * m, &out[i]);
+        }
+        failed += out[i].status != SIM_OK;
+    }
+    return failed;
+}

@@ -8,6 +8,7 @@
 #include "flat.h"
 #include "motor.h"
 #include "plan.h"
+#include "sim.h"
 #include "smc.h"
 
 // Returns nothing; writes plan_eval at each of the n times t into flag (n x 6, row-major).
@@ -47,5 +48,31 @@ size_t batch_state_to_flat(const struct motor_params *m, const fs_real *x, const
 // and each step's status into status (may be NULL).
 uint32_t batch_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_t n, fs_real *v,
                         uint32_t *status);
+
+// One sampled closed-loop scenario of batch_sampled: the controller, the plant, the period and the start.
+struct batch_run {
+    struct smc_params ctrl;        // controller: its motor model, plan, gains, measurement and limits
+    struct sim_plant plant;        // the simulated motor and its load torque
+    struct sim_sampled_params sp;  // control period and RK4 substeps
+    size_t n_periods;              // periods from t = 0 (states at k Ts, k = 0..n_periods)
+    fs_real x0[4];                 // start state (ia, ib, omega, theta)
+};
+
+// Summary of one run over the control instants t_k = k Ts, the values of flatstep.result.SimResult.summary.
+struct batch_summary {
+    int status;                              // SIM_OK, a sim_status, or -1 when smc_init refused the controller
+    uint32_t controller_status;              // OR of the controller's status bits
+    fs_real theta_final, ia_final, ib_final, omega_final, final_theta_error;
+    fs_real max_abs_theta_error, max_abs_rho_error, max_abs_va, max_abs_vb;
+    fs_real max_abs_theta_error_move;        // over t0 <= t_k <= tf (n_move samples)
+    fs_real max_abs_theta_error_after;       // over t_k > tf (n_after samples)
+    size_t n_move, n_after;
+};
+
+// Returns the number of runs whose status is not SIM_OK; runs the n sampled scenarios one after another
+// (sim_sampled), using scratch (at least 6 (n_periods + 1) values for the longest run) for each run's states
+// and voltages, and writes each run's summary into out[i].
+size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, size_t scratch_len,
+                     struct batch_summary *out);
 
 #endif

@@ -5,6 +5,8 @@ import pytest
 
 import flatstep as fs
 from flatstep.batch import run_batch, scenario_grid
+from flatstep.drive import Drive
+from flatstep.sensors import Sensors
 from flatstep.scenario import Scenario
 
 SAMPLED = Scenario("s", control_period=5e-5, substeps=4, measurement="model",
@@ -57,3 +59,35 @@ def test_bad_arguments(kwargs, match):
         run_batch([SAMPLED, "fig1"])
     with pytest.raises(ValueError, match="unknown scenario field"):
         scenario_grid(SAMPLED, W2=[1.0])
+
+
+@pytest.mark.parametrize("change, plain", [
+    (dict(), True), (dict(control_period=None), False), (dict(compute_delay=True), False),
+    (dict(sensors=Sensors()), False), (dict(drive=Drive(v_bus=24.0)), False),
+    (dict(controller_type="microstep"), False),
+])
+def test_the_fast_path_condition_is_explicit(change, plain):
+    from dataclasses import replace
+    from flatstep.batch import plain_sampled
+
+    assert plain_sampled(replace(SAMPLED, **change)) is plain
+
+
+def test_the_c_batch_fast_path_gives_the_per_run_rows(monkeypatch):
+    """Plain sampled runs go through one C call per chunk (summaries computed in C); engine='c' forces the
+    per-run path (simulate + SimResult.summary) on the same runs: every row is equal, bit for bit."""
+    ideal = Scenario("ideal", control_period=5e-5)
+    infeasible = Scenario("fast", plan=fs.RestToRest(0.0, 0.05, 0.4, 0.4, 0.02, 0.022), control_period=5e-5)
+    grid = (scenario_grid(SAMPLED, load_torque=[0.0, 2e-5], control_period=[5e-5, 3e-5])
+            + scenario_grid(ideal, plant=[None, ideal.motor.replace(R=1.1 * ideal.motor.R)], substeps=[3, 10])
+            + [infeasible])
+    from flatstep import _core
+
+    calls, batch = [], _core.run_sampled_summaries
+    monkeypatch.setattr(_core, "run_sampled_summaries", lambda runs: calls.append(len(runs)) or batch(runs))
+    fast = run_batch(grid, workers=2, chunk_size=3)
+    assert sorted(calls) == [2, 3, 3]  # one C call per chunk of 3; the infeasible plan never reaches C
+    slow = run_batch(grid, workers=1, engine="c")
+    assert len(calls) == 3 and fast == slow
+    assert fast[-1]["error"].startswith("InfeasiblePlanError")
+    assert all(r["error"] is None for r in fast[:-1]) and "max_abs_theta_error_after" in fast[0]

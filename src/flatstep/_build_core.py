@@ -51,6 +51,15 @@ enum { RES_VA, RES_VB, RES_ACC, RES_RHO, RES_PHI, RES_THETA_REF, RES_OMEGA_REF, 
        RES_IB_REF, RES_VA_REF, RES_VB_REF, RES_S1, RES_S2, RES_LEN };
 size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real load, const fs_real *t,
                     const fs_real *x, size_t n, fs_real *out, uint32_t *status);
+struct batch_run { struct smc_params ctrl; struct sim_plant plant; struct sim_sampled_params sp; size_t n_periods;
+                   fs_real x0[4]; };
+struct batch_summary { int status; uint32_t controller_status; fs_real theta_final; fs_real ia_final;
+                       fs_real ib_final; fs_real omega_final; fs_real final_theta_error; fs_real max_abs_theta_error;
+                       fs_real max_abs_rho_error; fs_real max_abs_va; fs_real max_abs_vb;
+                       fs_real max_abs_theta_error_move; fs_real max_abs_theta_error_after; size_t n_move;
+                       size_t n_after; };
+size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, size_t scratch_len,
+                     struct batch_summary *out);
 
 struct sensors_params { fs_real angle_step; fs_real encoder_offset; fs_real current_step; fs_real current_range;
                         fs_real current_offset[2]; uint32_t delay; };

@@ -203,6 +203,52 @@ def result_columns(controller: FlatnessSMC, motor: MotorParams, load: float, t: 
     return {name: cols[k] for k, name in enumerate(RESULT_COLUMNS)}, status
 
 
+#: Keys of :meth:`flatstep.result.SimResult.summary` that ``batch_sampled`` computes, in its order.
+SUMMARY_KEYS = ("theta_final", "ia_final", "ib_final", "omega_final", "max_abs_theta_error", "max_abs_rho_error",
+                "max_abs_va", "max_abs_vb", "final_theta_error")
+
+
+def _smc_params(controller: FlatnessSMC, v_limit: float, rho_min: float) -> dict:
+    m, g = controller.motor, controller.gains
+    return dict(motor=dict(R=m.R, L=m.L, Km=m.Km, J=m.J, B=m.B, Nr=m.Nr), plan=controller.plan.as_dict(),
+                gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn),
+                measurement=lib.SMC_MODEL if controller.measurement == "model" else lib.SMC_IDEAL,
+                v_limit=v_limit, rho_min=rho_min)
+
+
+def run_sampled_summaries(runs: list[tuple[FlatnessSMC, MotorParams, float, ArrayLike, int, float, int]], *,
+                          v_limit: float = V_LIMIT, rho_min: float = RHO_MIN) -> list[Optional[dict]]:
+    """C ``batch_sampled``: many sampled runs from t = 0 in one C call, each ``(controller, plant motor, load,
+    x0, n_periods, Ts, substeps)``; returns per run the :meth:`~flatstep.result.SimResult.summary` values
+    computed in C over the control instants, or None for a run that failed (controller refused, non-finite
+    state). The C call releases the GIL, so threads run batches on separate cores."""
+    n = len(runs)
+    c_runs, out = ffi.new("struct batch_run[]", max(n, 1)), ffi.new("struct batch_summary[]", max(n, 1))
+    for i, (ctrl, plant, load, x0, n_periods, Ts, substeps) in enumerate(runs):
+        r = c_runs[i]
+        r.ctrl = _smc_params(ctrl, v_limit, rho_min)
+        r.plant = dict(motor=dict(R=plant.R, L=plant.L, Km=plant.Km, J=plant.J, B=plant.B, Nr=plant.Nr),
+                       load=float(load))
+        r.sp = dict(Ts=Ts, substeps=substeps)
+        r.n_periods = n_periods
+        r.x0 = [float(v) for v in x0]
+    scratch = np.empty(6 * (max((r[4] for r in runs), default=0) + 1))
+    lib.batch_sampled(c_runs, n, _out(scratch), scratch.size, out)
+    rows: list[Optional[dict]] = []
+    for i in range(n):
+        o = out[i]
+        if o.status != lib.SIM_OK:
+            rows.append(None)
+            continue
+        row = {key: float(getattr(o, key)) for key in SUMMARY_KEYS}
+        if o.n_move:
+            row["max_abs_theta_error_move"] = float(o.max_abs_theta_error_move)
+        if o.n_after:
+            row["max_abs_theta_error_after"] = float(o.max_abs_theta_error_after)
+        rows.append(row)
+    return rows
+
+
 def _plant(motor: MotorParams, load: float):
     return ffi.new("struct sim_plant *", dict(motor=dict(R=motor.R, L=motor.L, Km=motor.Km, J=motor.J, B=motor.B,
                                                          Nr=motor.Nr), load=float(load)))
