@@ -6,46 +6,6 @@
 #define RHO2_SAFE_MIN FS_C(1e-30)
 #define RHO2_SAFE_MAX FS_C(1e30)
 
-#ifndef FS_SINGLE
-// fdlibm's minimax coefficients for sin and cos on [-pi/4, pi/4] (__kernel_sin, __kernel_cos), and pi/2 in
-// three parts whose first two have trailing zero bits, so n * part is exact for |n| < 2^16 (Cody-Waite).
-static const double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
-                    S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
-                    S5 = -2.50507602534068634195e-08, S6 = 1.58969099521155010221e-10;
-static const double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
-                    C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
-                    C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
-static const double INV_PIO2 = 6.36619772367581382433e-01, PIO2_1 = 1.57079632673412561417e+00,
-                    PIO2_2 = 6.07710050630396597660e-11, PIO2_3 = 2.02226624871116645580e-21;
-#endif
-
-// Returns nothing; writes sin x and cos x (within 2 ulp of libm's; libm itself beyond |x| = 1e5 and in float).
-static void sin_cos(fs_real x, fs_real *s, fs_real *c)
-{
-#ifndef FS_SINGLE
-    long n;
-    fs_real r, z, hz, w, sr, cr;
-    if (fs_fabs(x) < 1e5) {
-        // x = n pi/2 + r with |r| <= pi/4; then the quadrant n mod 4 permutes and negates sin r, cos r.
-        n = (long)(x * INV_PIO2 + (x >= 0 ? 0.5 : -0.5));
-        r = ((x - (fs_real)n * PIO2_1) - (fs_real)n * PIO2_2) - (fs_real)n * PIO2_3;
-        z = r * r;
-        sr = r + z * r * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
-        hz = 0.5 * z;
-        w = 1 - hz;
-        cr = w + (((1 - w) - hz) + z * z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6))))));
-        switch (n & 3) {
-        case 0: *s = sr, *c = cr; return;
-        case 1: *s = cr, *c = -sr; return;
-        case 2: *s = -sr, *c = -cr; return;
-        default: *s = -cr, *c = sr; return;
-        }
-    }
-#endif
-    *s = fs_sin(x);
-    *c = fs_cos(x);
-}
-
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
 // v_limit = 1e3 V and rho_min = 1e-6 A.
 void smc_params_default(struct smc_params *p)
@@ -116,7 +76,7 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
     // phi = atan2(ia, ib) by its sine and cosine; delta = Nr theta + phi by the angle-addition formulas.
     a.sphi = y[0] / rho;
     a.cphi = y[1] / rho;
-    sin_cos(m->Nr * y[3], &sN, &cN);
+    motor_sincos(m->Nr * y[3], &sN, &cN);
     a.sdelta = sN * a.cphi + cN * a.sphi;
     a.cdelta = cN * a.cphi - sN * a.sphi;
     // theta'' measured, or from the zero-load model in motor_acceleration's operation order.
