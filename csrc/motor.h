@@ -15,10 +15,6 @@ struct motor_params {
     int Nr;      // number of rotor teeth, >= 1
 };
 
-// Returns nothing; writes sin x and cos x (within 2 ulp of libm's; libm itself beyond |x| = 1e5 and in float),
-// for the electrical angle x = Nr theta of the model, the flat maps' users and the controller.
-void motor_sincos(fs_real x, fs_real *s, fs_real *c);
-
 // Returns true when every parameter is finite and in range (R, L, Km, J > 0, B >= 0, Nr >= 1).
 bool motor_params_valid(const struct motor_params *m);
 

@@ -76,7 +76,7 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
     // phi = atan2(ia, ib) by its sine and cosine; delta = Nr theta + phi by the angle-addition formulas.
     a.sphi = y[0] / rho;
     a.cphi = y[1] / rho;
-    motor_sincos(m->Nr * y[3], &sN, &cN);
+    fs_sincos(m->Nr * y[3], &sN, &cN);
     a.sdelta = sN * a.cphi + cN * a.sphi;
     a.cdelta = cN * a.cphi - sN * a.sphi;
     // theta'' measured, or from the zero-load model in motor_acceleration's operation order.
