@@ -31,10 +31,8 @@ int flat_voltages(const struct motor_params *m, fs_real rho, fs_real drho, fs_re
 {
     fs_real delta = m->Nr * theta + phi;
     struct flat_angles a;
-    a.sphi = fs_sin(phi);
-    a.cphi = fs_cos(phi);
-    a.sdelta = fs_sin(delta);
-    a.cdelta = fs_cos(delta);
+    fs_sincos(phi, &a.sphi, &a.cphi);
+    fs_sincos(delta, &a.sdelta, &a.cdelta);
     return flat_voltages_trig(m, rho, drho, dtheta, ddtheta, dddtheta, &a, A, v);
 }
 
@@ -57,8 +55,9 @@ int flat_to_state(const struct motor_params *m, const fs_real flag[PLAN_FLAG_LEN
     if (!(fs_fabs(c) < 1))
         return FLAT_ESQRT;
     phi = fs_acos(c) - m->Nr * flag[PLAN_THETA];
-    x[0] = rho * fs_sin(phi);
-    x[1] = rho * fs_cos(phi);
+    fs_sincos(phi, &x[0], &x[1]);
+    x[0] *= rho;
+    x[1] *= rho;
     x[2] = flag[PLAN_DTHETA];
     x[3] = flag[PLAN_THETA];
     return flat_voltages(m, rho, flag[PLAN_DRHO], flag[PLAN_THETA], flag[PLAN_DTHETA], flag[PLAN_DDTHETA],
