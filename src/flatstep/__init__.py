@@ -1,5 +1,7 @@
 """flatstep: flatness-based planning and sliding-mode control of permanent-magnet stepping motors."""
-from .control import FlatnessSMC, SMCGains
+from .control import (CONTROLLER_TYPES, CascadeFOC, ExactLinearization, FlatnessSMC, Microstepping, SMCGains,
+                      make_controller)
+from .plant import PlantEffects
 from .equilibria import CriticalPoint, equilibrium_currents, rest_positions, stable_angle
 from .feasibility import FeasibilityReport, InfeasiblePlanError, check_feasibility
 from .flat import FlatFlag, cartesian, flat_to_state, polar, polar_rhs, state_to_flat
@@ -19,5 +21,6 @@ __all__ = [
     "RestToRest", "PAPER_PLAN", "point_to_point", "psi",
     "FeasibilityReport", "InfeasiblePlanError", "check_feasibility",
     "FlatnessSMC", "SMCGains", "simulate", "SimResult",
+    "Microstepping", "CascadeFOC", "ExactLinearization", "CONTROLLER_TYPES", "make_controller", "PlantEffects",
     "Scenario", "PAPER_SCENARIOS", "run_batch", "scenario_grid",
 ]
