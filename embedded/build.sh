@@ -38,7 +38,7 @@ count_static() {  # object function -> number of instructions in the function's 
 }
 echo "-- static instructions (${PREFIX}objdump -d):"
 total=0
-for pair in smc:smc_step plan:plan_eval plan:plan_psi flat:flat_voltages motor:motor_acceleration; do
+for pair in smc:smc_step plan:plan_flag plan:psi_all plan:flag_of_psi flat:flat_voltages_trig; do
     n=$(count_static "$OUT/${pair%%:*}.o" "${pair#*:}")
     total=$((total + n))
     printf '   %-20s %5d\n' "${pair#*:}" "$n"
