@@ -99,6 +99,13 @@ def test_compare_cli_table_and_json(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_compare_worst_over_the_corners_of_the_example():
+def test_compare_worst_over_the_corners_of_the_example(capsys):
+    """docs/comparison.md: on the paper's move both closed loops stay within one count on all 32 plants."""
     assert main(["compare", str(EXAMPLES / "compare-paper-20khz.toml"), "--controllers", "smc,cascade",
                  "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    count = 2 * np.pi / 16384
+    assert rep["robustness"]["plants"] == 32
+    for kind in ("smc", "cascade"):
+        w = rep["robustness"]["worst"][kind]
+        assert w["failed"] == 0 and w["metrics"]["move_max"] < count and w["metrics"]["peak_voltage"] <= 24.0
