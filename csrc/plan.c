@@ -41,12 +41,17 @@ static void span_powers(fs_real t0, fs_real tf, fs_real Tk[4])
 // Returns nothing; writes the four psi tau-polynomials at tau in one Horner pass (four independent chains).
 static void psi_horner(fs_real tau, fs_real d[4])
 {
-    int j, k;
-    for (k = 0; k < 4; k++)
-        d[k] = 0;
-    for (j = 10; j >= 0; j--)
-        for (k = 0; k < 4; k++)
-            d[k] = psi_coef[j][k] + d[k] * tau;
+    fs_real a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+    const fs_real *c;
+    int j;
+    for (j = 10; j >= 0; j--) {
+        c = psi_coef[j];
+        a0 = c[0] + a0 * tau;
+        a1 = c[1] + a1 * tau;
+        a2 = c[2] + a2 * tau;
+        a3 = c[3] + a3 * tau;
+    }
+    d[0] = a0, d[1] = a1, d[2] = a2, d[3] = a3;
 }
 
 // Returns nothing; writes psi and its first three time derivatives at t (see plan_psi) from the span powers.
