@@ -7,7 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Optional
 
-from .compare import METRICS, bandwidth_sweep, compare, compare_worst, default_band
+from .compare import bandwidth_sweep, compare, compare_worst, default_band
 from .control.tuning import CONTROLLER_TYPES, LABELS
 from .scenario_file import load_scenario
 

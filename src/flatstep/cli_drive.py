@@ -38,7 +38,7 @@ def cmd_design(args: argparse.Namespace) -> int:
                      load_torque=base.load_torque, uncertainty=args.uncertainty, compute_delay=base.compute_delay)
     report = d.as_dict()
     if args.out:
-        from .plots import plot_compare
+        from .plots_compare import plot_overlay
 
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
@@ -48,7 +48,7 @@ def cmd_design(args: argparse.Namespace) -> int:
         report["runs"] = {k: {**r.summary(), "controller_faults": r.meta.get("controller_faults", 0)}
                           for k, r in runs.items()}
         count = s.angle_step if s and s.angle_step else None
-        plot_compare(runs, count, title=f"{base.name}: {1 / base.control_period:g} Hz control, "
+        plot_overlay(runs, base.plan, count, title=f"{base.name}: {1 / base.control_period:g} Hz control, "
                      f"load {base.load_torque:g} N m", path=out / "design.png")
         (out / "design.json").write_text(json.dumps(report, indent=2) + "\n")
     if args.json:

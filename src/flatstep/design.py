@@ -26,7 +26,7 @@ The rules, for a control period :math:`T_s` (see docs/drive.md for the reasoning
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np

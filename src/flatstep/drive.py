@@ -55,7 +55,7 @@ class Drive:
         Tp = 1.0 / self.f_pwm
         n = max(1, int(round(Ts / Tp)))
         Tp = Ts / n
-        edges, levels = [], []
+        edges = []
         for ph in range(2):
             d = 0.5 * (1.0 + v[ph] / self.v_bus)  # fraction of the period at +v_bus
             on, off = 0.5 * (1.0 - d) * Tp, 0.5 * (1.0 + d) * Tp

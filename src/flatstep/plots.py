@@ -54,34 +54,6 @@ def plot_run(result: SimResult, title: str = "", path: str | Path | None = None)
     return _finish(fig, title, path)
 
 
-def plot_compare(results: dict[str, SimResult], count: float | None = None, title: str = "",
-                 path: str | Path | None = None):
-    """Overlay runs: tracking error (in encoder counts when ``count`` is given) and phase voltages."""
-    fig, axes = plt.subplots(4, 1, figsize=(9, 11), sharex=True, constrained_layout=True)
-    scale, unit = (count, "counts") if count else (1.0, "rad")
-    for label, r in results.items():
-        for ax in axes[:2]:
-            ax.plot(r.t, r.theta_error / scale, lw=1.2, label=label)
-        axes[2].plot(r.t, r.va, lw=1.0, label=label)
-        axes[3].plot(r.t, r.vb, lw=1.0, label=label)
-    if count:
-        for y in (-1, 1):
-            axes[1].axhline(y, color="k", ls=":", lw=0.8)
-        axes[1].set_ylim(-3, 3)
-    else:
-        lim = 3 * min(np.max(np.abs(r.theta_error)) for r in results.values())
-        axes[1].set_ylim(-lim, lim)
-    axes[0].set_ylabel(rf"$\theta - \theta^*$ [{unit}]")
-    axes[1].set_ylabel(rf"zoom [{unit}]")
-    axes[2].set_ylabel("$v_a$ [V]")
-    axes[3].set_ylabel("$v_b$ [V]")
-    axes[3].set_xlabel("t [s]")
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=8)
-    return _finish(fig, title, path)
-
-
 def plot_robustness(study: dict, count: float | None, plan, title: str = "", path: str | Path | None = None):
     """Tracking-error traces of every plant of a robustness study, one panel per gain set; dotted lines at
     +-1 count (the move target) and +-0.5 count (the at-rest target)."""

@@ -35,8 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..motor import MotorParams, check_positive
 from ..plan import RestToRest
-from .loops import PIGains, bus_scale, check_v_limit, inverse_park, park, pi_integrate, pi_output
-from .smc import MEASUREMENTS
+from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, pi_integrate, pi_output
 
 
 @dataclass(frozen=True)
@@ -70,7 +69,7 @@ class CascadeGains:
         return {**asdict(self), "k_theta": self.k_theta, "k_omega": self.k_omega, "ki_omega": self.ki_omega}
 
 
-class CascadeFOC:
+class CascadeFOC(BaselineController):
     """Cascaded P-PI position-velocity loop over d-q PI current loops, with feedforward from the plan.
 
     Parameters
@@ -86,11 +85,8 @@ class CascadeFOC:
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: CascadeGains, *, control_period: float,
                  measurement: str = "observer", v_limit: float = math.inf):
-        if measurement not in MEASUREMENTS:
-            raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
-        self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
-        self.control_period = check_positive("control_period", control_period, unit=" s")
-        self.v_limit = check_v_limit(v_limit)
+        super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
+                         v_limit=v_limit)
         self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
         self.pi_omega = PIGains(gains.k_omega, gains.ki_omega)
 

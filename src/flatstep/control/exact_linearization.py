@@ -34,8 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..motor import MotorParams, check_finite, check_positive
 from ..plan import RestToRest
-from .loops import inverse_park, park
-from .smc import MEASUREMENTS
+from .loops import BaselineController, inverse_park, park
 
 
 @dataclass(frozen=True)
@@ -67,7 +66,7 @@ class LinearizationGains:
         return {**asdict(self), "k0": k0, "k1": k1, "k2": k2}
 
 
-class ExactLinearization:
+class ExactLinearization(BaselineController):
     """Zribi-Chiasson exact linearization in d-q with pole placement on theta and i_d.
 
     Parameters
@@ -81,10 +80,8 @@ class ExactLinearization:
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: LinearizationGains, *,
                  measurement: str = "observer", control_period: Optional[float] = None, v_limit: float = math.inf):
-        if measurement not in MEASUREMENTS:
-            raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
-        self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
-        self.control_period, self.v_limit = control_period, v_limit
+        super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
+                         v_limit=v_limit)
 
     def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> NDArray[np.float64]:
         """Phase voltages (va, vb) of the law, vectorized over time; ``ddtheta`` is not read in ``model`` mode."""

@@ -30,6 +30,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..motor import MotorParams, check_finite, check_positive
+from ..plan import RestToRest
+from .smc import MEASUREMENTS
 
 
 def park(ia: ArrayLike, ib: ArrayLike, electrical_angle: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -93,3 +95,18 @@ def check_v_limit(v_limit: float) -> float:
     if not v > 0:
         raise ValueError(f"v_limit={v_limit!r} V must be > 0 (the bus voltage; inf for none)")
     return v
+
+
+class BaselineController:
+    """What every baseline shares: its nominal model, the move, its gains, what it measures (as
+    :class:`~flatstep.control.smc.FlatnessSMC`), its control period (``None``: continuous) and the bus its
+    anti-windup knows."""
+
+    def __init__(self, motor: MotorParams, plan: RestToRest, gains, *, measurement: str,
+                 control_period: float | None, v_limit: float):
+        if measurement not in MEASUREMENTS:
+            raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
+        self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
+        self.control_period = None if control_period is None else check_positive(
+            "control_period", control_period, unit=" s")
+        self.v_limit = check_v_limit(v_limit)

@@ -38,8 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..motor import MotorParams, check_positive
 from ..plan import RestToRest
-from .loops import PIGains, bus_scale, check_v_limit, pi_integrate, pi_output
-from .smc import MEASUREMENTS
+from .loops import BaselineController, PIGains, bus_scale, pi_integrate, pi_output
 
 
 @dataclass(frozen=True)
@@ -57,7 +56,7 @@ class MicrostepGains:
         return {"current_bandwidth": self.current_bandwidth, "feedforward": self.feedforward}
 
 
-class Microstepping:
+class Microstepping(BaselineController):
     """Open-loop microstepping driver following a :class:`~flatstep.plan.RestToRest` plan.
 
     Parameters
@@ -73,11 +72,8 @@ class Microstepping:
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: MicrostepGains, *, control_period: float,
                  measurement: str = "model", v_limit: float = math.inf):
-        if measurement not in MEASUREMENTS:
-            raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
-        self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
-        self.control_period = check_positive("control_period", control_period, unit=" s")
-        self.v_limit = check_v_limit(v_limit)
+        super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
+                         v_limit=v_limit)
         self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
 
     def current_reference(self, t: ArrayLike, order: int = 0) -> NDArray[np.float64]:
