@@ -1,4 +1,5 @@
-// Dormand-Prince 5(4) (Hairer's DOPRI5: FSAL, PI step control, 4th-order dense output) and classical RK4.
+// Dormand-Prince 5(4) (Hairer's DOPRI5: FSAL, PI step control, 4th-order dense output), the first-step
+// heuristic both adaptive integrators share, and classical RK4.
 #include "ode.h"
 
 // Butcher tableau of DOPRI5 (a[i][j] for stage i+1), the error weights e and the dense-output weights d.
@@ -44,14 +45,47 @@ static int eval(struct ode_dopri5 *s, fs_real t, const fs_real *x, fs_real *dx)
     return s->f(s->ctx, t, x, dx);
 }
 
+// Returns ODE_OK, or ODE_EARGS for bad parameters, dimension or start time.
+int ode_check_args(const struct ode_params *p, size_t n, fs_real t)
+{
+    bool ok = n > 0 && n <= ODE_MAX_DIM && p->rtol > 0 && p->atol > 0 && p->h_max > 0 && fs_isfinite(t);
+    return ok ? ODE_OK : ODE_EARGS;
+}
+
+// Returns the first step size for a method of the given order by Hairer's heuristic (one Euler step from
+// (t, x) with slope f0 = f(t, x) estimates the second derivative), or -1 when f fails there.
+fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t, const fs_real *x,
+                       const fs_real *f0, int order)
+{
+    fs_real dnf = 0, dny = 0, der2 = 0, sk, h, h1, der12, x1[ODE_MAX_DIM] = {0}, f1[ODE_MAX_DIM] = {0};
+    size_t i;
+    for (i = 0; i < n; i++) {
+        sk = p->atol + p->rtol * fs_fabs(x[i]);
+        dnf += (f0[i] / sk) * (f0[i] / sk);
+        dny += (x[i] / sk) * (x[i] / sk);
+    }
+    h = (dnf <= FS_C(1e-10) || dny <= FS_C(1e-10)) ? FS_C(1e-6) : fs_sqrt(dny / dnf) * FS_C(0.01);
+    h = min2(h, p->h_max);
+    for (i = 0; i < n; i++)
+        x1[i] = x[i] + h * f0[i];
+    if (f(ctx, t + h, x1, f1))
+        return -1;
+    for (i = 0; i < n; i++) {
+        sk = p->atol + p->rtol * fs_fabs(x[i]);
+        der2 += ((f1[i] - f0[i]) / sk) * ((f1[i] - f0[i]) / sk);
+    }
+    der12 = max2(fs_sqrt(der2) / h, fs_sqrt(dnf));
+    h1 = der12 <= FS_C(1e-15) ? max2(FS_C(1e-6), h * FS_C(1e-3)) : fs_pow(FS_C(0.01) / der12, FS_C(1.0) / order);
+    return min2(min2(100 * h, h1), p->h_max);
+}
+
 // Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts an
 // integration at (t, x) and picks the first step size (Hairer's heuristic).
-int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_dopri5_params *p, size_t n, ode_rhs_fn f, void *ctx,
+int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx,
                     fs_real t, const fs_real *x)
 {
-    fs_real dnf = 0, dny = 0, der2 = 0, sk, h, h1, der12;
     size_t i;
-    if (n == 0 || n > ODE_MAX_DIM || !(p->rtol > 0) || !(p->atol > 0) || !(p->h_max > 0) || !fs_isfinite(t))
+    if (ode_check_args(p, n, t) != ODE_OK)
         return ODE_EARGS;
     s->p = *p;
     s->f = f;
@@ -64,26 +98,9 @@ int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_dopri5_params *p, siz
         s->x[i] = x[i];
     if (eval(s, t, s->x, s->k[0]))
         return ODE_ERHS;
-    for (i = 0; i < n; i++) {
-        sk = p->atol + p->rtol * fs_fabs(x[i]);
-        dnf += (s->k[0][i] / sk) * (s->k[0][i] / sk);
-        dny += (x[i] / sk) * (x[i] / sk);
-    }
-    h = (dnf <= FS_C(1e-10) || dny <= FS_C(1e-10)) ? FS_C(1e-6) : fs_sqrt(dny / dnf) * FS_C(0.01);
-    h = min2(h, p->h_max);
-    // One explicit Euler step estimates the second derivative (k[1], k[2] are scratch here).
-    for (i = 0; i < n; i++)
-        s->k[2][i] = x[i] + h * s->k[0][i];
-    if (eval(s, t + h, s->k[2], s->k[1]))
-        return ODE_ERHS;
-    for (i = 0; i < n; i++) {
-        sk = p->atol + p->rtol * fs_fabs(x[i]);
-        der2 += ((s->k[1][i] - s->k[0][i]) / sk) * ((s->k[1][i] - s->k[0][i]) / sk);
-    }
-    der12 = max2(fs_sqrt(der2) / h, fs_sqrt(dnf));
-    h1 = der12 <= FS_C(1e-15) ? max2(FS_C(1e-6), h * FS_C(1e-3)) : fs_pow(FS_C(0.01) / der12, FS_C(0.2));
-    s->h = min2(min2(100 * h, h1), p->h_max);
-    return ODE_OK;
+    s->rhs_evals++;
+    s->h = ode_first_step(p, n, f, ctx, t, s->x, s->k[0], 5);
+    return s->h > 0 ? ODE_OK : ODE_ERHS;
 }
 
 // Returns the scaled RMS error of a trial step from (x, k) to xn, or -1 when it is not finite.

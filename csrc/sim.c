@@ -74,6 +74,54 @@ static bool times_valid(const fs_real *t, size_t n)
     return n > 0;
 }
 
+// One segment's integrator: DOPRI5 or DOP853 (enum sim_method).
+struct segment {
+    uint32_t method;
+    union {
+        struct ode_dopri5 d5;
+        struct ode_dop853 d8;
+    } u;
+};
+
+// Returns an ODE_* status; starts the segment's integrator at (t, x).
+static int seg_init(struct segment *g, const struct ode_params *op, struct loop *c, fs_real t, const fs_real *x)
+{
+    if (g->method == SIM_DOPRI5)
+        return ode_dopri5_init(&g->u.d5, op, 4, closed_loop_rhs, c, t, x);
+    return ode_dop853_init(&g->u.d8, op, 4, closed_loop_rhs, c, t, x);
+}
+
+// Returns an ODE_* status; one accepted step towards t_end.
+static int seg_step(struct segment *g, fs_real t_end)
+{
+    return g->method == SIM_DOPRI5 ? ode_dopri5_step(&g->u.d5, t_end) : ode_dop853_step(&g->u.d8, t_end);
+}
+
+// Returns an ODE_* status; writes the dense-output state at t within the last step.
+static int seg_dense(struct segment *g, fs_real t, fs_real *x)
+{
+    if (g->method == SIM_DOPRI5)
+        ode_dopri5_dense(&g->u.d5, t, x);
+    else if (g->method == SIM_DOP853)
+        ode_dop853_hermite(&g->u.d8, t, x);
+    else
+        return ode_dop853_dense(&g->u.d8, t, x);
+    return ODE_OK;
+}
+
+// Returns nothing; adds the segment's work to st and writes its current time and state.
+static void seg_end(const struct segment *g, struct sim_stats *st, fs_real *t, fs_real x[4])
+{
+    const fs_real *xs = g->method == SIM_DOPRI5 ? g->u.d5.x : g->u.d8.x;
+    int m;
+    st->steps += g->method == SIM_DOPRI5 ? g->u.d5.steps : g->u.d8.steps;
+    st->rejected += g->method == SIM_DOPRI5 ? g->u.d5.rejected : g->u.d8.rejected;
+    st->rhs_evals += g->method == SIM_DOPRI5 ? g->u.d5.rhs_evals : g->u.d8.rhs_evals;
+    *t = g->method == SIM_DOPRI5 ? g->u.d5.t : g->u.d8.t;
+    for (m = 0; m < 4; m++)
+        x[m] = xs[m];
+}
+
 // Returns SIM_OK or an error sim_status; runs the continuous closed loop from x0 at t_out[0], the law
 // evaluated at every stage, integration restarted at the plan's knots t0 and tf, and writes the state at
 // each of the n_out nondecreasing times t_out into x_out (n_out x 4, row-major).
@@ -81,17 +129,21 @@ int sim_continuous(struct smc *ctrl, const struct sim_plant *plant, const fs_rea
                    size_t n_out, const struct sim_continuous_params *p, fs_real *x_out, struct sim_stats *st)
 {
     struct loop c = {ctrl, plant, {0, 0}, SMC_OK};
-    struct ode_dopri5_params op = {p->rtol, p->atol, p->h_max};
-    struct ode_dopri5 ode;
-    fs_real edges[4], x[4], t_end;
+    struct ode_params op = {p->rtol, p->atol, p->h_max};
+    struct segment g;
+    const fs_real *xs;
+    fs_real edges[4], x[4], t_end, t = 0;
     size_t i = 0, n_edges = 0, k;
+    uint32_t steps = 0;
     int rc = SIM_OK, e, m;
     st->steps = st->rejected = st->rhs_evals = 0;
     st->smc_status = SMC_OK;
     st->t_fail = 0;
     if (!times_valid(t_out, n_out) || !state_finite(x0) || !motor_params_valid(&plant->motor)
-        || !fs_isfinite(plant->load) || !(p->rtol > 0) || !(p->atol > 0) || !(p->h_max > 0))
+        || !fs_isfinite(plant->load) || !(p->rtol > 0) || !(p->atol > 0) || !(p->h_max > 0)
+        || p->method > SIM_DOP853_DENSE)
         return SIM_EARGS;
+    g.method = p->method;
     t_end = t_out[n_out - 1];
     edges[n_edges++] = t_out[0];
     if (ctrl->p.plan.t0 > t_out[0] && ctrl->p.plan.t0 < t_end)
@@ -106,30 +158,28 @@ int sim_continuous(struct smc *ctrl, const struct sim_plant *plant, const fs_rea
             x_out[4 * i + m] = x0[m];
     for (k = 0; k + 1 < n_edges && rc == SIM_OK; k++) {
         // A new segment restarts the integrator, as simulate.py restarts solve_ivp at each knot.
-        e = ode_dopri5_init(&ode, &op, 4, closed_loop_rhs, &c, edges[k], x);
-        while (e == ODE_OK && ode.t < edges[k + 1]) {
-            if (st->steps + ode.steps >= p->max_steps) {
+        e = seg_init(&g, &op, &c, edges[k], x);
+        xs = g.method == SIM_DOPRI5 ? g.u.d5.x : g.u.d8.x;
+        for (t = edges[k]; e == ODE_OK && t < edges[k + 1]; steps++) {
+            if (steps >= p->max_steps) {
                 rc = SIM_EMAXSTEPS;
                 break;
             }
-            e = ode_dopri5_step(&ode, edges[k + 1]);
-            for (; e == ODE_OK && i < n_out && t_out[i] <= ode.t; i++) {
-                if (t_out[i] == ode.t)
+            e = seg_step(&g, edges[k + 1]);
+            t = g.method == SIM_DOPRI5 ? g.u.d5.t : g.u.d8.t;
+            for (; e == ODE_OK && i < n_out && t_out[i] <= t; i++) {
+                if (t_out[i] == t)
                     for (m = 0; m < 4; m++)
-                        x_out[4 * i + m] = ode.x[m];
+                        x_out[4 * i + m] = xs[m];
                 else
-                    ode_dopri5_dense(&ode, t_out[i], &x_out[4 * i]);
+                    e = seg_dense(&g, t_out[i], &x_out[4 * i]);
             }
         }
-        st->steps += ode.steps;
-        st->rejected += ode.rejected;
-        st->rhs_evals += ode.rhs_evals;
+        seg_end(&g, st, &t, x);
         if (e != ODE_OK)
             rc = sim_error(e);
         if (rc != SIM_OK)
-            st->t_fail = ode.t;
-        for (m = 0; m < 4; m++)
-            x[m] = ode.x[m];
+            st->t_fail = t;
     }
     st->smc_status = c.status;
     return rc;

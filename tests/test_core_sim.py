@@ -91,8 +91,27 @@ def test_c_engine_result_is_the_reference_collect():
     acc = (fs.motor.torque(x, PAPER) - PAPER.B * r.omega - load) / PAPER.J
     v = ctrl.voltages(r.t, x, acc)
     np.testing.assert_allclose([r.va, r.vb], v, rtol=1e-12, atol=1e-12)
-    assert r.meta["engine"] == "c" and r.meta["method"] == "DOPRI5" and r.meta["controller_status"] == []
-    assert r.meta["steps"] > 100 and r.meta["rhs_evals"] >= 6 * r.meta["steps"]
+    assert r.meta["engine"] == "c" and r.meta["method"] == "DOP853" and r.meta["controller_status"] == []
+    assert r.meta["steps"] > 100 and r.meta["rhs_evals"] >= 12 * r.meta["steps"]
+
+
+@pytest.mark.parametrize("method, lo, hi", [("DOP853", 12, 12), ("DOPRI5", 6, 6), ("DOP853-dense7", 12, 15)])
+def test_every_c_integrator_tracks_fig1_and_matches_the_default(method, lo, hi):
+    """sim_continuous's three integrators: Fig. 1 starts on the plan, so theta*(t) is the exact angle; at rtol
+    1e-10 each stays within 1e-9 rad of it, and the currents agree with the default's to 1e-7 A. Evaluations
+    per accepted step: 12 (DOP853), 6 (DOPRI5), up to 3 more where a step holds an output time (dense7)."""
+    from flatstep import _core
+
+    plant, ctrl, load = RUNS["fig1"]
+    p = fs.PAPER_PLAN
+    t = np.linspace(0.0, 0.06, 601)
+    X, st = _core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12, method=method)
+    X0, _ = _core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12)
+    assert np.abs(X[3] - p.flag(t).theta).max() < 1e-9
+    assert np.abs(X[:2] - X0[:2]).max() < 1e-7
+    assert lo * st["steps"] <= st["rhs_evals"] <= hi * st["steps"] + (lo + 1) * st["rejected"] + 6
+    with pytest.raises(ValueError, match="not a C integrator"):
+        _core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12, method="RK45")
 
 
 def zoh_reference(plant, ctrl, load, Ts, n):

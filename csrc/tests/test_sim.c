@@ -33,7 +33,7 @@ static double max_theta_error(const struct smc *s, const double *t, const double
 // Returns 0 after the continuous-loop checks (paper Fig. 1 and Fig. 2, faults, arguments).
 static int continuous_checks(void)
 {
-    struct sim_continuous_params cp = {1e-10, 1e-12, 1.0, 1000000};
+    struct sim_continuous_params cp = {1e-10, 1e-12, 1.0, 1000000, SIM_DOP853};
     struct sim_plant plant;
     struct sim_stats st;
     struct smc s;
@@ -41,13 +41,20 @@ static int continuous_checks(void)
     int i, rc;
     for (i = 0; i < N_OUT; i++)
         t_out[i] = 0.06 * i / (N_OUT - 1);
-    paper(&s, &plant, 100, 0, x0);
-    rc = sim_continuous(&s, &plant, x0, t_out, N_OUT, &cp, x_out, &st);
-    err = max_theta_error(&s, t_out, x_out, N_OUT);
-    CHECK(rc == SIM_OK && err < 1e-8, "Fig. 1: rc %d max theta error %g", rc, err);
-    CHECK(fabs(x_out[4 * (N_OUT - 1) + 3] - 0.02) < 1e-8 && x_out[0] == 0.4, "Fig. 1 ends at theta2, starts at x0");
-    printf("  Fig. 1 continuous: %u steps, %u rejected, %u rhs calls, max |theta - theta*| %.3g rad\n", st.steps,
-           st.rejected, st.rhs_evals, err);
+    // Every integrator (DOP853 with Hermite output, DOPRI5, DOP853 with 7th-order dense output) tracks the plan.
+    for (i = SIM_DOP853; i <= SIM_DOP853_DENSE; i++) {
+        cp.method = (uint32_t)i;
+        paper(&s, &plant, 100, 0, x0);
+        rc = sim_continuous(&s, &plant, x0, t_out, N_OUT, &cp, x_out, &st);
+        err = max_theta_error(&s, t_out, x_out, N_OUT);
+        CHECK(rc == SIM_OK && err < 1e-8, "Fig. 1, method %d: rc %d max theta error %g", i, rc, err);
+        CHECK(fabs(x_out[4 * (N_OUT - 1) + 3] - 0.02) < 1e-8 && x_out[0] == 0.4, "Fig. 1 ends at theta2, starts at x0");
+        printf("  Fig. 1 continuous, method %d: %u steps, %u rejected, %u rhs calls, max |theta - theta*| %.3g rad\n",
+               i, st.steps, st.rejected, st.rhs_evals, err);
+    }
+    cp.method = SIM_DOP853_DENSE + 1;
+    CHECK(sim_continuous(&s, &plant, x0, t_out, N_OUT, &cp, x_out, &st) == SIM_EARGS, "unknown method");
+    cp.method = SIM_DOP853;
     paper(&s, &plant, 300, 1e-5, x0);
     rc = sim_continuous(&s, &plant, x0, t_out, N_OUT, &cp, x_out, &st);
     err = 0.02 - x_out[4 * (N_OUT - 1) + 3];
@@ -80,7 +87,7 @@ static int continuous_checks(void)
 // Returns 0 after the sampled-loop checks: convergence to the continuous loop as Ts -> 0, faults, arguments.
 static int sampled_checks(void)
 {
-    struct sim_continuous_params cp = {1e-10, 1e-12, 1.0, 1000000};
+    struct sim_continuous_params cp = {1e-10, 1e-12, 1.0, 1000000, SIM_DOP853};
     struct sim_sampled_params sp = {1e-5, 4};
     struct sim_plant plant;
     struct sim_stats st;

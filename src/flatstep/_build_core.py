@@ -11,6 +11,8 @@ from cffi import FFI
 
 ROOT = Path(__file__).resolve().parents[2]
 MODULES = ("motor", "plan", "flat", "smc", "ode", "sim", "batch", "sensors", "observer", "drive", "sampled")
+#: Sources beyond one per module header (ode.h declares both integrators).
+EXTRA_SOURCES = ("ode_dop853",)
 
 CDEF = """
 typedef double fs_real;
@@ -22,7 +24,8 @@ struct smc_params { struct motor_params motor; struct plan plan; struct smc_gain
                     fs_real v_limit; fs_real rho_min; };
 struct smc { struct smc_params p; fs_real alpha1; fs_real alpha2; uint32_t status_seen; ...; };
 struct sim_plant { struct motor_params motor; fs_real load; };
-struct sim_continuous_params { fs_real rtol; fs_real atol; fs_real h_max; uint32_t max_steps; };
+struct sim_continuous_params { fs_real rtol; fs_real atol; fs_real h_max; uint32_t max_steps; uint32_t method; };
+enum sim_method { SIM_DOP853, SIM_DOPRI5, SIM_DOP853_DENSE };
 struct sim_sampled_params { fs_real Ts; uint32_t substeps; };
 struct sim_stats { uint32_t steps; uint32_t rejected; uint32_t rhs_evals; uint32_t smc_status; fs_real t_fail; };
 
@@ -95,7 +98,7 @@ ffibuilder.cdef(CDEF)
 ffibuilder.set_source(
     "flatstep._flatstep_core",
     "\n".join(f'#include "{m}.h"' for m in MODULES),
-    sources=[_relative(ROOT / "csrc" / f"{m}.c") for m in MODULES],
+    sources=[_relative(ROOT / "csrc" / f"{m}.c") for m in MODULES + EXTRA_SOURCES],
     include_dirs=[_relative(ROOT / "csrc")],
     # C99 also keeps GCC from contracting a*b+c into FMAs, so the core rounds like the NumPy reference.
     extra_compile_args=["-std=c99", "-O2"] if os.name != "nt" else [],

@@ -193,9 +193,15 @@ def result_columns(controller: FlatnessSMC, motor: MotorParams, load: float, t: 
     xr, tv = _rows(x, 4, "x"), _vec(t)
     if tv.size != xr.shape[0]:
         raise ValueError(f"t has {tv.size} samples but x has {xr.shape[0]}")
+    return _result_rows(smc_struct(controller, v_limit, rho_min), motor, load, tv, xr)
+
+
+def _result_rows(ctrl, motor: MotorParams, load: float, tv: np.ndarray,
+                 xr: np.ndarray) -> tuple[dict[str, Array], NDArray[np.uint32]]:
+    """``batch_result`` on an initialised ``struct smc``, the times and the C rows (n, 4) of the states."""
     out, status = np.empty((tv.size, lib.RES_LEN)), np.empty(tv.size, dtype=np.uint32)
-    bad = lib.batch_result(smc_struct(controller, v_limit, rho_min), motor_struct(motor), float(load), _in(tv),
-                           _in(xr), tv.size, _out(out), ffi.from_buffer("uint32_t[]", status, require_writable=True))
+    bad = lib.batch_result(ctrl, motor_struct(motor), float(load), _in(tv), _in(xr), tv.size, _out(out),
+                           ffi.from_buffer("uint32_t[]", status, require_writable=True))
     if bad:
         raise ValueError(f"{bad} sample(s) of the plan are outside the domain of the flat maps "
                          "(|J theta'' + B theta' + tau| >= Km rho): no reference state there")
@@ -264,21 +270,54 @@ def _check(rc: int, st, what: str) -> None:
                            f"(controller status {status_names(st.smc_status)})")
 
 
+#: Integrators of ``sim_continuous`` by name (``enum sim_method``): DOP853 with cubic Hermite output between
+#: steps (the default), DOPRI5 with its 4th-order dense output, DOP853 with its 7th-order dense output.
+CONTINUOUS_METHODS = {"DOP853": lib.SIM_DOP853, "DOPRI5": lib.SIM_DOPRI5, "DOP853-dense7": lib.SIM_DOP853_DENSE}
+
+
 def run_continuous(controller: FlatnessSMC, motor: MotorParams, load: float, x0: ArrayLike, t_out: ArrayLike, *,
                    rtol: float, atol: float, h_max: float = np.inf, max_steps: int = 10_000_000,
-                   v_limit: float = V_LIMIT, rho_min: float = RHO_MIN) -> tuple[Array, dict]:
+                   method: str = "DOP853", v_limit: float = V_LIMIT, rho_min: float = RHO_MIN) -> tuple[Array, dict]:
     """C ``sim_continuous``: the (4, n) states at the nondecreasing times ``t_out`` and the run's stats
-    (``stage_status``: the status bits of every controller call, trial stages of rejected steps included)."""
-    t_out = _vec(t_out)
+    (``stage_status``: the status bits of every controller call, trial stages of rejected steps included).
+
+    ``method``: ``"DOP853"`` (Dormand-Prince 8(5,3); between steps the step's cubic Hermite interpolant),
+    ``"DOPRI5"`` (Dormand-Prince 5(4), 4th-order dense output) or ``"DOP853-dense7"`` (DOP853 with its
+    7th-order dense output, three more evaluations per step). docs/c-core.md compares their accuracy."""
+    X, st = _run_continuous(smc_struct(controller, v_limit, rho_min), motor, load, x0, _vec(t_out), rtol=rtol,
+                            atol=atol, h_max=h_max, max_steps=max_steps, method=method)
+    return np.ascontiguousarray(X.T), st
+
+
+def _run_continuous(ctrl, motor: MotorParams, load: float, x0: ArrayLike, t_out: np.ndarray, *, rtol: float,
+                    atol: float, h_max: float, max_steps: int, method: str) -> tuple[np.ndarray, dict]:
+    """``sim_continuous`` on an initialised ``struct smc``: the C rows (n, 4) of the states and the stats."""
+    if method not in CONTINUOUS_METHODS:
+        raise ValueError(f"method={method!r} is not a C integrator; valid: {tuple(CONTINUOUS_METHODS)}")
     x0 = _vec(x0)
     X = np.empty((t_out.size, 4))
     params = ffi.new("struct sim_continuous_params *", dict(rtol=rtol, atol=atol, h_max=min(h_max, 1e300),
-                                                            max_steps=max_steps))
+                                                            max_steps=max_steps, method=CONTINUOUS_METHODS[method]))
     st = ffi.new("struct sim_stats *")
-    rc = lib.sim_continuous(smc_struct(controller, v_limit, rho_min), _plant(motor, load), _in(x0), _in(t_out),
-                            t_out.size, params, _out(X), st)
+    rc = lib.sim_continuous(ctrl, _plant(motor, load), _in(x0), _in(t_out), t_out.size, params, _out(X), st)
     _check(rc, st, "continuous")
-    return np.ascontiguousarray(X.T), _stats(st, "stage_status")
+    return X, _stats(st, "stage_status")
+
+
+def continuous_result(controller: FlatnessSMC, motor: MotorParams, load: float, x0: ArrayLike, t_out: ArrayLike,
+                      *, rtol: float, atol: float, h_max: float = np.inf, max_steps: int = 10_000_000,
+                      method: str = "DOP853", v_limit: float = V_LIMIT,
+                      rho_min: float = RHO_MIN) -> tuple[Array, dict[str, Array], NDArray[np.uint32], dict]:
+    """:func:`run_continuous` then :func:`result_columns` on its states, sharing one controller struct and the
+    C rows of the states (no copy between the two calls): the (4, n) states (a view of the (n, 4) rows), the
+    result's series, the controller's status bits per sample and the run's stats."""
+    t_out = _vec(t_out)
+    ctrl = smc_struct(controller, v_limit, rho_min)
+    X, st = _run_continuous(ctrl, motor, load, x0, t_out, rtol=rtol, atol=atol, h_max=h_max, max_steps=max_steps,
+                            method=method)
+    lib.smc_reset(ctrl)
+    cols, status = _result_rows(ctrl, motor, load, t_out, X)
+    return X.T, cols, status, st
 
 
 def run_sampled(controller: FlatnessSMC, motor: MotorParams, load: float, x0: ArrayLike, t_start: float,

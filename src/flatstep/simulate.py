@@ -49,7 +49,7 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
         sampled loop only (``engine="python"``, the default for them).
     load : load torque on the plant [N m], a constant or a function of time.
     t_end : horizon [s].
-    engine : ``"c"``: the C core, adaptive Dormand-Prince 5(4) at ``rtol``/``atol`` (``method`` is not
+    engine : ``"c"``: the C core, adaptive Dormand-Prince 8(5,3) at ``rtol``/``atol`` (``method`` is not
         used); ``"scipy"``: :func:`scipy.integrate.solve_ivp` with ``method`` at ``rtol``/``atol``;
         ``"python"``: the readable sampled-loop reference (:mod:`flatstep.sampled`). Default (``None``): the C
         core, which runs the sampled drive loop too (sensors, observer, bus saturation, delays: C
@@ -133,7 +133,7 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
 def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, load: Load, t_end: float,
                 x0: np.ndarray, engine: str, rtol: float, atol: float, dt_out: float,
                 control_period: Optional[float], substeps: int) -> SimResult:
-    """The C engine: continuous (DOPRI5 on the output grid of :func:`_grid`) or sampled (ZOH + RK4)."""
+    """The C engine: continuous (DOP853 on the output grid of :func:`_grid`) or sampled (ZOH + RK4)."""
     from . import _core
 
     if engine != "c":
@@ -145,12 +145,12 @@ def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, l
     if control_period is None:
         segs = _grid(t_end, [plan.t0, plan.tf], dt_out)
         t = np.concatenate([segs[0]] + [s[1:] for s in segs[1:]])
-        X, stats = _core.run_continuous(controller, motor, tau, x0, t, rtol=rtol, atol=atol)
-        # Voltages, references and sliding variables on the returned samples in one C call; the status is the
-        # controller's on these samples (stats["stage_status"] also counts trial stages).
-        cols, status = _core.result_columns(controller, motor, tau, t, X)
+        # The run, then voltages, references and sliding variables on the returned samples, in two C calls on
+        # one controller struct; the status is the controller's on these samples (stats["stage_status"] also
+        # counts trial stages).
+        X, cols, status, stats = _core.continuous_result(controller, motor, tau, x0, t, rtol=rtol, atol=atol)
         stats = {**stats, "controller_status": _core.status_names(np.bitwise_or.reduce(status))}
-        return _collect_columns(t, X, plan, controller, cols, {"engine": engine, "method": "DOPRI5", "rtol": rtol,
+        return _collect_columns(t, X, plan, controller, cols, {"engine": engine, "method": "DOP853", "rtol": rtol,
                                                                 "atol": atol, **stats})
     Ts = check_positive("control_period", control_period, unit=" s")
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
