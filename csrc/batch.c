@@ -76,38 +76,55 @@ size_t batch_plan_flat(const struct plan *p, const struct motor_params *m, const
     return bad;
 }
 
+// Returns nothing; writes the rest of a batch_result row that smc_step_terms left unset (w->have): a step
+// whose inputs were not finite or whose rho < rho_min computed neither the plan's flag nor the sliding variables.
+static void result_fallback(struct smc *s, fs_real t, const fs_real y[5], struct smc_terms *w)
+{
+    if (!(w->have & SMC_HAVE_FLAG))
+        plan_flag(&s->plan, t, w->flag);
+    w->acc = s->p.measurement == SMC_IDEAL ? y[4] : motor_acceleration(&s->p.motor, y, 0);
+    w->s2 = w->acc - w->flag[PLAN_DDTHETA] + s->alpha2 * (y[2] - w->flag[PLAN_DTHETA])
+          + s->alpha1 * (y[3] - w->flag[PLAN_THETA]);
+}
+
 // Returns the number of samples where the plan leaves the flat maps' domain (their reference currents and
 // voltages are 0); writes one RES_LEN row (out, n x RES_LEN) and the controller's status bits (status, may be
 // NULL) for each of the n plant states x (n x 4) at times t: smc_step on (x, the plant's acceleration).
 size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real load, const fs_real *t,
                     const fs_real *x, size_t n, fs_real *out, uint32_t *status)
 {
-    fs_real y[5], flag[PLAN_FLAG_LEN], prev[PLAN_FLAG_LEN], xr[4] = {0, 0, 0, 0}, vr[2] = {0, 0}, *row, acc;
+    fs_real y[5], trig[2], prev[PLAN_FLAG_LEN], xr[4] = {0, 0, 0, 0}, vr[2] = {0, 0}, *row;
+    struct smc_terms w;
     size_t i, bad = 0;
     uint32_t one;
-    int k, ok = FLAT_OK, same;
+    int k, ok = FLAT_OK, same, shared = plant->Nr == s->p.motor.Nr;
     for (i = 0; i < n; i++) {
         row = &out[RES_LEN * i];
         for (k = 0; k < 4; k++)
             y[k] = x[4 * i + k];
-        y[4] = motor_acceleration(plant, y, load);
-        one = smc_step(s, t[i], y, &row[RES_VA]);
+        // The plant's acceleration in motor_acceleration's operation order; its sin and cos of Nr theta are
+        // the controller's too when the two motors have the same Nr.
+        fs_sincos(plant->Nr * y[3], &trig[0], &trig[1]);
+        y[4] = (plant->Km * (y[1] * trig[1] - y[0] * trig[0]) - plant->B * y[2] - load) / plant->J;
+        one = smc_step_terms(s, t[i], y, shared ? trig : NULL, &row[RES_VA], &w);
         if (status)
             status[i] = one;
+        if (!(w.have & SMC_HAVE_LAW))
+            result_fallback(s, t[i], y, &w);
         row[RES_ACC] = y[4];
+        // hypot, not the step's sqrt(ia^2 + ib^2): rho and s1 equal NumPy's bit for bit.
         row[RES_RHO] = fs_hypot(y[0], y[1]);
         row[RES_PHI] = fs_atan2(y[0], y[1]);
-        plan_flag(&s->plan, t[i], flag);
-        row[RES_THETA_REF] = flag[PLAN_THETA];
-        row[RES_OMEGA_REF] = flag[PLAN_DTHETA];
-        row[RES_RHO_REF] = flag[PLAN_RHO];
+        row[RES_THETA_REF] = w.flag[PLAN_THETA];
+        row[RES_OMEGA_REF] = w.flag[PLAN_DTHETA];
+        row[RES_RHO_REF] = w.flag[PLAN_RHO];
         // The reference state is the previous one while the flag holds still (before t0 and after tf).
         for (k = 0, same = i > 0; k < PLAN_FLAG_LEN && same; k++)
-            same = flag[k] == prev[k];
+            same = w.flag[k] == prev[k];
         if (!same) {
-            ok = flat_to_state(&s->p.motor, flag, 0, xr, vr);
+            ok = flat_to_state(&s->p.motor, w.flag, 0, xr, vr);
             for (k = 0; k < PLAN_FLAG_LEN; k++)
-                prev[k] = flag[k];
+                prev[k] = w.flag[k];
         }
         bad += ok != FLAT_OK;
         row[RES_IA_REF] = xr[0];
@@ -115,10 +132,8 @@ size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real loa
         row[RES_VA_REF] = vr[0];
         row[RES_VB_REF] = vr[1];
         // The sliding variables of eq. (12), as smc_step and FlatnessSMC.sliding_variables form them.
-        acc = s->p.measurement == SMC_IDEAL ? y[4] : motor_acceleration(&s->p.motor, y, 0);
-        row[RES_S1] = row[RES_RHO] - flag[PLAN_RHO];
-        row[RES_S2] = acc - flag[PLAN_DDTHETA] + s->alpha2 * (y[2] - flag[PLAN_DTHETA])
-                    + s->alpha1 * (y[3] - flag[PLAN_THETA]);
+        row[RES_S1] = row[RES_RHO] - w.flag[PLAN_RHO];
+        row[RES_S2] = w.s2;
     }
     return bad;
 }

@@ -1,10 +1,19 @@
 // smc_init / smc_reset / smc_step: the law of flatstep.control.smc, guarded so no input yields NaN or a division by 0.
 #include "smc.h"
+#include <stddef.h>
 #include "flat.h"
 
 // Where ia^2 + ib^2 neither underflows nor overflows, so that sqrt(ia^2 + ib^2) is as good as hypot(ia, ib).
 #define RHO2_SAFE_MIN FS_C(1e-30)
 #define RHO2_SAFE_MAX FS_C(1e30)
+
+// The step's body is specialised into smc_step (no intermediate values) and smc_step_terms: inline it in both,
+// so that smc_step compiles to what it was before smc_step_terms existed.
+#if defined(__GNUC__)
+#define SMC_INLINE static inline __attribute__((always_inline))
+#else
+#define SMC_INLINE static inline
+#endif
 
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
 // v_limit = 1e3 V and rho_min = 1e-6 A.
@@ -59,15 +68,19 @@ void smc_reset(struct smc *s)
     s->status_seen = SMC_OK;
 }
 
-// Returns the status bits of the unguarded law; writes its voltages (0 V on a fault).
-static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
+// Returns the status bits of the unguarded law; writes its voltages (0 V on a fault) and, when w is not NULL,
+// its intermediate values (nr_trig: NULL, or the caller's sin and cos of Nr theta).
+SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig,
+                            fs_real v[2], struct smc_terms *w)
 {
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
-    fs_real ref[PLAN_FLAG_LEN], rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2;
+    fs_real own[PLAN_FLAG_LEN], *ref = w ? w->flag : own, rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2;
     struct flat_angles a;
     int flat;
     plan_flag(&s->plan, t, ref);
+    if (w)
+        w->have = SMC_HAVE_FLAG;
     // rho = hypot(ia, ib); the square root of the sum of squares is as accurate unless it over- or underflows.
     rho = y[0] * y[0] + y[1] * y[1];
     rho = rho > RHO2_SAFE_MIN && rho < RHO2_SAFE_MAX ? fs_sqrt(rho) : fs_hypot(y[0], y[1]);
@@ -76,7 +89,12 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
     // phi = atan2(ia, ib) by its sine and cosine; delta = Nr theta + phi by the angle-addition formulas.
     a.sphi = y[0] / rho;
     a.cphi = y[1] / rho;
-    fs_sincos(m->Nr * y[3], &sN, &cN);
+    if (nr_trig) {
+        sN = nr_trig[0];
+        cN = nr_trig[1];
+    } else {
+        fs_sincos(m->Nr * y[3], &sN, &cN);
+    }
     a.sdelta = sN * a.cphi + cN * a.sphi;
     a.cdelta = cN * a.cphi - sN * a.sphi;
     // theta'' measured, or from the zero-load model in motor_acceleration's operation order.
@@ -89,6 +107,17 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
     gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
     gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
     flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2], v);
+    if (w) {
+        w->rho = rho;
+        w->sphi = a.sphi;
+        w->cphi = a.cphi;
+        w->snr = sN;
+        w->cnr = cN;
+        w->acc = acc;
+        w->s1 = s1;
+        w->s2 = s2;
+        w->have |= SMC_HAVE_LAW;
+    }
     if (flat & FLAT_ERHO)
         return SMC_RHO;
     if (flat & FLAT_ESQRT)
@@ -96,9 +125,9 @@ static uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], fs_r
     return SMC_OK;
 }
 
-// Returns the smc_status bits of this step; writes finite phase voltages v with hypot(v) <= v_limit for any
-// time t and measurement y = (ia, ib, omega, theta, theta'') (y[4] read in SMC_IDEAL mode only).
-uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
+// Returns the status bits of one guarded step (smc_step's contract); w and nr_trig as in smc_law.
+SMC_INLINE uint32_t smc_guarded(struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig,
+                                fs_real v[2], struct smc_terms *w)
 {
     // Law (12)-(14): s1 = rho - rho*, s2 = e'' + a2 e' + a1 e; Gamma1 = rho*' - W1 s1/(|s1| + eps1),
     // Gamma2 = theta*''' - a2 e'' - a1 e' - W2 s2/(|s2| + eps2); v = flat inverse (13) with rho' -> Gamma1,
@@ -110,7 +139,7 @@ uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
     z = (t - t) + (y[0] - y[0]) + (y[1] - y[1]) + (y[2] - y[2]) + (y[3] - y[3]);
     if (s->p.measurement == SMC_IDEAL)
         z += y[4] - y[4];
-    status = z == 0 ? smc_law(s, t, y, v) : SMC_NONFINITE;
+    status = z == 0 ? smc_law(s, t, y, nr_trig, v, w) : SMC_NONFINITE;
     if (status == SMC_OK && !(fs_isfinite(v[0]) && fs_isfinite(v[1])))
         status = SMC_OVERFLOW;
     if (status != SMC_OK) {
@@ -130,4 +159,21 @@ uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
     }
     s->status_seen |= status;
     return status;
+}
+
+// Returns the smc_status bits of this step; writes finite phase voltages v with hypot(v) <= v_limit for any
+// time t and measurement y = (ia, ib, omega, theta, theta'') (y[4] read in SMC_IDEAL mode only).
+uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2])
+{
+    return smc_guarded(s, t, y, NULL, v, NULL);
+}
+
+// Returns smc_step's status and writes its voltages v, bit for bit; also writes the step's intermediate values
+// into w (w->have says which). nr_trig: NULL, or sin and cos of Nr y[3] already computed by the caller (the
+// controller's Nr), which the step then uses instead of computing them.
+uint32_t smc_step_terms(struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig, fs_real v[2],
+                        struct smc_terms *w)
+{
+    w->have = 0;
+    return smc_guarded(s, t, y, nr_trig, v, w);
 }

@@ -49,6 +49,23 @@ struct smc {
     uint32_t status_seen;    // OR of every status since the last reset
 };
 
+// Which fields of struct smc_terms a step wrote (bits of smc_terms.have).
+enum smc_terms_have {
+    SMC_HAVE_FLAG = 1,  // flag: the inputs were finite
+    SMC_HAVE_LAW = 2,   // rho .. s2: rho >= rho_min as well (the law ran to its voltages)
+};
+
+// The intermediate values of one step (smc_step_terms), for a caller that reports them beside the voltages.
+struct smc_terms {
+    fs_real flag[PLAN_FLAG_LEN];  // the plan's flat flag at t (plan_flag)
+    fs_real rho;                  // sqrt(ia^2 + ib^2) (hypot where the squares would over- or underflow)
+    fs_real sphi, cphi;           // sin phi = ia / rho, cos phi = ib / rho (phi = atan2(ia, ib))
+    fs_real snr, cnr;             // sin and cos of Nr theta
+    fs_real acc;                  // the theta'' the law used: y[4], or the zero-load model's
+    fs_real s1, s2;               // the sliding variables of eq. (12)
+    uint32_t have;                // SMC_HAVE_* bits; the other fields are unset
+};
+
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
 // v_limit = 1e3 V and rho_min = 1e-6 A.
 void smc_params_default(struct smc_params *p);
@@ -62,5 +79,11 @@ void smc_reset(struct smc *s);
 // Returns the smc_status bits of this step; writes finite phase voltages v with hypot(v) <= v_limit for any
 // time t and measurement y = (ia, ib, omega, theta, theta'') (y[4] read in SMC_IDEAL mode only).
 uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2]);
+
+// Returns smc_step's status and writes its voltages v, bit for bit; also writes the step's intermediate values
+// into w (w->have says which). nr_trig: NULL, or sin and cos of Nr y[3] already computed by the caller (the
+// controller's Nr), which the step then uses instead of computing them.
+uint32_t smc_step_terms(struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig, fs_real v[2],
+                        struct smc_terms *w);
 
 #endif

@@ -62,6 +62,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     struct reader r = {data, size};
     struct smc_params p;
     struct smc s, s2;
+    struct smc_terms w;
     double t, y[5], v[2], v2[2], x[4], vff[2], f[PLAN_FLAG_LEN], norm;
     uint32_t st, st2;
     uint8_t head;
@@ -115,5 +116,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     st2 = smc_step(&s2, t, y, v2);  // no hidden state: the same call gives the same bits
     if (st2 != st || memcmp(v, v2, sizeof v) != 0)
         FAIL("the same call gave different results");
+    st2 = smc_step_terms(&s2, t, y, NULL, v2, &w);  // the variant that reports its intermediate values
+    if (st2 != st || memcmp(v, v2, sizeof v) != 0)
+        FAIL("smc_step_terms differs from smc_step");
+    if ((w.have == 0) != (st == SMC_NONFINITE))
+        FAIL("smc_step_terms: no intermediate values iff the inputs are non-finite");
     return 0;
 }

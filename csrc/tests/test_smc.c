@@ -122,11 +122,57 @@ static int guard_checks(void)
     return 0;
 }
 
+// Returns 0; smc_step_terms gives smc_step's bits and the step's intermediate values, with and without the
+// caller's sin and cos of Nr theta, on the law's path and on the faults that stop it early.
+static int terms_checks(void)
+{
+    struct smc_params p;
+    struct smc s;
+    struct smc_terms w;
+    double f[PLAN_FLAG_LEN], y[5] = {0.3, 0.2, 5.0, 0.01, 40.0}, v[2], vt[2], trig[2], rho, acc, s2;
+    double faults[3][5] = {{NAN, 0.2, 5.0, 0.01, 40.0}, {0, 0, 5.0, 0.01, 40.0}, {1e-7, 0, 5.0, 0.01, 40.0}};
+    uint32_t st, stt;
+    int mode, k, given;
+    smc_params_default(&p);
+    for (mode = SMC_IDEAL; mode <= SMC_MODEL; mode++) {
+        p.measurement = mode;
+        smc_init(&s, &p);
+        trig[0] = sin(p.motor.Nr * y[3]), trig[1] = cos(p.motor.Nr * y[3]);
+        for (given = 0; given < 2; given++) {
+            st = smc_step(&s, 0.03, y, v);
+            stt = smc_step_terms(&s, 0.03, y, given ? trig : NULL, vt, &w);
+            CHECK(st == stt && v[0] == vt[0] && v[1] == vt[1], "mode %d trig %d: terms step differs (%.17g %.17g)",
+                  mode, given, vt[0] - v[0], vt[1] - v[1]);
+            CHECK(w.have == (SMC_HAVE_FLAG | SMC_HAVE_LAW), "mode %d: have %u", mode, w.have);
+            plan_eval(&p.plan, 0.03, f);
+            rho = hypot(y[0], y[1]);
+            acc = mode == SMC_IDEAL ? y[4] : motor_acceleration(&p.motor, y, 0);
+            s2 = acc - f[PLAN_DDTHETA] + s.alpha2 * (y[2] - f[PLAN_DTHETA]) + s.alpha1 * (y[3] - f[PLAN_THETA]);
+            for (k = 0; k < PLAN_FLAG_LEN; k++)
+                CHECK(fabs(w.flag[k] - f[k]) <= 1e-15 * fabs(f[k]), "flag[%d] %.17g vs %.17g", k, w.flag[k], f[k]);
+            CHECK(fabs(w.rho - rho) <= 2e-16 * rho && fabs(w.s1 - (rho - f[PLAN_RHO])) <= 1e-15 * rho
+                      && fabs(w.sphi - y[0] / rho) <= 1e-15 && fabs(w.cphi - y[1] / rho) <= 1e-15
+                      && fabs(w.snr - trig[0]) <= 1e-15 && fabs(w.cnr - trig[1]) <= 1e-15
+                      && fabs(w.acc - acc) <= 1e-12 * fabs(acc) && fabs(w.s2 - s2) <= 1e-12 * fabs(s2),
+                  "mode %d trig %d: terms rho %.17g s1 %.17g acc %.17g s2 %.17g", mode, given, w.rho, w.s1, w.acc, w.s2);
+        }
+    }
+    // Faults before the law: no flag for a non-finite input, the flag only when rho < rho_min.
+    for (k = 0; k < 3; k++) {
+        st = smc_step(&s, 0.03, faults[k], v);
+        stt = smc_step_terms(&s, 0.03, faults[k], NULL, vt, &w);
+        CHECK(st == stt && vt[0] == 0 && vt[1] == 0, "fault case %d: status %u vs %u", k, stt, st);
+        CHECK(w.have == (k == 0 ? 0u : (uint32_t)SMC_HAVE_FLAG), "fault case %d: have %u", k, w.have);
+    }
+    return 0;
+}
+
 // Returns 0 after running the controller checks.
 int test_smc(void)
 {
     init_checks();
     law_checks();
     guard_checks();
+    terms_checks();
     return 0;
 }
