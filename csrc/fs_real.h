@@ -72,6 +72,18 @@ static inline void fs_sincos(fs_real x, fs_real *s, fs_real *c)
     *c = fs_cos(x);
 }
 
+// Returns the larger of a and b.
+static inline fs_real fs_max(fs_real a, fs_real b)
+{
+    return a > b ? a : b;
+}
+
+// Returns the smaller of a and b.
+static inline fs_real fs_min(fs_real a, fs_real b)
+{
+    return a < b ? a : b;
+}
+
 // isfinite is a type-generic macro in C99 <math.h>; this names it once for the whole core.
 #define fs_isfinite(x) isfinite(x)
 

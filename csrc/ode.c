@@ -26,18 +26,6 @@ static const fs_real d_[7] = {FS_C(-12715105075.0) / FS_C(11282082432.0), 0, FS_
 #define FAC_MAX FS_C(10.0)
 #define EPS_T FS_C(1e-14)
 
-// Returns the larger of two values.
-static fs_real max2(fs_real a, fs_real b)
-{
-    return a > b ? a : b;
-}
-
-// Returns the smaller of two values.
-static fs_real min2(fs_real a, fs_real b)
-{
-    return a < b ? a : b;
-}
-
 // Returns the calls' result of f, counting the evaluation.
 static int eval(struct ode_dopri5 *s, fs_real t, const fs_real *x, fs_real *dx)
 {
@@ -65,7 +53,7 @@ fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void 
         dny += (x[i] / sk) * (x[i] / sk);
     }
     h = (dnf <= FS_C(1e-10) || dny <= FS_C(1e-10)) ? FS_C(1e-6) : fs_sqrt(dny / dnf) * FS_C(0.01);
-    h = min2(h, p->h_max);
+    h = fs_min(h, p->h_max);
     for (i = 0; i < n; i++)
         x1[i] = x[i] + h * f0[i];
     if (f(ctx, t + h, x1, f1))
@@ -74,9 +62,9 @@ fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void 
         sk = p->atol + p->rtol * fs_fabs(x[i]);
         der2 += ((f1[i] - f0[i]) / sk) * ((f1[i] - f0[i]) / sk);
     }
-    der12 = max2(fs_sqrt(der2) / h, fs_sqrt(dnf));
-    h1 = der12 <= FS_C(1e-15) ? max2(FS_C(1e-6), h * FS_C(1e-3)) : fs_pow(FS_C(0.01) / der12, FS_C(1.0) / order);
-    return min2(min2(100 * h, h1), p->h_max);
+    der12 = fs_max(fs_sqrt(der2) / h, fs_sqrt(dnf));
+    h1 = der12 <= FS_C(1e-15) ? fs_max(FS_C(1e-6), h * FS_C(1e-3)) : fs_pow(FS_C(0.01) / der12, FS_C(1.0) / order);
+    return fs_min(fs_min(100 * h, h1), p->h_max);
 }
 
 // Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts an
@@ -113,7 +101,7 @@ static fs_real trial_error(const struct ode_dopri5 *s, const fs_real *xn, fs_rea
         ei = 0;
         for (j = 0; j < 7; j++)
             ei += e_[j] * s->k[j][i];
-        sk = s->p.atol + s->p.rtol * max2(fs_fabs(s->x[i]), fs_fabs(xn[i]));
+        sk = s->p.atol + s->p.rtol * fs_max(fs_fabs(s->x[i]), fs_fabs(xn[i]));
         err += (h * ei / sk) * (h * ei / sk);
     }
     err = fs_sqrt(err / (fs_real)s->n);
@@ -150,27 +138,27 @@ int ode_dopri5_step(struct ode_dopri5 *s, fs_real t_end)
     size_t i;
     int j;
     for (;;) {
-        h = min2(s->h, s->p.h_max);
+        h = fs_min(s->h, s->p.h_max);
         last = s->t + FS_C(1.01) * h >= t_end;
         if (last)
             h = t_end - s->t;
-        if (!(h > EPS_T * max2(fs_fabs(s->t), 1)))
+        if (!(h > EPS_T * fs_max(fs_fabs(s->t), 1)))
             return last && h == 0 ? ODE_OK : ODE_EHMIN;
         failed = trial_step(s, h, xn) != 0;
         err = failed ? -1 : trial_error(s, xn, h);
         if (err < 0 || err > 1) {
             // Reject: shrink by the error estimate, or tenfold when f failed or the trial was not finite.
             fac11 = err < 0 ? 0 : fs_pow(err, expo1);
-            s->h = err < 0 ? h * FS_C(0.1) : h / min2(1 / FAC_MIN, fac11 / SAFE);
+            s->h = err < 0 ? h * FS_C(0.1) : h / fs_min(1 / FAC_MIN, fac11 / SAFE);
             s->rejected++;
             rejected = true;
-            if (failed && !(s->h > EPS_T * max2(fs_fabs(s->t), 1)))
+            if (failed && !(s->h > EPS_T * fs_max(fs_fabs(s->t), 1)))
                 return ODE_ERHS;
             continue;
         }
         fac11 = fs_pow(err, expo1);
-        fac = max2(1 / FAC_MAX, min2(1 / FAC_MIN, fac11 / fs_pow(s->facold, BETA) / SAFE));
-        s->facold = max2(err, FS_C(1e-4));
+        fac = fs_max(1 / FAC_MAX, fs_min(1 / FAC_MIN, fac11 / fs_pow(s->facold, BETA) / SAFE));
+        s->facold = fs_max(err, FS_C(1e-4));
         for (i = 0; i < s->n; i++) {
             s->rcont[0][i] = s->x[i];
             s->rcont[1][i] = xn[i] - s->x[i];
@@ -184,7 +172,7 @@ int ode_dopri5_step(struct ode_dopri5 *s, fs_real t_end)
         }
         s->t_old = s->t;
         s->t = last ? t_end : s->t + h;
-        s->h = rejected ? min2(h / fac, h) : h / fac;
+        s->h = rejected ? fs_min(h / fac, h) : h / fac;
         s->steps++;
         return ODE_OK;
     }

@@ -102,18 +102,6 @@ static const fs_real d_[4][16] = {
 #define FAC_MAX FS_C(6.0)
 #define EPS_T FS_C(1e-14)
 
-// Returns the larger of two values.
-static fs_real max2(fs_real a, fs_real b)
-{
-    return a > b ? a : b;
-}
-
-// Returns the smaller of two values.
-static fs_real min2(fs_real a, fs_real b)
-{
-    return a < b ? a : b;
-}
-
 // Returns f's result, counting the evaluation.
 static int eval(struct ode_dop853 *s, fs_real t, const fs_real *x, fs_real *dx)
 {
@@ -178,7 +166,7 @@ static fs_real trial_error(const struct ode_dop853 *s, const fs_real *xn, fs_rea
             e5 += e5_[j] * s->k[j][i];
             e3 += (a_[12][j] - bhat_[j]) * s->k[j][i];
         }
-        sk = s->p.atol + s->p.rtol * max2(fs_fabs(s->x[i]), fs_fabs(xn[i]));
+        sk = s->p.atol + s->p.rtol * fs_max(fs_fabs(s->x[i]), fs_fabs(xn[i]));
         err5 += (e5 / sk) * (e5 / sk);
         err3 += (e3 / sk) * (e3 / sk);
     }
@@ -213,11 +201,11 @@ int ode_dop853_step(struct ode_dop853 *s, fs_real t_end)
     bool rejected = false, last, failed;
     size_t i;
     for (;;) {
-        h = min2(s->h, s->p.h_max);
+        h = fs_min(s->h, s->p.h_max);
         last = s->t + FS_C(1.01) * h >= t_end;
         if (last)
             h = t_end - s->t;
-        if (!(h > EPS_T * max2(fs_fabs(s->t), 1)))
+        if (!(h > EPS_T * fs_max(fs_fabs(s->t), 1)))
             return last && h == 0 ? ODE_OK : ODE_EHMIN;
         t_new = last ? t_end : s->t + h;
         failed = trial_step(s, h, xn) != 0;
@@ -230,14 +218,14 @@ int ode_dop853_step(struct ode_dop853 *s, fs_real t_end)
         fac11 = err > 0 ? fs_sqrt(fs_sqrt(fs_sqrt(err))) : 0;  // err^(1/8)
         if (err < 0 || err > 1) {
             // Reject: shrink by the error estimate, or tenfold when f failed or the trial was not finite.
-            s->h = err < 0 ? h * FS_C(0.1) : h / min2(1 / FAC_MIN, fac11 / SAFE);
+            s->h = err < 0 ? h * FS_C(0.1) : h / fs_min(1 / FAC_MIN, fac11 / SAFE);
             s->rejected++;
             rejected = true;
-            if (failed && !(s->h > EPS_T * max2(fs_fabs(s->t), 1)))
+            if (failed && !(s->h > EPS_T * fs_max(fs_fabs(s->t), 1)))
                 return ODE_ERHS;
             continue;
         }
-        fac = max2(1 / FAC_MAX, min2(1 / FAC_MIN, fac11 / SAFE));
+        fac = fs_max(1 / FAC_MAX, fs_min(1 / FAC_MIN, fac11 / SAFE));
         // The cubic Hermite part of the dense output (end states and slopes); d's part waits for a request.
         for (i = 0; i < s->n; i++) {
             s->rcont[0][i] = s->x[i];
@@ -250,7 +238,7 @@ int ode_dop853_step(struct ode_dop853 *s, fs_real t_end)
         s->dense_ready = false;
         s->t_old = s->t;
         s->t = t_new;
-        s->h = rejected ? min2(h / fac, h) : h / fac;
+        s->h = rejected ? fs_min(h / fac, h) : h / fac;
         s->steps++;
         return ODE_OK;
     }

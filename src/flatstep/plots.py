@@ -54,6 +54,15 @@ def plot_run(result: SimResult, title: str = "", path: str | Path | None = None)
     return _finish(fig, title, path)
 
 
+def plot_traces(ax, rows: list[dict], scale: float, plan, lw: float = 0.7) -> None:
+    """Draw the tracking-error trace of every successful batch row (``series_t``, ``series_theta_error``)
+    divided by ``scale`` on ``ax``, with the move shaded."""
+    for row in rows:
+        if row["error"] is None:
+            ax.plot(row["series_t"], np.asarray(row["series_theta_error"]) / scale, lw=lw, alpha=0.7)
+    ax.axvspan(plan.t0, plan.tf, color="0.92", zorder=0)
+
+
 def plot_robustness(study: dict, count: float | None, plan, title: str = "", path: str | Path | None = None):
     """Tracking-error traces of every plant of a robustness study, one panel per gain set; dotted lines at
     +-1 count (the move target) and +-0.5 count (the at-rest target)."""
@@ -61,10 +70,7 @@ def plot_robustness(study: dict, count: float | None, plan, title: str = "", pat
     fig, axes = plt.subplots(len(sets), 1, figsize=(9, 3.6 * len(sets)), constrained_layout=True, squeeze=False)
     scale, unit = (count, "counts") if count else (1.0, "rad")
     for ax, (label, s) in zip(axes[:, 0], sets.items()):
-        for row in s["rows"]:
-            if row["error"] is None:
-                ax.plot(row["series_t"], np.asarray(row["series_theta_error"]) / scale, lw=0.7, alpha=0.7)
-        ax.axvspan(plan.t0, plan.tf, color="0.9", zorder=0)
+        plot_traces(ax, s["rows"], scale, plan)
         if count:
             for y, ls in ((1, ":"), (-1, ":"), (0.5, "--"), (-0.5, "--")):
                 ax.axhline(y, color="k", ls=ls, lw=0.8)

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .plots import _finish, plt
+from .plots import _finish, plot_traces, plt
 from .plan import RestToRest
 from .result import SimResult
 
@@ -40,10 +40,7 @@ def plot_plants(study: dict[str, dict], labels: dict[str, str], plan: RestToRest
                              squeeze=False)
     scale, unit = (count, "counts") if count else (1.0, "rad")
     for ax, (kind, s) in zip(axes[:, 0], study.items()):
-        for row in s["rows"]:
-            if row["error"] is None:
-                ax.plot(row["series_t"], np.asarray(row["series_theta_error"]) / scale, lw=0.6, alpha=0.7)
-        ax.axvspan(plan.t0, plan.tf, color="0.92", zorder=0)
+        plot_traces(ax, s["rows"], scale, plan, lw=0.6)
         worst = s["worst"].get("move_max", np.nan) if s["worst"] else np.nan
         ax.set_title(f"{labels.get(kind, kind)}: {s['runs'] - s['failed']}/{s['runs']} runs, worst max error "
                      f"during the move {worst / scale:.3g} {unit}", fontsize=10)
