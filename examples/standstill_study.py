@@ -1,7 +1,7 @@
 """Standstill on a quantized encoder: what holding the rotor after the move costs, strategy by strategy.
 
 Run: python examples/standstill_study.py [--workers N]
-For the 14-bit and the 4000-count drive files, every +-10 % plant (32 sign combinations), prints the worst
+For the 14-bit, the 4000-count and the NEMA 17 drive files, every +-10 % plant (32 sign combinations), prints the worst
 |theta - theta*| in encoder counts during the move, at rest (t >= tf + 5 ms) and at the end, for the
 designed loop and for the standstill strategies tried against its half-count limit cycle (docs/drive.md,
 "Standstill"). Each strategy changes the loop only from tf on; the move itself is the designed one.
@@ -22,10 +22,10 @@ from flatstep.control.smc import FlatnessSMC
 from flatstep.observers import Observer
 from flatstep.plant import plant_rhs
 from flatstep.robustness import REST_AFTER, perturbed, plant_errors
-from flatstep.scenario_file import load_scenario
+from flatstep.scenario_file import Robustness, load_scenario
 
 HERE = Path(__file__).parent
-FILES = ("drive-20khz-14bit.toml", "drive-20khz-optical-4000.toml")
+FILES = ("drive-20khz-14bit.toml", "drive-20khz-optical-4000.toml", "nema17-20khz.toml")
 
 #: strategy -> what it changes from tf on (see docs/drive.md, "Standstill")
 STRATEGIES = {
@@ -124,7 +124,7 @@ def worst(job):
     scenario, study = load_scenario(HERE / file)
     plan, q = scenario.plan, scenario.sensors.angle_step
     out = np.zeros(3)
-    for plant_case in perturbed(scenario, plant_errors(study)):
+    for plant_case in perturbed(scenario, plant_errors(study or Robustness())):
         t, e = run(plant_case, **options)
         e = np.abs(e) / q
         out = np.maximum(out, [e[(t >= plan.t0) & (t <= plan.tf)].max(), e[t >= plan.tf + REST_AFTER].max(), e[-1]])
