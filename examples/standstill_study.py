@@ -20,8 +20,8 @@ import numpy as np
 
 from flatstep.control.smc import FlatnessSMC
 from flatstep.observers import Observer
-from flatstep.plant import plant_rhs
 from flatstep.robustness import REST_AFTER, perturbed, plant_errors
+from flatstep.sampled import _rk4  # the reference loop's RK4 step over one substep
 from flatstep.scenario_file import Robustness, load_scenario
 
 HERE = Path(__file__).parent
@@ -39,15 +39,6 @@ STRATEGIES = {
     "current vector pinned on theta2, damping 0.4": {"pin_damping": 0.4},
     "current vector pinned on theta2, damping 0.7": {"pin_damping": 0.7},
 }
-
-
-def _rk4(x, v, h, plant, load):
-    f = lambda y: plant_rhs(y, v, plant, load)  # noqa: E731
-    k1 = f(x)
-    k2 = f(x + 0.5 * h * k1)
-    k3 = f(x + 0.5 * h * k2)
-    k4 = f(x + h * k3)
-    return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
 def _embedded(observer: Observer, motor, Ts: float, order: int):
