@@ -21,7 +21,7 @@ void smc_params_default(struct smc_params *p)
 {
     struct motor_params m = {FS_C(8.4), FS_C(0.010), FS_C(0.05), FS_C(3.6e-6), FS_C(1e-4), 50};
     struct plan pl = {0, FS_C(0.02), FS_C(0.4), FS_C(0.4), FS_C(0.02), FS_C(0.04)};
-    struct smc_gains g = {100, 100, FS_C(0.005), FS_C(0.005), FS_C(0.8), 10};
+    struct smc_gains g = {100, 100, FS_C(0.005), FS_C(0.005), FS_C(0.8), 10, 0};
     p->motor = m;
     p->plan = pl;
     p->gains = g;
@@ -47,6 +47,8 @@ int smc_init(struct smc *s, const struct smc_params *p)
     if (!(positive(g->W1) && positive(g->W2) && positive(g->eps1) && positive(g->eps2) && positive(g->xi)
           && positive(g->wn)))
         return SMC_EGAINS;
+    if (!(fs_isfinite(g->hold_damping) && g->hold_damping >= 0))
+        return SMC_EGAINS;
     if (p->measurement != SMC_IDEAL && p->measurement != SMC_MODEL)
         return SMC_EMEASUREMENT;
     if (!positive(p->v_limit) || p->v_limit < FS_C(1e-3) || !positive(p->rho_min))
@@ -55,6 +57,15 @@ int smc_init(struct smc *s, const struct smc_params *p)
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
     s->alpha2 = 2 * g->xi * g->wn;
+    if (g->hold_damping > 0) {  // rho2 > 0 (plan_valid); Km rho2 may still underflow, the gain and rate overflow
+        if (!(p->motor.Km * p->plan.rho2 > 0))
+            return SMC_EGAINS;
+        s->hold_gain = 2 * g->hold_damping * fs_sqrt(p->motor.J * p->motor.Nr / (p->motor.Km * p->plan.rho2));
+        fs_sincos(p->motor.Nr * p->plan.theta2, &s->hold_s2, &s->hold_c2);
+        s->hold_lambda = g->W1 / g->eps1;
+        if (!(fs_isfinite(s->hold_gain) && fs_isfinite(s->hold_lambda)))
+            return SMC_EGAINS;
+    }
     // v_limit^2 less a margin of 16 rounding units (v0^2 + v1^2 is within 2 of |v|^2), capped below overflow.
     s->v_limit2_below = p->v_limit < fs_sqrt(FS_REAL_MAX) ? p->v_limit * p->v_limit * (1 - 16 * FS_REAL_EPSILON)
                                                              : FS_REAL_MAX;
@@ -66,6 +77,21 @@ int smc_init(struct smc *s, const struct smc_params *p)
 void smc_reset(struct smc *s)
 {
     s->status_seen = SMC_OK;
+}
+
+// Returns nothing; writes the detent hold's voltages (smc.h) for y = (ia, ib, omega, theta) with sN, cN the sine
+// and cosine of Nr theta.
+SMC_INLINE void smc_hold(const struct smc *s, const fs_real y[5], fs_real sN, fs_real cN, fs_real v[2])
+{
+    const struct motor_params *m = &s->p.motor;
+    fs_real rho2 = s->p.plan.rho2, sp = -s->hold_gain * y[2], cp, ia, ib, emf;
+    sp = sp > 1 ? 1 : sp < -1 ? -1 : sp;  // a NaN cannot reach here: the inputs were checked finite
+    cp = fs_sqrt(1 - sp * sp);
+    ia = rho2 * (s->hold_c2 * cp - s->hold_s2 * sp);
+    ib = rho2 * (s->hold_s2 * cp + s->hold_c2 * sp);
+    emf = m->Km * y[2];
+    v[0] = m->R * ia + m->L * s->hold_lambda * (ia - y[0]) - emf * sN;
+    v[1] = m->R * ib + m->L * s->hold_lambda * (ib - y[1]) + emf * cN;
 }
 
 // Returns the status bits of the unguarded law; writes its voltages (0 V on a fault) and, when w is not NULL,
@@ -104,9 +130,14 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     dde = acc - ref[PLAN_DDTHETA];
     s1 = rho - ref[PLAN_RHO];
     s2 = dde + s->alpha2 * de + s->alpha1 * e;
-    gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
-    gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
-    flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2], v);
+    if (g->hold_damping > 0 && t >= s->p.plan.tf) {
+        flat = FLAT_OK;
+        smc_hold(s, y, sN, cN, v);
+    } else {
+        gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
+        gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
+        flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2], v);
+    }
     if (w) {
         w->rho = rho;
         w->sphi = a.sphi;

@@ -30,6 +30,8 @@ struct smc_gains {
     fs_real W1, W2;      // reaching gains [A/s], [rad/s^3], > 0
     fs_real eps1, eps2;  // boundary-layer widths of s/(|s| + eps), > 0
     fs_real xi, wn;      // alpha1 = wn^2, alpha2 = 2 xi wn, > 0
+    fs_real hold_damping;  // 0: track the plan to the end; > 0: from tf on, hold the detent of theta2 with this
+                           // damping ratio (smc_step)
 };
 
 struct smc_params {
@@ -46,6 +48,9 @@ struct smc {
     struct plan_coef plan;   // p.plan ready to evaluate (plan_init)
     fs_real alpha1, alpha2;  // wn^2, 2 xi wn
     fs_real v_limit2_below;  // just below v_limit^2: va^2 + vb^2 under it needs no hypot
+    fs_real hold_gain;       // 2 hold_damping sqrt(J Nr / (Km rho2)): sin of the hold's torque angle per rad/s
+    fs_real hold_s2, hold_c2;  // sin and cos of Nr theta2
+    fs_real hold_lambda;       // W1 / eps1: the rate of the hold's current loop [1/s]
     uint32_t status_seen;    // OR of every status since the last reset
 };
 
@@ -78,6 +83,9 @@ void smc_reset(struct smc *s);
 
 // Returns the smc_status bits of this step; writes finite phase voltages v with hypot(v) <= v_limit for any
 // time t and measurement y = (ia, ib, omega, theta, theta'') (y[4] read in SMC_IDEAL mode only).
+// With gains.hold_damping = zeta > 0 and t >= tf, the voltages are the detent hold's instead of the law's:
+// i* = rho2 (cos p, sin p), p = Nr theta2 + asin(clip(-2 zeta sqrt(J Nr / (Km rho2)) omega, +-1)),
+// v = R i* + L (W1 / eps1) (i* - i) + Km omega (-sin Nr theta, cos Nr theta) (flatstep.control.smc).
 uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2]);
 
 // Returns smc_step's status and writes its voltages v, bit for bit; also writes the step's intermediate values

@@ -85,6 +85,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     if (head & 4)
         p.measurement = (int)(head >> 3);  // mostly invalid modes: smc_init must refuse them
+    else if (head & 8)  // the detent hold from tf on
+        p.gains.hold_damping = head & 2 ? next(&r, 0.7) : 0.7;
     if (smc_init(&s, &p) != SMC_PARAMS_OK)
         return 0;
     t = next(&r, 0.03);

@@ -40,10 +40,10 @@ RUNS = {  # name: (measurement, simulate options)
 }
 
 
-def run_pair(motor, plan, measurement, options, **kw):
+def run_pair(motor, plan, measurement, options, gains=DESIGNED, **kw):
     """The same run on the C engine and on the Python reference: 60 ms at 20 kHz, perturbed plant, 1e-5 N m."""
     plant = motor.replace(R=1.1 * motor.R, L=0.9 * motor.L, Km=0.9 * motor.Km, J=1.1 * motor.J, B=0.9 * motor.B)
-    ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, measurement)
+    ctrl = fs.FlatnessSMC(motor, plan, gains, measurement)
     kw = {"load": 1e-5, "control_period": TS, "substeps": 4, "drive": Drive(), **options, **kw}
     return fs.simulate(plant, plan, ctrl, engine="c", **kw), fs.simulate(plant, plan, ctrl, engine="python", **kw)
 
@@ -66,6 +66,19 @@ def test_c_drive_loop_matches_the_reference(motor, plan, name):
     assert c.summary()["max_abs_theta_error_move"] < 5 * COUNT  # the loop tracks: a check on both engines
     if measurement == "model":  # the controller saw the encoder itself: not one reading may differ
         np.testing.assert_array_equal(c.meta["measured"]["theta"], py.meta["measured"]["theta"])
+
+
+def test_c_detent_hold_matches_the_reference(motor, plan):
+    """The hold from tf on (gains.hold_damping) on both engines, with the observer it is meant for."""
+    gains = fs.SMCGains(**{**DESIGNED.as_dict(), "hold_damping": 0.7})
+    c, py = run_pair(motor, plan, "observer", dict(sensors=NOISY, observer=Observer(1500.0, 2)), gains=gains)
+    np.testing.assert_allclose(c.theta, py.theta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose([c.va, c.vb], [py.va, py.vb], rtol=0, atol=1e-9)
+    plain, _ = run_pair(motor, plan, "observer", dict(sensors=NOISY, observer=Observer(1500.0, 2)))
+    rest = c.t >= plan.tf
+    assert np.array_equal(c.va[~rest], plain.va[~rest]) and not np.array_equal(c.va[rest], plain.va[rest])
+    i_star = fs.FlatnessSMC(motor, plan, gains).hold_currents(0.0)
+    np.testing.assert_allclose([c.ia[-1], c.ib[-1]], i_star, atol=0.02)  # the currents sit on the detent
 
 
 def test_the_saturation_runs_use_the_bus(motor, plan):

@@ -1,4 +1,5 @@
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +39,21 @@ def test_study_reports_worst_values_in_counts():
     row = designed["rows"][0]
     e = np.abs(np.array(row["series_theta_error"])) / scenario.sensors.angle_step
     assert designed["worst_counts"]["final"] >= e[-1]
+
+
+@pytest.mark.parametrize("name", ["drive-20khz-14bit", "drive-20khz-optical-4000"])
+def test_realistic_drives_meet_the_targets(name):
+    """Issue targets on all 32 plants (+-10 %), 1e-5 N m: <= 1 count in the move, <= 1/2 count at rest (from
+    tf + 5 ms, here over 0.2 s), no voltage beyond the bus; and without the detent hold the rest target fails."""
+    scenario, study = load_scenario(DRIVE.parent / f"{name}.toml")
+    scenario = replace(scenario, t_end=0.2)
+    held = run_study(scenario, study, with_paper_gains=False)["sets"]["scenario"]
+    assert held["failed"] == 0 and held["runs"] == 32
+    assert held["worst_counts"]["move"] <= 1.0 and held["worst_counts"]["rest"] <= 0.5
+    assert held["worst_rad"]["peak_voltage"] <= scenario.drive.v_bus
+    plain = replace(scenario, gains=replace(scenario.gains, hold_damping=None))
+    hunting = run_study(plain, study, with_paper_gains=False)["sets"]["scenario"]
+    assert hunting["worst_counts"]["rest"] > 0.5
 
 
 def test_cli_robustness_and_design(tmp_path, capsys):

@@ -45,6 +45,7 @@ def write(tmp_path, text):
     ("[plan]\ntheta3 = 1.0", r"unknown key\(s\) \['theta3'\] in \[plan\]"),
     ("[plan]\nrho1 = 0.0", r"\[plan\] rho1=0.0"),
     ("[controller]\nW1 = 0", r"\[controller\] W1=0.0"),
+    ("[controller]\nhold_damping = -0.7", r"\[controller\] hold_damping=-0.7"),
     ("[sensors]\nencoder_counts = 16384", "control_rate is needed"),
     ("[drive]\ncontrol_rate = -5.0", "control_rate=-5.0"),
     ("[drive]\ncontrol_rate = 2e4\nv_bus = 0", r"\[drive\] v_bus=0"),

@@ -18,6 +18,7 @@ def test_gains_defaults_are_the_papers():
 @pytest.mark.parametrize("kwargs, match", [
     (dict(W1=0.0), "W1=0.0"), (dict(W2=-1.0), "W2=-1.0"), (dict(eps1=0.0), "eps1=0.0"),
     (dict(eps2=float("nan")), "eps2=nan"), (dict(xi=0.0), "xi=0.0"), (dict(wn=-10.0), "wn=-10.0"),
+    (dict(hold_damping=0.0), "hold_damping=0.0"), (dict(hold_damping=float("inf")), "hold_damping=inf"),
 ])
 def test_gains_bad_values(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -82,3 +83,45 @@ def test_step_interface(motor, plan):
     np.testing.assert_allclose(v, motor.R * x[:2], rtol=1e-12, atol=1e-14)
     v2, _ = fs.FlatnessSMC(motor, plan).step(None, [*x, 0.0], 0.01)
     np.testing.assert_allclose(v2, v, rtol=1e-14)
+
+
+HOLD = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500, hold_damping=0.7)
+
+
+def test_hold_rests_on_the_detent_of_theta2(motor, plan):
+    ctrl = fs.FlatnessSMC(motor, plan, HOLD, "model")
+    i_star = ctrl.hold_currents(0.0)
+    assert np.hypot(*i_star) == pytest.approx(plan.rho2, rel=1e-14)
+    assert torque([*i_star, 0.0, plan.theta2], motor) == pytest.approx(0.0, abs=1e-15)  # no torque on theta2...
+    # ...and a restoring one beside it: the stiffness of the detent, Km rho2 Nr
+    dth = 1e-6
+    assert torque([*i_star, 0.0, plan.theta2 + dth], motor) / dth == pytest.approx(
+        -motor.Km * plan.rho2 * motor.Nr, rel=1e-5)
+    x = np.array([*i_star, 0.0, plan.theta2])
+    np.testing.assert_allclose(ctrl.step(None, x, plan.tf)[0], motor.R * i_star, rtol=1e-12)  # the static voltages
+
+
+def test_hold_damps_the_speed(motor, plan):
+    ctrl = fs.FlatnessSMC(motor, plan, HOLD, "model")
+    K = motor.Km * plan.rho2 * motor.Nr
+    for omega in (1e-3, -2e-3):
+        i_star = ctrl.hold_currents(omega)
+        assert torque([*i_star, omega, plan.theta2], motor) == pytest.approx(
+            -2 * 0.7 * np.sqrt(K * motor.J) * omega, rel=1e-6)
+    big = ctrl.hold_currents(1e6)  # the damping torque clipped at the largest the current can make
+    assert torque([*big, 0.0, plan.theta2], motor) == pytest.approx(-motor.Km * plan.rho2, rel=1e-12)
+
+
+def test_hold_starts_at_tf_and_drives_the_currents_there(motor, plan):
+    plain = fs.FlatnessSMC(motor, plan, fs.SMCGains(**{**HOLD.as_dict(), "hold_damping": None}), "model")
+    hold = fs.FlatnessSMC(motor, plan, HOLD, "model")
+    x = np.array([0.1, -0.3, 0.5, plan.theta2 + 1e-3])
+    t = np.array([plan.t0, 0.5 * (plan.t0 + plan.tf), np.nextafter(plan.tf, 0)])
+    X = np.repeat(x[:, None], 3, axis=1)
+    np.testing.assert_array_equal(hold.voltages(t, X), plain.voltages(t, X))  # the law until tf
+    v = hold.voltages(np.array([plan.tf, 1.0]), np.repeat(x[:, None], 2, axis=1))
+    lam = HOLD.W1 / HOLD.eps1
+    i_star = hold.hold_currents(x[2])
+    emf = motor.Km * x[2] * np.array([-np.sin(motor.Nr * x[3]), np.cos(motor.Nr * x[3])])
+    expected = motor.R * i_star + motor.L * lam * (i_star - x[:2]) + emf
+    np.testing.assert_allclose(v, np.repeat(expected[:, None], 2, axis=1), rtol=1e-12)

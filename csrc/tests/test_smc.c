@@ -34,6 +34,12 @@ static int init_checks(void)
     CHECK(smc_init(&s, &q) == SMC_ELIMITS, "v_limit = 1e-309");
     q = p, q.rho_min = 0;
     CHECK(smc_init(&s, &q) == SMC_ELIMITS, "rho_min = 0");
+    q = p, q.gains.hold_damping = -0.7;
+    CHECK(smc_init(&s, &q) == SMC_EGAINS, "hold_damping < 0");
+    q = p, q.gains.hold_damping = NAN;
+    CHECK(smc_init(&s, &q) == SMC_EGAINS, "hold_damping = NaN");
+    q = p, q.gains.hold_damping = 1e300, q.plan.rho2 = 1e-300;  // the hold's gain overflows
+    CHECK(smc_init(&s, &q) == SMC_EGAINS, "hold gain = inf");
     return 0;
 }
 
@@ -167,6 +173,42 @@ static int terms_checks(void)
     return 0;
 }
 
+// Returns 0; the detent hold: the law's voltages until tf, then v = R i* on the detent of theta2 at rest, and a
+// damping torque -2 zeta sqrt(K J) omega (K = Km rho2 Nr) from the hold's current vector when the rotor moves.
+static int hold_checks(void)
+{
+    struct smc_params p;
+    struct smc plain, hold;
+    const struct motor_params *m = &p.motor;
+    double y[5], v[2], vp[2], ia, ib, K, te, istar[2], omega = 2e-3, lam;
+    smc_params_default(&p);
+    p.measurement = SMC_MODEL;
+    smc_init(&plain, &p);
+    p.gains.hold_damping = 0.7;
+    CHECK(smc_init(&hold, &p) == SMC_PARAMS_OK, "hold_damping = 0.7 is valid");
+    y[0] = 0.1, y[1] = -0.3, y[2] = 0.5, y[3] = p.plan.theta2 + 1e-3, y[4] = NAN;
+    smc_step(&plain, 0.039, y, vp);
+    smc_step(&hold, 0.039, y, v);
+    CHECK(v[0] == vp[0] && v[1] == vp[1], "before tf the hold is the law");
+    // at rest on theta2 with the currents on the detent (ia, ib) = rho2 (cos Nr theta2, sin Nr theta2): v = R i
+    istar[0] = p.plan.rho2 * cos(m->Nr * p.plan.theta2), istar[1] = p.plan.rho2 * sin(m->Nr * p.plan.theta2);
+    y[0] = istar[0], y[1] = istar[1], y[2] = 0, y[3] = p.plan.theta2;
+    CHECK(smc_step(&hold, p.plan.tf, y, v) == SMC_OK, "hold at rest");
+    CHECK(fabs(v[0] - m->R * istar[0]) < 1e-12 && fabs(v[1] - m->R * istar[1]) < 1e-12, "v (%g, %g) vs R i* (%g, %g)",
+          v[0], v[1], m->R * istar[0], m->R * istar[1]);
+    // moving: the currents the hold drives to, from v = R i* + L lam (i* - i) + emf at i = the rest currents
+    y[2] = omega;
+    CHECK(smc_step(&hold, 0.05, y, v) == SMC_OK, "hold moving");
+    lam = p.gains.W1 / p.gains.eps1;
+    ia = (v[0] + m->Km * omega * sin(m->Nr * y[3]) + m->L * lam * istar[0]) / (m->R + m->L * lam);
+    ib = (v[1] - m->Km * omega * cos(m->Nr * y[3]) + m->L * lam * istar[1]) / (m->R + m->L * lam);
+    K = m->Km * p.plan.rho2 * m->Nr;
+    te = m->Km * (ib * cos(m->Nr * y[3]) - ia * sin(m->Nr * y[3]));
+    CHECK(rel_diff(te, -2 * 0.7 * sqrt(K * m->J) * omega) < 1e-6, "damping torque %g vs %g", te,
+          -2 * 0.7 * sqrt(K * m->J) * omega);
+    return 0;
+}
+
 // Returns 0 after running the controller checks.
 int test_smc(void)
 {
@@ -174,5 +216,6 @@ int test_smc(void)
     law_checks();
     guard_checks();
     terms_checks();
+    hold_checks();
     return 0;
 }

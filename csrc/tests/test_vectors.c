@@ -87,7 +87,7 @@ int test_vectors(const char *path)
             smc_params_default(&p);
             motor_from(a, &p.motor);
             p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11]};
-            p.gains = (struct smc_gains){a[12], a[13], a[14], a[15], a[16], a[17]};
+            p.gains = (struct smc_gains){a[12], a[13], a[14], a[15], a[16], a[17], 0};  // the vectors predate the hold
             p.measurement = (int)a[18];
             CHECK(smc_init(&s, &p) == SMC_PARAMS_OK, "line %d", lineno);
             CHECK(smc_step(&s, a[19], a + 20, out) == SMC_OK, "line %d: status", lineno);

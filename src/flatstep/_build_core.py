@@ -19,7 +19,8 @@ typedef double fs_real;
 
 struct motor_params { fs_real R; fs_real L; fs_real Km; fs_real J; fs_real B; int Nr; };
 struct plan { fs_real theta1; fs_real theta2; fs_real rho1; fs_real rho2; fs_real t0; fs_real tf; };
-struct smc_gains { fs_real W1; fs_real W2; fs_real eps1; fs_real eps2; fs_real xi; fs_real wn; };
+struct smc_gains { fs_real W1; fs_real W2; fs_real eps1; fs_real eps2; fs_real xi; fs_real wn;
+                   fs_real hold_damping; };
 struct smc_params { struct motor_params motor; struct plan plan; struct smc_gains gains; int measurement;
                     fs_real v_limit; fs_real rho_min; };
 struct smc { struct smc_params p; fs_real alpha1; fs_real alpha2; uint32_t status_seen; ...; };

@@ -83,7 +83,8 @@ def _smc_params(controller: FlatnessSMC, v_limit: float, rho_min: float) -> dict
     g = controller.gains
     # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state
     return dict(motor=_motor(controller.motor), plan=controller.plan.as_dict(),
-                gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn),
+                gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn,
+                           hold_damping=g.hold_damping or 0.0),
                 measurement=lib.SMC_MODEL if controller.measurement == "model" else lib.SMC_IDEAL,
                 v_limit=v_limit, rho_min=rho_min)
 

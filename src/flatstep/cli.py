@@ -45,7 +45,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 SIM_FLAGS = ("theta1", "theta2", "rho1", "rho2", "t0", "tf", "t_end", "load_torque", "W1", "W2", "eps1", "eps2",
-             "xi", "wn", "measurement")
+             "xi", "wn", "hold_damping", "measurement")
 
 
 def _scenario_from_flags(args: argparse.Namespace) -> Scenario:
@@ -108,6 +108,8 @@ def build_parser() -> argparse.ArgumentParser:
         ("--xi", g.xi, "damping of the theta error dynamics"), ("--wn", g.wn, "natural frequency [rad/s]"),
     ):
         sim.add_argument(flag, type=float, default=None, help=f"{help_} (default {default:g})")
+    sim.add_argument("--hold-damping", type=float, default=None,
+                     help="from tf on, hold the target's detent with this damping ratio (default: track the plan)")
     sim.add_argument("--measurement", choices=MEASUREMENTS, default=None,
                      help="ideal: true theta'' known (the paper); model: theta'' from the zero-load model")
     sim.add_argument("--x0", type=float, nargs=4, metavar=("IA", "IB", "OMEGA", "THETA"), default=None,

@@ -54,7 +54,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
-    print("designed gains: " + ", ".join(f"{k}={v:.6g}" for k, v in report["gains"].items()))
+    print("designed gains: " + ", ".join(f"{k}={v:.6g}" for k, v in report["gains"].items() if v is not None))
     print("observer: " + ", ".join(f"{k}={v:.6g}" for k, v in report["observer"].items()))
     print("rationale: " + ", ".join(f"{k}={v:.6g}" for k, v in report["rationale"].items()))
     for w in d.warnings:

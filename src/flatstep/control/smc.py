@@ -7,6 +7,23 @@ r"""The paper's flatness + sliding-mode law, eqs. (12)-(14), corrected, with the
 
 and the voltages are the flat inverse (eq. 9) with :math:`\dot\rho \to \Gamma_1`,
 :math:`\theta^{(3)} \to \Gamma_2`, evaluated at the measured state (:func:`flatstep.flat.flat_voltages`).
+
+**Hold** (``SMCGains.hold_damping``, not in the paper). On a quantized encoder the law above, fed by an
+observer, hunts across a count edge at rest (docs/drive.md, "Standstill"). With ``hold_damping`` = zeta, from
+``plan.tf`` on the law pins the current vector at the electrical angle of the target, the magnetic detent of
+:math:`\theta_2` (stiffness :math:`K = K_m\rho_2 N_r`), turned by a damping torque on the measured speed:
+
+.. math::
+    \tau = -2\zeta\sqrt{K J}\,\dot\theta,\qquad
+    i^* = \rho_2\begin{bmatrix}\cos p\\ \sin p\end{bmatrix},\quad
+    p = N_r\theta_2 + \arcsin\!\big(\mathrm{clip}(\tau / K_m\rho_2, \pm 1)\big),
+
+    v = R\,i^* + L\lambda\,(i^* - i) + K_m\dot\theta\begin{bmatrix}-\sin N_r\theta\\ \cos N_r\theta\end{bmatrix},
+    \qquad \lambda = W_1/\epsilon_1
+
+(the current loop at the rate of the :math:`s_1` boundary layer, with the back EMF cancelled). The position
+error then no longer feeds an integrator, so the quantization cannot drive a limit cycle; a load torque
+:math:`\tau_L` costs the static error :math:`\tau_L / K`.
 """
 from __future__ import annotations
 
@@ -33,10 +50,14 @@ class SMCGains:
     eps2: float = 0.005
     xi: float = 0.8
     wn: float = 10.0
+    #: damping ratio of the detent hold from ``plan.tf`` on (module docstring); ``None``: track to the end
+    hold_damping: Optional[float] = None
 
     def __post_init__(self) -> None:
         for name in ("W1", "W2", "eps1", "eps2", "wn"):
             object.__setattr__(self, name, check_positive(name, getattr(self, name)))
+        if self.hold_damping is not None:
+            object.__setattr__(self, "hold_damping", check_positive("hold_damping", self.hold_damping))
         xi = check_finite("xi", self.xi)
         if xi <= 0:
             raise ValueError(f"xi={xi!r} must be > 0 for the error dynamics e'' + 2 xi wn e' + wn^2 e = 0 to be stable")
@@ -108,7 +129,27 @@ class FlatnessSMC:
         s2 = dde + g.alpha2 * de + g.alpha1 * e
         gamma1 = ref.drho - g.W1 * s1 / (np.abs(s1) + g.eps1)
         gamma2 = ref.dddtheta - g.alpha2 * dde - g.alpha1 * de - g.W2 * s2 / (np.abs(s2) + g.eps2)
-        return flat_voltages(m, rho, gamma1, theta, omega, acc, gamma2, phi, m.J * acc + m.B * omega)
+        v = flat_voltages(m, rho, gamma1, theta, omega, acc, gamma2, phi, m.J * acc + m.B * omega)
+        if g.hold_damping is None:
+            return v
+        return np.where(np.asarray(t) >= self.plan.tf, self.hold_voltages(ia, ib, omega, theta), v)
+
+    def hold_currents(self, omega: ArrayLike) -> NDArray[np.float64]:
+        """The detent hold's current vector ``(ia*, ib*)`` at the measured speed (module docstring; vectorized)."""
+        m, rho2, Nr = self.motor, self.plan.rho2, self.motor.Nr
+        # sin p = s, cos p by the angle addition on N_r theta2, as csrc/smc.c computes it
+        s = np.clip(-2.0 * self.gains.hold_damping * np.sqrt(m.J * Nr / (m.Km * rho2)) * np.asarray(omega), -1.0, 1.0)
+        c = np.sqrt(1.0 - s * s)
+        s2, c2 = np.sin(Nr * self.plan.theta2), np.cos(Nr * self.plan.theta2)
+        return rho2 * np.array([c2 * c - s2 * s, s2 * c + c2 * s])
+
+    def hold_voltages(self, ia: ArrayLike, ib: ArrayLike, omega: ArrayLike, theta: ArrayLike) -> NDArray[np.float64]:
+        """The detent hold's voltages (module docstring) for measured currents, speed and angle (vectorized)."""
+        m, g = self.motor, self.gains
+        ia_ref, ib_ref = self.hold_currents(omega)
+        lam, emf, Nr_theta = g.W1 / g.eps1, m.Km * np.asarray(omega), m.Nr * np.asarray(theta)
+        return np.array([m.R * ia_ref + m.L * lam * (ia_ref - ia) - emf * np.sin(Nr_theta),
+                         m.R * ib_ref + m.L * lam * (ib_ref - ib) + emf * np.cos(Nr_theta)])
 
     def step(self, state: None, measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], None]:
         """Controller step ``(state, measurement, t) -> (voltages, new state)``; this law is static.
