@@ -3,8 +3,9 @@
 Run: python examples/standstill_study.py [--workers N]
 For the 14-bit, the 4000-count and the NEMA 17 drive files, every +-10 % plant (32 sign combinations), prints the worst
 |theta - theta*| in encoder counts during the move, at rest (t >= tf + 5 ms) and at the end, for the
-designed loop and for the standstill strategies tried against its half-count limit cycle (docs/drive.md,
-"Standstill"). Each strategy changes the loop only from tf on; the move itself is the designed one.
+designed law without the files' detent hold and for the standstill strategies tried against its half-count
+limit cycle (docs/drive.md, "Standstill"), the shipped detent hold (``SMCGains.hold_damping``) among them.
+Each strategy changes the loop only from tf on; the move itself is the designed one.
 
 The loop here is the period-by-period drive loop of flatstep.sampled (averaged bridge), written out so that a strategy can change the observer and the law at rest (no measurement or computation
 delay); on the designed loop it reproduces `flatstep robustness` to the printed digits.
@@ -29,15 +30,15 @@ FILES = ("drive-20khz-14bit.toml", "drive-20khz-optical-4000.toml", "nema17-20kh
 
 #: strategy -> what it changes from tf on (see docs/drive.md, "Standstill")
 STRATEGIES = {
-    "designed loop (no standstill handling)": {},
+    "designed law, no standstill handling": {},
     "observer dead band of +-1/2 count": {"dead_band": 0.5},
     "slower loop: wn = observer bandwidth = 400 rad/s": {"rest_bandwidth": 400.0},
     "  the same, exact encoder": {"rest_bandwidth": 400.0, "exact_encoder": True},
     "constant-load observer (ramp state dropped)": {"rest_load_states": 1},
     "  the same, for the whole run": {"rest_load_states": 1, "whole_run": True},
-    "current vector pinned on theta2, damping 0.2": {"pin_damping": 0.2},
-    "current vector pinned on theta2, damping 0.4": {"pin_damping": 0.4},
-    "current vector pinned on theta2, damping 0.7": {"pin_damping": 0.7},
+    "detent hold (current vector on theta2), damping 0.2": {"hold_damping": 0.2},
+    "detent hold (current vector on theta2), damping 0.4": {"hold_damping": 0.4},
+    "detent hold, damping 0.7 (the drive files' setting)": {"hold_damping": 0.7},
 }
 
 
@@ -50,21 +51,12 @@ def _embedded(observer: Observer, motor, Ts: float, order: int):
     return A, B, L
 
 
-def _pinned_voltages(model, plan, omega_hat, theta_hat, i_m, damping, lam):
-    """Current vector of magnitude rho2 at the electrical angle of theta2 (the magnetic detent of the target),
-    turned by the damping torque; voltages that drive the currents there at the rate ``lam``."""
-    K = model.Km * plan.rho2 * model.Nr
-    torque = -2.0 * damping * np.sqrt(K * model.J) * omega_hat
-    phase = model.Nr * plan.theta2 + np.arcsin(np.clip(torque / (model.Km * plan.rho2), -1.0, 1.0))
-    i_star = plan.rho2 * np.array([np.cos(phase), np.sin(phase)])
-    emf = model.Km * omega_hat * np.array([-np.sin(model.Nr * theta_hat), np.cos(model.Nr * theta_hat)])
-    return model.R * i_star + model.L * lam * (i_star - i_m) + emf
-
-
-def run(scenario, dead_band=0.0, rest_bandwidth=None, rest_load_states=None, pin_damping=None,
+def run(scenario, dead_band=0.0, rest_bandwidth=None, rest_load_states=None, hold_damping=None,
         exact_encoder=False, whole_run=False):
     """One run of ``scenario`` with the strategy's changes from tf on (from t = 0 with ``whole_run``), the
-    encoder exact with ``exact_encoder``; returns (t, theta - theta*)."""
+    encoder exact with ``exact_encoder``, the detent hold from tf on with ``hold_damping``; returns
+    (t, theta - theta*)."""
+    scenario = replace(scenario, gains=replace(scenario.gains, hold_damping=hold_damping))
     if exact_encoder:
         scenario = replace(scenario, sensors=replace(scenario.sensors, encoder_counts=None))
     ctrl, plant, sensors, drive = scenario.controller(), scenario.plant_motor, scenario.sensors, scenario.drive
@@ -81,7 +73,6 @@ def run(scenario, dead_band=0.0, rest_bandwidth=None, rest_load_states=None, pin
     n = int(np.ceil(scenario.t_end / Ts - 1e-9))
     x, xh, q = plan.x0(model.Nr), None, sensors.angle_step
     theta, noise = np.empty(n + 1), sensors.noise(n + 1)
-    lam = ctrl.gains.W1 / ctrl.gains.eps1
     for k in range(n + 1):
         t = k * Ts
         rest = whole_run or t >= plan.tf
@@ -94,11 +85,8 @@ def run(scenario, dead_band=0.0, rest_bandwidth=None, rest_load_states=None, pin
             innovation = np.sign(innovation) * max(abs(innovation) - dead_band * q, 0.0)
         xh = np.r_[th_m, np.zeros(order - 1)] if xh is None else xh + Lc * innovation
         Te = model.Km * (i_m[1] * np.cos(model.Nr * xh[0]) - i_m[0] * np.sin(model.Nr * xh[0]))
-        if rest and pin_damping is not None:
-            v = _pinned_voltages(model, plan, xh[1], xh[0], i_m, pin_damping, lam)
-        else:
-            y = np.array([i_m[0], i_m[1], xh[1], xh[0], (Te - model.B * xh[1] - xh[2]) / model.J])
-            v, _ = (rest_ctrl if rest else ctrl).step(None, y, t)
+        y = np.array([i_m[0], i_m[1], xh[1], xh[0], (Te - model.B * xh[1] - xh[2]) / model.J])
+        v, _ = (rest_ctrl if rest else ctrl).step(None, y, t)
         v = drive.saturate(v)
         if k == n:
             break
