@@ -55,3 +55,13 @@ def test_bad_value_names_itself(capsys):
 def test_unknown_measurement_is_an_argparse_error(capsys):
     with pytest.raises(SystemExit):
         main(["simulate", "--measurement", "perfect"])
+
+
+def test_simulate_hold_damping_flag(capsys):
+    """--hold-damping: from tf on the rotor rests on the detent, offset by the load over its stiffness."""
+    assert main(["simulate", "--hold-damping", "0.7", "--load-torque", "1e-4", "--t-end", "0.1", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    stiffness = 0.05 * 0.4 * 50  # Km rho2 Nr of the paper's motor and move [N m/rad]
+    assert s["theta_final"] == pytest.approx(0.02 - 1e-4 / stiffness, abs=1e-6)
+    assert main(["simulate", "--hold-damping", "0"]) == 2
+    assert "hold_damping=0.0" in capsys.readouterr().err
