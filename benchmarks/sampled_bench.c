@@ -11,7 +11,8 @@
 #include <time.h>
 
 #include "flat.h"
-#include "sim.h"
+#include "sampled.h"
+#include "smc.h"
 
 #define PERIODS 1200
 
@@ -29,8 +30,10 @@ int main(int argc, char **argv)
     struct smc_params p;
     struct smc s;
     struct sim_stats st = {0, 0, 0, 0, 0};
-    struct sim_sampled_params sp = {FS_C(5e-5), 10};
-    struct sim_plant plant;
+    struct sampled_params sp = {0};
+    struct sampled loop;
+    struct controller c;
+    struct plant plant = {{0, 0, 0, 0, 0, 0}, 0, {0, 0, 0, 0, 0}};
     fs_real flag[PLAN_FLAG_LEN], x0[4], v0[2];
     double t_start;
     long runs, r;
@@ -41,13 +44,19 @@ int main(int argc, char **argv)
     smc_params_default(&p);
     if (smc_init(&s, &p) != SMC_PARAMS_OK)
         return 1;
+    smc_controller(&s, &c);
     plant.motor = p.motor;
-    plant.load = 0;
+    sp.Ts = FS_C(5e-5);
+    sp.substeps = 10;
+    sp.drive.v_bus = INFINITY;
+    sp.model = p.motor;
+    if (sampled_init(&loop, &sp) != SIM_OK)
+        return 1;
     plan_eval(&p.plan, 0, flag);
     flat_to_state(&p.motor, flag, 0, x0, v0);
     t_start = now();
     for (r = 0; r < runs; r++)
-        if (sim_sampled(&s, &plant, x0, 0, PERIODS, &sp, x, v, &st) != SIM_OK)
+        if (sampled_run(&loop, &c, &plant, x0, PERIODS, NULL, x, v, NULL, NULL, &st) != SIM_OK)
             return 1;
     printf("ms_per_run %.4f\n", (now() - t_start) * 1e3 / (double)runs);
     printf("plant_evals %u\n", (unsigned)st.rhs_evals);

@@ -1,142 +1,5 @@
-// Loops of the single-sample core functions over row-major arrays.
+// batch_sampled: many sampled scenarios through sampled_run, each summarised in one pass over its samples.
 #include "batch.h"
-
-// Returns nothing; writes plan_eval at each of the n times t into flag (n x 6, row-major).
-void batch_plan_eval(const struct plan *p, const fs_real *t, size_t n, fs_real *flag)
-{
-    struct plan_coef c;
-    size_t i;
-    plan_init(&c, p);
-    for (i = 0; i < n; i++)
-        plan_flag(&c, t[i], &flag[PLAN_FLAG_LEN * i]);
-}
-
-// Returns the number of samples outside the maps' domain; flat_voltages on rows of
-// args (n x 8: rho, drho, theta, dtheta, ddtheta, dddtheta, phi, A) into v (n x 2).
-size_t batch_flat_voltages(const struct motor_params *m, const fs_real *args, size_t n, fs_real *v)
-{
-    size_t i, bad = 0;
-    const fs_real *a;
-    for (i = 0; i < n; i++) {
-        a = &args[8 * i];
-        bad += flat_voltages(m, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], &v[2 * i]) != FLAT_OK;
-    }
-    return bad;
-}
-
-// Returns the number of samples outside the maps' domain; flat_to_state on the n flags (n x 6) into
-// x (n x 4) and v (n x 2).
-size_t batch_flat_to_state(const struct motor_params *m, const fs_real *flag, size_t n, fs_real load, fs_real *x,
-                           fs_real *v)
-{
-    size_t i, bad = 0;
-    for (i = 0; i < n; i++)
-        bad += flat_to_state(m, &flag[PLAN_FLAG_LEN * i], load, &x[4 * i], &v[2 * i]) != FLAT_OK;
-    return bad;
-}
-
-// Returns the number of samples with ia = ib = 0; state_to_flat on x (n x 4), v (n x 2) into flag (n x 6).
-size_t batch_state_to_flat(const struct motor_params *m, const fs_real *x, const fs_real *v, size_t n,
-                           fs_real load, fs_real *flag)
-{
-    size_t i, bad = 0;
-    for (i = 0; i < n; i++)
-        bad += state_to_flat(m, &x[4 * i], &v[2 * i], load, &flag[PLAN_FLAG_LEN * i]) != FLAT_OK;
-    return bad;
-}
-
-// Returns the OR of the status bits; smc_step at the n times t with measurements y (n x 5) into v (n x 2)
-// and each step's status into status (may be NULL).
-uint32_t batch_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_t n, fs_real *v,
-                        uint32_t *status)
-{
-    uint32_t all = SMC_OK, one;
-    size_t i;
-    for (i = 0; i < n; i++) {
-        one = smc_step(s, t[i], &y[5 * i], &v[2 * i]);
-        all |= one;
-        if (status)
-            status[i] = one;
-    }
-    return all;
-}
-
-// Returns the number of samples outside the flat maps' domain; plan_eval and flat_to_state in one pass: the
-// flag (n x 6), state (n x 4) and voltages (n x 2) of the plan at the n times t for a known load.
-size_t batch_plan_flat(const struct plan *p, const struct motor_params *m, const fs_real *t, size_t n,
-                       fs_real load, fs_real *flag, fs_real *x, fs_real *v)
-{
-    struct plan_coef c;
-    size_t i, bad = 0;
-    plan_init(&c, p);
-    for (i = 0; i < n; i++) {
-        plan_flag(&c, t[i], &flag[PLAN_FLAG_LEN * i]);
-        bad += flat_to_state(m, &flag[PLAN_FLAG_LEN * i], load, &x[4 * i], &v[2 * i]) != FLAT_OK;
-    }
-    return bad;
-}
-
-// Returns nothing; writes the rest of a batch_result row that smc_step_terms left unset (w->have): a step
-// whose inputs were not finite or whose rho < rho_min computed neither the plan's flag nor the sliding variables.
-static void result_fallback(struct smc *s, fs_real t, const fs_real y[5], struct smc_terms *w)
-{
-    if (!(w->have & SMC_HAVE_FLAG))
-        plan_flag(&s->plan, t, w->flag);
-    w->acc = s->p.measurement == SMC_IDEAL ? y[4] : motor_acceleration(&s->p.motor, y, 0);
-    w->s2 = w->acc - w->flag[PLAN_DDTHETA] + s->alpha2 * (y[2] - w->flag[PLAN_DTHETA])
-          + s->alpha1 * (y[3] - w->flag[PLAN_THETA]);
-}
-
-// Returns the number of samples where the plan leaves the flat maps' domain (their reference currents and
-// voltages are 0); writes one RES_LEN row (out, n x RES_LEN) and the controller's status bits (status, may be
-// NULL) for each of the n plant states x (n x 4) at times t: smc_step on (x, the plant's acceleration).
-size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real load, const fs_real *t,
-                    const fs_real *x, size_t n, fs_real *out, uint32_t *status)
-{
-    fs_real y[5], trig[2], prev[PLAN_FLAG_LEN], xr[4] = {0, 0, 0, 0}, vr[2] = {0, 0}, *row;
-    struct smc_terms w;
-    size_t i, bad = 0;
-    uint32_t one;
-    int k, ok = FLAT_OK, same, shared = plant->Nr == s->p.motor.Nr;
-    for (i = 0; i < n; i++) {
-        row = &out[RES_LEN * i];
-        for (k = 0; k < 4; k++)
-            y[k] = x[4 * i + k];
-        // The plant's acceleration in motor_acceleration's operation order; its sin and cos of Nr theta are
-        // the controller's too when the two motors have the same Nr.
-        fs_sincos(plant->Nr * y[3], &trig[0], &trig[1]);
-        y[4] = (plant->Km * (y[1] * trig[1] - y[0] * trig[0]) - plant->B * y[2] - load) / plant->J;
-        one = smc_step_terms(s, t[i], y, shared ? trig : NULL, &row[RES_VA], &w);
-        if (status)
-            status[i] = one;
-        if (!(w.have & SMC_HAVE_LAW))
-            result_fallback(s, t[i], y, &w);
-        row[RES_ACC] = y[4];
-        // hypot, not the step's sqrt(ia^2 + ib^2): rho and s1 equal NumPy's bit for bit.
-        row[RES_RHO] = fs_hypot(y[0], y[1]);
-        row[RES_PHI] = fs_atan2(y[0], y[1]);
-        row[RES_THETA_REF] = w.flag[PLAN_THETA];
-        row[RES_OMEGA_REF] = w.flag[PLAN_DTHETA];
-        row[RES_RHO_REF] = w.flag[PLAN_RHO];
-        // The reference state is the previous one while the flag holds still (before t0 and after tf).
-        for (k = 0, same = i > 0; k < PLAN_FLAG_LEN && same; k++)
-            same = w.flag[k] == prev[k];
-        if (!same) {
-            ok = flat_to_state(&s->p.motor, w.flag, 0, xr, vr);
-            for (k = 0; k < PLAN_FLAG_LEN; k++)
-                prev[k] = w.flag[k];
-        }
-        bad += ok != FLAT_OK;
-        row[RES_IA_REF] = xr[0];
-        row[RES_IB_REF] = xr[1];
-        row[RES_VA_REF] = vr[0];
-        row[RES_VB_REF] = vr[1];
-        // The sliding variables of eq. (12), as smc_step and FlatnessSMC.sliding_variables form them.
-        row[RES_S1] = row[RES_RHO] - w.flag[PLAN_RHO];
-        row[RES_S2] = w.s2;
-    }
-    return bad;
-}
 
 // Returns the larger of a and |b|.
 static fs_real max_abs(fs_real a, fs_real b)
@@ -179,28 +42,28 @@ static void summarize(const struct plan_coef *plan, fs_real Ts, size_t n, const 
     o->theta_final = x[4 * n + 3];
 }
 
-// Returns the number of runs whose status is not SIM_OK; runs the n sampled scenarios one after another
-// (sim_sampled), using scratch (at least 6 (n_periods + 1) values for the longest run) for each run's states
-// and voltages, and writes each run's summary into out[i].
+// Returns the number of runs whose status is not SIM_OK; runs the n scenarios one after another on sampled_run,
+// using scratch (at least 6 (n_periods + 1) values for the longest run) for each run's states and voltages,
+// and writes each run's summary into out[i].
 size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, size_t scratch_len,
                      struct batch_summary *out)
 {
-    struct smc ctrl;
+    struct sampled loop;
+    struct plan_coef plan;
     struct sim_stats st;
     size_t i, failed = 0, m;
     for (i = 0; i < n; i++) {
         m = runs[i].n_periods + 1;
         out[i].controller_status = 0;
-        if (runs[i].n_periods > scratch_len / 6 - 1 || scratch_len < 6)
-            out[i].status = SIM_EARGS;  // the scratch cannot hold this run
-        else if (smc_init(&ctrl, &runs[i].ctrl) != SMC_PARAMS_OK)
-            out[i].status = -1;
+        if (scratch_len < 6 || runs[i].n_periods > scratch_len / 6 - 1 || !plan_init(&plan, &runs[i].reference)
+            || sampled_init(&loop, &runs[i].loop) != SIM_OK)
+            out[i].status = SIM_EARGS;  // the scratch cannot hold this run, or its plan or loop is invalid
         else {
-            out[i].status = sim_sampled(&ctrl, &runs[i].plant, runs[i].x0, 0, runs[i].n_periods, &runs[i].sp,
-                                        scratch, scratch + 4 * m, &st);
-            out[i].controller_status = st.smc_status;
+            out[i].status = sampled_run(&loop, &runs[i].ctrl, &runs[i].plant, runs[i].x0, runs[i].n_periods,
+                                        runs[i].noise, scratch, scratch + 4 * m, NULL, NULL, &st);
+            out[i].controller_status = st.controller_status;
             if (out[i].status == SIM_OK)
-                summarize(&ctrl.plan, runs[i].sp.Ts, runs[i].n_periods, scratch, scratch + 4 * m, &out[i]);
+                summarize(&plan, runs[i].loop.Ts, runs[i].n_periods, scratch, scratch + 4 * m, &out[i]);
         }
         failed += out[i].status != SIM_OK;
     }

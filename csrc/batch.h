@@ -1,66 +1,32 @@
-// Array wrappers over time samples for host bindings and tests: one call per array, no loop in Python.
+// Many sampled runs (scenarios) in one call, each summarised as flatstep.engine.result.SimResult.summary does.
 #ifndef FS_BATCH_H
 #define FS_BATCH_H
 
 #include <stddef.h>
 #include <stdint.h>
+#include "controller.h"
 #include "fs_real.h"
-#include "flat.h"
-#include "motor.h"
 #include "plan.h"
+#include "plant.h"
+#include "sampled.h"
 #include "sim.h"
-#include "smc.h"
 
-// Returns nothing; writes plan_eval at each of the n times t into flag (n x 6, row-major).
-void batch_plan_eval(const struct plan *p, const fs_real *t, size_t n, fs_real *flag);
-
-// Returns the number of samples outside the flat maps' domain; plan_eval and flat_to_state in one pass: the
-// flag (n x 6), state (n x 4) and voltages (n x 2) of the plan at the n times t for a known load.
-size_t batch_plan_flat(const struct plan *p, const struct motor_params *m, const fs_real *t, size_t n,
-                       fs_real load, fs_real *flag, fs_real *x, fs_real *v);
-
-// Columns of a closed-loop result row (batch_result): the controller's voltages, the plant's acceleration,
-// the polar current (rho, phi), the planned angle, speed and rho, the planned state's currents and the
-// feedforward voltages, and the sliding variables.
-enum { RES_VA, RES_VB, RES_ACC, RES_RHO, RES_PHI, RES_THETA_REF, RES_OMEGA_REF, RES_RHO_REF, RES_IA_REF,
-       RES_IB_REF, RES_VA_REF, RES_VB_REF, RES_S1, RES_S2, RES_LEN };
-
-// Returns the number of samples where the plan leaves the flat maps' domain (their reference currents and
-// voltages are 0); writes one RES_LEN row (out, n x RES_LEN) and the controller's status bits (status, may be
-// NULL) for each of the n plant states x (n x 4) at times t: smc_step on (x, the plant's acceleration).
-size_t batch_result(struct smc *s, const struct motor_params *plant, fs_real load, const fs_real *t,
-                    const fs_real *x, size_t n, fs_real *out, uint32_t *status);
-
-// Returns the number of samples outside the maps' domain; flat_voltages on rows of
-// args (n x 8: rho, drho, theta, dtheta, ddtheta, dddtheta, phi, A) into v (n x 2).
-size_t batch_flat_voltages(const struct motor_params *m, const fs_real *args, size_t n, fs_real *v);
-
-// Returns the number of samples outside the maps' domain; flat_to_state on the n flags (n x 6) into
-// x (n x 4) and v (n x 2).
-size_t batch_flat_to_state(const struct motor_params *m, const fs_real *flag, size_t n, fs_real load, fs_real *x,
-                           fs_real *v);
-
-// Returns the number of samples with ia = ib = 0; state_to_flat on x (n x 4), v (n x 2) into flag (n x 6).
-size_t batch_state_to_flat(const struct motor_params *m, const fs_real *x, const fs_real *v, size_t n,
-                           fs_real load, fs_real *flag);
-
-// Returns the OR of the status bits; smc_step at the n times t with measurements y (n x 5) into v (n x 2)
-// and each step's status into status (may be NULL).
-uint32_t batch_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_t n, fs_real *v,
-                        uint32_t *status);
-
-// One sampled closed-loop scenario of batch_sampled: the controller, the plant, the period and the start.
+// cffi:begin
+// One sampled scenario: a bound controller (its state is the caller's), the plant, the loop, the plan the
+// summary measures against, the horizon and the start.
 struct batch_run {
-    struct smc_params ctrl;        // controller: its motor model, plan, gains, measurement and limits
-    struct sim_plant plant;        // the simulated motor and its load torque
-    struct sim_sampled_params sp;  // control period and RK4 substeps
-    size_t n_periods;              // periods from t = 0 (states at k Ts, k = 0..n_periods)
-    fs_real x0[4];                 // start state (ia, ib, omega, theta)
+    struct controller ctrl;
+    struct plant plant;
+    struct sampled_params loop;
+    struct plan reference;   // the planned move (theta*, rho*) the errors are measured against
+    size_t n_periods;        // periods from t = 0 (states at k Ts, k = 0..n_periods)
+    fs_real x0[4];           // start state (ia, ib, omega, theta)
+    const fs_real *noise;    // (n_periods + 1) x 2 current-noise samples, or NULL for none
 };
 
-// Summary of one run over the control instants t_k = k Ts, the values of flatstep.result.SimResult.summary.
+// Summary of one run over the control instants t_k = k Ts, the values of SimResult.summary.
 struct batch_summary {
-    int status;                              // SIM_OK, a sim_status, or -1 when smc_init refused the controller
+    int status;                              // SIM_OK or a sim_status (SIM_EARGS: the loop refused the run)
     uint32_t controller_status;              // OR of the controller's status bits
     fs_real theta_final, ia_final, ib_final, omega_final, final_theta_error;
     fs_real max_abs_theta_error, max_abs_rho_error, max_abs_va, max_abs_vb;
@@ -69,10 +35,11 @@ struct batch_summary {
     size_t n_move, n_after;
 };
 
-// Returns the number of runs whose status is not SIM_OK; runs the n sampled scenarios one after another
-// (sim_sampled), using scratch (at least 6 (n_periods + 1) values for the longest run) for each run's states
-// and voltages, and writes each run's summary into out[i].
+// Returns the number of runs whose status is not SIM_OK; runs the n scenarios one after another on sampled_run,
+// using scratch (at least 6 (n_periods + 1) values for the longest run) for each run's states and voltages,
+// and writes each run's summary into out[i].
 size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, size_t scratch_len,
                      struct batch_summary *out);
+// cffi:end
 
 #endif

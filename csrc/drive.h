@@ -5,6 +5,8 @@
 #include <stdbool.h>
 #include "fs_real.h"
 
+// cffi:begin
+
 struct drive_params {
     fs_real v_bus;       // |va|, |vb| <= v_bus [V], > 0; infinity for an unlimited (ideal) bridge
     bool compute_delay;  // apply each command one period after it is computed
@@ -29,4 +31,5 @@ void drive_saturate(const struct drive_params *p, const fs_real v[2], fs_real ou
 // saturated command, or with compute_delay the previous period's).
 void drive_step(struct drive *d, const fs_real v_cmd[2], fs_real v_apply[2]);
 
+// cffi:end
 #endif

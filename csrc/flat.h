@@ -6,6 +6,8 @@
 #include "motor.h"
 #include "plan.h"
 
+// cffi:begin
+
 // Domain errors of the flat maps (bit flags); the maps never divide by zero.
 enum {
     FLAT_OK = 0,
@@ -39,4 +41,5 @@ int flat_to_state(const struct motor_params *m, const fs_real flag[PLAN_FLAG_LEN
 int state_to_flat(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load,
                   fs_real flag[PLAN_FLAG_LEN]);
 
+// cffi:end
 #endif

@@ -16,6 +16,7 @@ typedef float fs_real;
 #define fs_fabs fabsf
 #define fs_pow powf
 #define fs_rint rintf
+#define fs_tanh tanhf
 #define FS_REAL_MAX 3.402823466e+38f
 #define FS_REAL_EPSILON 1.1920928955078125e-07f
 #else
@@ -30,6 +31,7 @@ typedef double fs_real;
 #define fs_fabs fabs
 #define fs_pow pow
 #define fs_rint rint
+#define fs_tanh tanh
 #define FS_REAL_MAX 1.7976931348623157e+308
 #define FS_REAL_EPSILON 2.220446049250313e-16
 #endif

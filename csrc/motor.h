@@ -5,6 +5,8 @@
 #include <stdbool.h>
 #include "fs_real.h"
 
+// cffi:begin
+
 // State order everywhere: x = (ia, ib, omega, theta); inputs v = (va, vb).
 struct motor_params {
     fs_real R;   // phase resistance [ohm], > 0
@@ -28,4 +30,5 @@ fs_real motor_acceleration(const struct motor_params *m, const fs_real x[4], fs_
 void motor_rhs(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load,
                fs_real dx[4]);
 
+// cffi:end
 #endif

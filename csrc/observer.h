@@ -6,6 +6,8 @@
 #include <stdint.h>
 #include "fs_real.h"
 
+// cffi:begin
+
 // Largest observer order: theta, omega, load torque, load-torque rate.
 #define OBSERVER_MAX_ORDER 4
 
@@ -40,4 +42,5 @@ void observer_predict(struct observer *o, fs_real torque);
 // Returns the estimated load torque [N m] (0 for a speed-only observer of order 2).
 fs_real observer_load(const struct observer *o);
 
+// cffi:end
 #endif

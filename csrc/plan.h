@@ -5,6 +5,8 @@
 #include <stdbool.h>
 #include "fs_real.h"
 
+// cffi:begin
+
 // Flat flag layout used by plan_eval and the flat maps.
 enum { PLAN_RHO, PLAN_DRHO, PLAN_THETA, PLAN_DTHETA, PLAN_DDTHETA, PLAN_DDDTHETA, PLAN_FLAG_LEN };
 
@@ -42,4 +44,5 @@ fs_real plan_psi(fs_real t, fs_real t0, fs_real tf, int order);
 // Returns plan_flag's value for a plan used once (plan_init on the stack, then plan_flag); writes the flag.
 bool plan_eval(const struct plan *p, fs_real t, fs_real flag[PLAN_FLAG_LEN]);
 
+// cffi:end
 #endif

@@ -1,10 +1,10 @@
-// One period of the sampled drive loop in the order and arithmetic of flatstep.sampled.run_reference.
+// sampled_run: one period at a time in the order and arithmetic of flatstep.loop.reference.run_reference.
 #include "sampled.h"
 #include "ode.h"
 
 // What the plant's right-hand side needs over a period: the plant and the held voltage.
 struct held {
-    const struct sim_plant *plant;
+    const struct plant *plant;
     fs_real v[2];
 };
 
@@ -13,7 +13,7 @@ static int held_rhs(void *ctx, fs_real t, const fs_real *x, fs_real *dx)
 {
     const struct held *h = ctx;
     (void)t;
-    motor_rhs(&h->plant->motor, x, h->v, h->plant->load, dx);
+    plant_rhs(h->plant, x, h->v, dx);
     return 0;
 }
 
@@ -27,7 +27,7 @@ static bool finite4(const fs_real x[4])
 int sampled_init(struct sampled *s, const struct sampled_params *p)
 {
     const fs_real zero[2] = {0, 0};
-    if (!(p->Ts > 0) || !fs_isfinite(p->Ts) || p->substeps < 1)
+    if (!(p->Ts > 0) || !fs_isfinite(p->Ts) || p->substeps < 1 || !motor_params_valid(&p->model))
         return SIM_EARGS;
     if (p->sensed && sensors_init(&s->sensors, &p->sensors) != 0)
         return SIM_EARGS;
@@ -39,6 +39,7 @@ int sampled_init(struct sampled *s, const struct sampled_params *p)
     s->substeps = p->substeps;
     s->sensed = p->sensed;
     s->observed = p->observed;
+    s->model = p->model;
     s->have_prev = false;
     s->theta_prev = 0;
     return SIM_OK;
@@ -46,8 +47,8 @@ int sampled_init(struct sampled *s, const struct sampled_params *p)
 
 // Returns nothing; writes what the controller sees at state x, y = (ia, ib, omega, theta, theta''), and the
 // torque of the measured currents at the estimated angle (for the observer's prediction).
-static void measure(struct sampled *s, const struct motor_params *model, const struct sim_plant *plant,
-                    const fs_real x[4], const fs_real noise[2], fs_real y[5], fs_real *torque)
+static void measure(struct sampled *s, const struct plant *plant, const fs_real x[4], const fs_real noise[2],
+                    fs_real y[5], fs_real *torque)
 {
     fs_real r[3] = {x[3], x[0], x[1]}, z[4];  // (theta_m, ia_m, ib_m)
     if (s->sensed)
@@ -57,14 +58,14 @@ static void measure(struct sampled *s, const struct motor_params *model, const s
     if (s->observed) {
         observer_correct(&s->observer, r[0]);
         z[0] = r[1], z[1] = r[2], z[2] = 0, z[3] = s->observer.x[0];
-        *torque = motor_torque(model, z);
+        *torque = motor_torque(&s->model, z);
         y[2] = s->observer.x[1];
         y[3] = s->observer.x[0];
-        y[4] = (*torque - model->B * s->observer.x[1] - observer_load(&s->observer)) / model->J;
+        y[4] = (*torque - s->model.B * s->observer.x[1] - observer_load(&s->observer)) / s->model.J;
     } else if (!s->sensed) {
         y[2] = x[2];
         y[3] = x[3];
-        y[4] = motor_acceleration(&plant->motor, x, plant->load);
+        y[4] = plant_acceleration(plant, x);
     } else {
         y[2] = s->have_prev ? (r[0] - s->theta_prev) / s->Ts : 0;
         y[3] = r[0];
@@ -74,34 +75,30 @@ static void measure(struct sampled *s, const struct motor_params *model, const s
     s->have_prev = true;
 }
 
-// Returns SIM_OK or an error sim_status; resets the parts and runs n_periods periods from x0 at t_k = k Ts.
-// Period k: read the sensors with noise sample k (noise: (n_periods + 1) x 2, or NULL for none), correct the
-// observer, step the controller (0 V on a fault), saturate and delay in the drive, integrate the plant by RK4
-// substeps under the applied voltage, predict the observer. Writes, at every t_k, k = 0..n_periods, the plant
-// state into x_out ((n_periods + 1) x 4), the voltage applied from t_k into v_out ((n_periods + 1) x 2), and,
-// unless NULL, what the controller saw into y_out ((n_periods + 1) x 5) and its status into status_out.
-int sampled_run(struct sampled *s, struct smc *ctrl, const struct sim_plant *plant, const fs_real x0[4],
+// Returns SIM_OK or an error sim_status; resets the parts and the controller and runs n_periods periods from
+// x0 at t_k = k Ts (sampled.h).
+int sampled_run(struct sampled *s, const struct controller *ctrl, const struct plant *plant, const fs_real *x0,
                 size_t n_periods, const fs_real *noise, fs_real *x_out, fs_real *v_out, fs_real *y_out,
                 uint32_t *status_out, struct sim_stats *st)
 {
-    const struct motor_params *model = &ctrl->p.motor;
     const fs_real quiet[2] = {0, 0};
     struct held c;
-    fs_real x[4], y[5], v[2], t, h = s->Ts / (fs_real)s->substeps, torque = 0;
-    fs_real v_start[2] = {model->R * x0[0], model->R * x0[1]};  // the start equilibrium, until the first command
+    fs_real x[4], y[CTRL_Y_LEN], v[2], t, h = s->Ts / (fs_real)s->substeps, torque = 0;
+    fs_real v_start[2] = {s->model.R * x0[0], s->model.R * x0[1]};  // the start equilibrium, until a command
     uint32_t status, j;
     size_t k;
     int m;
     st->steps = st->rejected = st->rhs_evals = 0;
-    st->smc_status = SMC_OK;
+    st->controller_status = CTRL_OK;
     st->t_fail = 0;
-    if (!finite4(x0) || !motor_params_valid(&plant->motor) || !fs_isfinite(plant->load))
+    if (!finite4(x0) || !plant_valid(plant))
         return SIM_EARGS;
     if (s->sensed)
         sensors_reset(&s->sensors);
     if (s->observed)
         observer_reset(&s->observer);
     drive_reset(&s->drive, v_start);
+    ctrl->reset(ctrl->self);
     s->have_prev = false;
     c.plant = plant;
     for (m = 0; m < 4; m++)
@@ -110,15 +107,15 @@ int sampled_run(struct sampled *s, struct smc *ctrl, const struct sim_plant *pla
         t = (fs_real)k * s->Ts;
         for (m = 0; m < 4; m++)
             x_out[4 * k + m] = x[m];
-        measure(s, model, plant, x, noise ? &noise[2 * k] : quiet, y, &torque);
-        status = smc_step(ctrl, t, y, v);  // 0 V on a fault: the drive de-energises for this period
-        st->smc_status |= status;
+        measure(s, plant, x, noise ? &noise[2 * k] : quiet, y, &torque);
+        status = ctrl->step(ctrl->self, t, y, v);  // 0 V on a fault: the drive de-energises for this period
+        st->controller_status |= status;
         drive_step(&s->drive, v, c.v);
         v_out[2 * k] = c.v[0];
         v_out[2 * k + 1] = c.v[1];
         if (y_out)
-            for (m = 0; m < 5; m++)
-                y_out[5 * k + m] = y[m];
+            for (m = 0; m < CTRL_Y_LEN; m++)
+                y_out[CTRL_Y_LEN * k + m] = y[m];
         if (status_out)
             status_out[k] = status;
         if (k == n_periods)

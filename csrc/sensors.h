@@ -6,6 +6,8 @@
 #include <stdint.h>
 #include "fs_real.h"
 
+// cffi:begin
+
 // Longest measurement delay the ring holds [control periods].
 #define SENSORS_MAX_DELAY 8
 
@@ -49,4 +51,5 @@ void sensors_currents(const struct sensors_params *p, const fs_real i[2], const 
 // (theta_m, ia_m, ib_m).
 void sensors_step(struct sensors *s, const fs_real x[4], const fs_real noise[2], fs_real reading[3]);
 
+// cffi:end
 #endif

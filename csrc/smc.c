@@ -208,3 +208,24 @@ uint32_t smc_step_terms(struct smc *s, fs_real t, const fs_real y[5], const fs_r
     w->have = 0;
     return smc_guarded(s, t, y, nr_trig, v, w);
 }
+
+// Returns smc_step's status; the interface's step on a struct smc.
+static uint32_t smc_step_bound(void *self, fs_real t, const fs_real *y, fs_real *v)
+{
+    return smc_step(self, t, y, v);
+}
+
+// Returns nothing; the interface's reset on a struct smc.
+static void smc_reset_bound(void *self)
+{
+    smc_reset(self);
+}
+
+// Returns nothing; binds s into the run loops' interface (a stateless law: the continuous loop may run it).
+void smc_controller(struct smc *s, struct controller *c)
+{
+    c->self = s;
+    c->step = smc_step_bound;
+    c->reset = smc_reset_bound;
+    c->stateless = true;
+}

@@ -3,9 +3,12 @@
 #define FS_SMC_H
 
 #include <stdint.h>
+#include "controller.h"
 #include "fs_real.h"
 #include "motor.h"
 #include "plan.h"
+
+// cffi:begin
 
 // Where theta'' comes from: the measurement y[4] (the paper's assumption) or the zero-load model.
 enum smc_measurement { SMC_IDEAL = 0, SMC_MODEL = 1 };
@@ -13,13 +16,14 @@ enum smc_measurement { SMC_IDEAL = 0, SMC_MODEL = 1 };
 // Status bits returned by smc_step. Any bit below SMC_SATURATED is a fault: the step then outputs
 // v = (0, 0), i.e. de-energises both phases, which is the safe state of a PM stepper (no current can run
 // away; the detent torque and friction hold the rotor) until the caller decides to re-energise.
+// The bits are the controller interface's (controller.h), named for this law.
 enum smc_status {
-    SMC_OK = 0,
-    SMC_NONFINITE = 1,   // t or a used measurement is NaN or infinite
-    SMC_RHO = 2,         // current magnitude rho < rho_min: phi is undefined
-    SMC_SQRT = 4,        // Km^2 rho^2 - (J theta'' + B theta')^2 <= 0: the torque demand is out of reach
-    SMC_OVERFLOW = 8,    // the law overflowed to a non-finite voltage from finite inputs
-    SMC_SATURATED = 16,  // |v| > v_limit: v scaled to |v| = v_limit keeping its direction (not a fault)
+    SMC_OK = CTRL_OK,
+    SMC_NONFINITE = CTRL_NONFINITE,  // t or a used measurement is NaN or infinite
+    SMC_RHO = CTRL_RHO,              // current magnitude rho < rho_min: phi is undefined
+    SMC_SQRT = CTRL_SQRT,            // Km^2 rho^2 - (J theta'' + B theta')^2 <= 0: the torque demand is out of reach
+    SMC_OVERFLOW = CTRL_OVERFLOW,    // the law overflowed to a non-finite voltage from finite inputs
+    SMC_SATURATED = CTRL_SATURATED,  // |v| > v_limit: v scaled to |v| = v_limit keeping its direction (not a fault)
 };
 
 // Errors of smc_init: which group of parameters is invalid.
@@ -94,4 +98,8 @@ uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2]);
 uint32_t smc_step_terms(struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig, fs_real v[2],
                         struct smc_terms *w);
 
+// Returns nothing; binds s into the run loops' interface (a stateless law: the continuous loop may run it).
+void smc_controller(struct smc *s, struct controller *c);
+
+// cffi:end
 #endif

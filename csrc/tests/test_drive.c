@@ -1,7 +1,8 @@
 // The drive's parts: encoder and ADC readings, the delay ring, the observer, bus saturation and computation
-// delay, and the sampled drive loop against sim_sampled and on a realistic 20 kHz drive.
+// delay, and the sampled loop with ideal parts, a detent, and on a realistic 20 kHz drive.
 #include "check.h"
 #include "sampled.h"
+#include "smc.h"
 
 #define PI 3.14159265358979323846
 #define N_PERIODS 1200  // 60 ms at 20 kHz
@@ -154,7 +155,7 @@ static int drive_checks(void)
 }
 
 // Returns nothing; the paper's motor and move with the 20 kHz designed gains (model or ideal measurement).
-static void designed(struct smc *s, struct sim_plant *plant, int measurement, double x0[4])
+static void designed(struct smc *s, struct plant *plant, int measurement, double x0[4])
 {
     struct smc_params p;
     smc_params_default(&p);
@@ -164,6 +165,7 @@ static void designed(struct smc *s, struct sim_plant *plant, int measurement, do
     smc_init(s, &p);
     plant->motor = p.motor;
     plant->load = 1e-5;
+    plant->effects = (struct plant_effects){0, 0, 0, 0, 0};
     x0[0] = 0.4, x0[1] = 0, x0[2] = 0, x0[3] = 0;
 }
 
@@ -182,35 +184,40 @@ static double max_error(const struct smc *s, const double *x, int k0, int k1)
 // Returns 0 after the sampled-loop checks.
 static int loop_checks(void)
 {
-    struct sampled_params p = {5e-5, 4, false, false, drive_sensors(), {0}, {INFINITY, false}};
-    struct sim_sampled_params sp = {5e-5, 4};
-    struct sim_plant plant;
-    struct sim_stats st, st2;
+    struct sampled_params p = {5e-5, 4, false, false, drive_sensors(), {0}, {INFINITY, false}, {0, 0, 0, 0, 0, 0}};
+    struct plant plant;
+    struct sim_stats st;
     struct sampled s;
     struct smc c;
-    double x0[4], count = 2 * PI / 16384, err;
+    struct controller cc;
+    double x0[4], count = 2 * PI / 16384, err, acc;
     int rc, k, same = 1;
-    // ideal parts: exactly sim_sampled's loop
+    // ideal parts: the controller sees the plant's state and its true acceleration, effects included
     designed(&c, &plant, SMC_IDEAL, x0);
+    smc_controller(&c, &cc);
+    p.model = c.p.motor;
     CHECK(sampled_init(&s, &p) == SIM_OK, "ideal loop accepted");
-    rc = sampled_run(&s, &c, &plant, x0, N_PERIODS, NULL, xa, va, ya, status, &st);
-    sim_sampled(&c, &plant, x0, 0, N_PERIODS, &sp, xb, vb, &st2);
-    for (k = 0; k < 4 * (N_PERIODS + 1); k++)
-        same &= xa[k] == xb[k];
-    for (k = 0; k < 2 * (N_PERIODS + 1); k++)
-        same &= va[k] == vb[k];
-    CHECK(rc == SIM_OK && same && st.smc_status == st2.smc_status && st.rhs_evals == 4 * 4 * N_PERIODS,
-          "ideal parts: the sim_sampled loop bit for bit");
-    CHECK(ya[5 * 7 + 3] == xa[4 * 7 + 3] && ya[5 * 7 + 2] == xa[4 * 7 + 2], "ideal parts: the controller sees x");
+    plant.effects.detent_torque = 1e-3, plant.effects.detent_harmonic = 4;
+    rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xa, va, ya, status, &st);
+    acc = plant_acceleration(&plant, &xa[4 * 7]);
+    CHECK(rc == SIM_OK && st.rhs_evals == 4 * 4 * N_PERIODS, "ideal parts: rc %d", rc);
+    CHECK(ya[5 * 7 + 3] == xa[4 * 7 + 3] && ya[5 * 7 + 2] == xa[4 * 7 + 2] && ya[5 * 7 + 4] == acc
+          && acc != motor_acceleration(&plant.motor, &xa[4 * 7], plant.load),
+          "ideal parts: the controller sees x and the acceleration with the detent");
+    plant.effects.detent_torque = 0;
+    rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xb, vb, NULL, NULL, &st);
+    for (k = 0, same = 0; k < 4 * (N_PERIODS + 1); k++)
+        same |= xa[k] != xb[k];
+    CHECK(rc == SIM_OK && same, "the detent changes the run");
     // the realistic drive: 14-bit encoder, 12-bit ADC, speed observer at 1500 rad/s, 24 V bus
     p.sensed = p.observed = true;
     p.drive.v_bus = 24;
     speed_observer(&p.observer, c.p.motor.J, c.p.motor.B, p.Ts, 1500);
     CHECK(sampled_init(&s, &p) == SIM_OK, "drive loop accepted");
-    rc = sampled_run(&s, &c, &plant, x0, N_PERIODS, NULL, xa, va, ya, status, &st);
+    rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xa, va, ya, status, &st);
     err = max_error(&c, xa, 400, 800);
-    CHECK(rc == SIM_OK && err < count && st.smc_status == SMC_OK, "20 kHz drive: move error %.3g counts, status %u",
-          err / count, st.smc_status);
+    CHECK(rc == SIM_OK && err < count && st.controller_status == SMC_OK, "20 kHz drive: move error %.3g counts, status %u",
+          err / count, st.controller_status);
     for (k = 0, same = 1; k <= N_PERIODS; k++)
         same &= fabs(va[2 * k]) <= 24 && fabs(va[2 * k + 1]) <= 24 && status[k] == SMC_OK;
     CHECK(same, "20 kHz drive: every voltage within the bus, no fault");
@@ -218,11 +225,12 @@ static int loop_checks(void)
            err / count);
     // encoder-difference speed and the controller's model acceleration, with a delay and a compute delay
     designed(&c, &plant, SMC_MODEL, x0);
+    smc_controller(&c, &cc);
     p.observed = false;
     p.sensors.delay = 1;
     p.drive.compute_delay = true;
     sampled_init(&s, &p);
-    rc = sampled_run(&s, &c, &plant, x0, N_PERIODS, NULL, xa, va, ya, status, &st);
+    rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xa, va, ya, status, &st);
     CHECK(rc == SIM_OK && ya[5 * 0 + 2] == 0 && ya[5 * 500 + 2] == (ya[5 * 500 + 3] - ya[5 * 499 + 3]) / 5e-5,
           "backward difference of the encoder");
     CHECK(va[0] == c.p.motor.R * 0.4 && va[1] == 0, "compute delay: the start equilibrium first");
@@ -233,9 +241,13 @@ static int loop_checks(void)
     p.Ts = 0;
     CHECK(sampled_init(&s, &p) == SIM_EARGS, "zero period refused");
     p.Ts = 5e-5;
+    p.model.J = 0;
+    CHECK(sampled_init(&s, &p) == SIM_EARGS, "invalid model refused");
+    p.model = c.p.motor;
+    p.Ts = 5e-5;
     sampled_init(&s, &p);
     plant.load = 1e308;  // theta'' = -load / J overflows
-    rc = sampled_run(&s, &c, &plant, x0, N_PERIODS, NULL, xa, va, NULL, NULL, &st);
+    rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xa, va, NULL, NULL, &st);
     CHECK(rc == SIM_ENONFINITE && st.t_fail > 0, "a non-finite plant stops the run: rc %d", rc);
     return 0;
 }

@@ -1,7 +1,7 @@
 // The single-precision build (FS_SINGLE): the law on the paper's plan and a short continuous run.
 #include <stdio.h>
 #include "flat.h"
-#include "sim.h"
+#include "continuous.h"
 #include "smc.h"
 
 // Returns 0 when the float core reproduces the feedforward and tracks the paper's move, 1 otherwise.
@@ -9,8 +9,10 @@ int main(void)
 {
     struct smc_params p;
     struct smc s;
-    struct sim_plant plant;
-    struct sim_continuous_params cp = {1e-5f, 1e-8f, 1.0f, 100000, SIM_DOP853};
+    struct plant plant = {{0, 0, 0, 0, 0, 0}, 0, {0, 0, 0, 0, 0}};
+    struct controller c;
+    const float knots[2] = {0.02f, 0.04f};
+    struct continuous_params cp = {1e-5f, 1e-8f, 1.0f, 100000, CONTINUOUS_DOP853, knots, 2};
     struct sim_stats st;
     float f[PLAN_FLAG_LEN], x[4], vff[2], y[5], v[2], t_out[2] = {0.0f, 0.06f}, x_out[8], x0[4] = {0.4f, 0, 0, 0};
     int i, failures = 0, rc;
@@ -31,7 +33,8 @@ int main(void)
     }
     plant.motor = p.motor;
     plant.load = 0;
-    rc = sim_continuous(&s, &plant, x0, t_out, 2, &cp, x_out, &st);
+    smc_controller(&s, &c);
+    rc = continuous_run(&c, &plant, x0, t_out, 2, &cp, x_out, &st);
     printf("float: Fig. 1 run rc %d, theta(0.06) = %.7g (want 0.02), %u steps\n", rc, (double)x_out[7], st.steps);
     if (rc != SIM_OK || fabsf(x_out[7] - 0.02f) > 1e-5f)
         failures++;

@@ -2,10 +2,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include "check.h"
-#include "batch.h"
+#include "arrays.h"
 #include "flat.h"
 #include "plan.h"
-#include "sim.h"
 #include "smc.h"
 
 #define TOL 1e-12

@@ -1,6 +1,6 @@
 """The planner, flat maps and controller of the C core over arrays: one C call per array
-(csrc/batch.h: ``batch_plan_eval``, ``batch_plan_flat``, ``batch_flat_*``, ``batch_state_to_flat``,
-``batch_smc_step``)."""
+(csrc/arrays.h: ``arrays_plan_eval``, ``arrays_plan_flat``, ``arrays_flat_*``, ``arrays_state_to_flat``,
+``arrays_smc_step``, ``arrays_controller_step``)."""
 from __future__ import annotations
 
 from typing import Optional
@@ -11,16 +11,16 @@ from numpy.typing import ArrayLike, NDArray
 from ._core_structs import (RHO_MIN, V_LIMIT, Array, _in, _out, _rows, _shape, _u32, _vec, lib, motor_struct,
                             plan_struct, smc_struct)
 from .control.smc import FlatnessSMC
-from .flat import FlatFlag
-from .motor import MotorParams
-from .plan import RestToRest
+from .model.flat import FlatFlag
+from .model.motor import MotorParams
+from .plan.rest_to_rest import RestToRest
 
 def plan_flag(plan: RestToRest, t: ArrayLike) -> FlatFlag:
     """C ``plan_eval`` at times ``t``; the same values as :meth:`RestToRest.flag`."""
     t_arr = np.asarray(t, dtype=np.float64)
     tv = _vec(t_arr)
     out = np.empty((tv.size, 6))
-    lib.batch_plan_eval(plan_struct(plan), _in(tv), tv.size, _out(out))
+    lib.arrays_plan_eval(plan_struct(plan), _in(tv), tv.size, _out(out))
     return FlatFlag(*_shape(out, t_arr.shape))
 
 
@@ -31,7 +31,7 @@ def flat_voltages(motor: MotorParams, rho: ArrayLike, drho: ArrayLike, theta: Ar
                                  (rho, drho, theta, dtheta, ddtheta, dddtheta, phi, torque_demand)))
     rows = np.ascontiguousarray(np.stack([a.ravel() for a in args], axis=1))
     out = np.empty((rows.shape[0], 2))
-    lib.batch_flat_voltages(motor_struct(motor), _in(rows), rows.shape[0], _out(out))
+    lib.arrays_flat_voltages(motor_struct(motor), _in(rows), rows.shape[0], _out(out))
     return _nan_outside(_shape(out, args[0].shape), rows, motor)
 
 
@@ -50,7 +50,7 @@ def flat_to_state(flag: FlatFlag, motor: MotorParams, load_torque: float = 0.0) 
     arrays = np.broadcast_arrays(*(np.asarray(f, dtype=np.float64) for f in flag))
     rows = np.ascontiguousarray(np.stack([a.ravel() for a in arrays], axis=1))
     x, v = np.empty((rows.shape[0], 4)), np.empty((rows.shape[0], 2))
-    bad = lib.batch_flat_to_state(motor_struct(motor), _in(rows), rows.shape[0], float(load_torque), _out(x), _out(v))
+    bad = lib.arrays_flat_to_state(motor_struct(motor), _in(rows), rows.shape[0], float(load_torque), _out(x), _out(v))
     if bad:
         raise ValueError(f"{bad} sample(s) of the flat flag are outside the domain of the flat maps "
                          "(rho <= 0 or |J theta'' + B theta' + tau| >= Km rho)")
@@ -64,7 +64,7 @@ def state_to_flat(x: ArrayLike, v: ArrayLike, motor: MotorParams, load_torque: f
     if xr.shape[0] != vr.shape[0]:
         raise ValueError(f"x has {xr.shape[0]} samples but v has {vr.shape[0]}")
     out = np.empty((xr.shape[0], 6))
-    bad = lib.batch_state_to_flat(motor_struct(motor), _in(xr), _in(vr), xr.shape[0], float(load_torque), _out(out))
+    bad = lib.arrays_state_to_flat(motor_struct(motor), _in(xr), _in(vr), xr.shape[0], float(load_torque), _out(out))
     if bad:
         raise ValueError(f"{bad} sample(s) have ia = ib = 0 (rho = 0): the flat outputs' phase is undefined there")
     return FlatFlag(*_shape(out, x_arr.shape[1:]))
@@ -85,17 +85,17 @@ def smc_voltages(controller: FlatnessSMC, t: ArrayLike, x: ArrayLike, ddtheta: O
     y = np.ascontiguousarray(np.column_stack([xr, acc]))
     tv = np.ascontiguousarray(np.broadcast_to(_vec(t), (n,)))
     v, status = np.empty((n, 2)), np.empty(n, dtype=np.uint32)
-    lib.batch_smc_step(smc_struct(controller, v_limit, rho_min), _in(tv), _in(y), n, _out(v),
+    lib.arrays_smc_step(smc_struct(controller, v_limit, rho_min), _in(tv), _in(y), n, _out(v),
                        _u32(status))
     return np.ascontiguousarray(v.T), status
 
 
 def plan_to_state(plan: RestToRest, motor: MotorParams, t: ArrayLike, load_torque: float = 0.0) -> tuple[Array, Array]:
-    """C ``batch_plan_flat``: the planned state (4, n) and feedforward voltages (2, n) at the times ``t`` (1-D),
+    """C ``arrays_plan_flat``: the planned state (4, n) and feedforward voltages (2, n) at the times ``t`` (1-D),
     plan and flat map in one C loop; the values of ``flat_to_state(plan_flag(plan, t), motor)``."""
     tv = _vec(t)
     flag, x, v = np.empty((tv.size, 6)), np.empty((tv.size, 4)), np.empty((tv.size, 2))
-    bad = lib.batch_plan_flat(plan_struct(plan), motor_struct(motor), _in(tv), tv.size, float(load_torque),
+    bad = lib.arrays_plan_flat(plan_struct(plan), motor_struct(motor), _in(tv), tv.size, float(load_torque),
                               _out(flag), _out(x), _out(v))
     if bad:
         raise ValueError(f"{bad} sample(s) of the plan are outside the domain of the flat maps "

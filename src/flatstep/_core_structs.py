@@ -6,27 +6,31 @@ in the Python reference) on this side.
 """
 from __future__ import annotations
 
+from typing import Any, NamedTuple, Optional
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._flatstep_core import ffi, lib
 from .control.smc import FlatnessSMC
-from .motor import MotorParams, check_positive
-from .plan import RestToRest
+from .validate import check_positive
+from .model.motor import MotorParams
+from .model.plant import PlantEffects
+from .plan.rest_to_rest import RestToRest
 
 Array = NDArray[np.float64]
-#: smc_step status bits by name; every bit but ``saturated`` is a fault (the step then outputs 0 V).
-STATUS_BITS = {"nonfinite": lib.SMC_NONFINITE, "rho": lib.SMC_RHO, "sqrt": lib.SMC_SQRT,
-               "overflow": lib.SMC_OVERFLOW, "saturated": lib.SMC_SATURATED}
+#: Controller status bits by name (csrc/controller.h); every bit but ``saturated`` is a fault (the step then outputs 0 V).
+STATUS_BITS = {"nonfinite": lib.CTRL_NONFINITE, "rho": lib.CTRL_RHO, "sqrt": lib.CTRL_SQRT,
+               "overflow": lib.CTRL_OVERFLOW, "saturated": lib.CTRL_SATURATED}
 #: The status bits that are faults (the step then outputs 0 V): all but ``saturated``.
-FAULT_BITS = lib.SMC_NONFINITE | lib.SMC_RHO | lib.SMC_SQRT | lib.SMC_OVERFLOW
+FAULT_BITS = lib.CTRL_FAULTS
 _SIM_ERRORS = {lib.SIM_EARGS: "invalid arguments", lib.SIM_ECONTROL: "the controller faulted",
                lib.SIM_EHMIN: "the step size fell below rounding level",
                lib.SIM_EMAXSTEPS: "more than max_steps steps", lib.SIM_ENONFINITE: "the state became non-finite"}
 _PARAM_ERRORS = {lib.SMC_EMOTOR: "motor", lib.SMC_EPLAN: "plan", lib.SMC_EGAINS: "gains",
                  lib.SMC_EMEASUREMENT: "measurement", lib.SMC_ELIMITS: "v_limit/rho_min"}
 #: Defaults of the guards in smc_step: bound on hypot(va, vb) [V] and smallest rho acted on [A].
-V_LIMIT, RHO_MIN = 1e3, 1e-6
+V_LIMIT, RHO_MIN = FlatnessSMC.c_v_limit, FlatnessSMC.c_rho_min
 
 
 def status_names(status: int) -> list[str]:
@@ -79,14 +83,8 @@ def plan_struct(p: RestToRest):
 
 
 def _smc_params(controller: FlatnessSMC, v_limit: float, rho_min: float) -> dict:
-    """The fields of a ``struct smc_params`` for ``controller`` (its motor model, plan, gains and measurement)."""
-    g = controller.gains
-    # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state
-    return dict(motor=_motor(controller.motor), plan=controller.plan.as_dict(),
-                gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn,
-                           hold_damping=g.hold_damping or 0.0),
-                measurement=lib.SMC_MODEL if controller.measurement == "model" else lib.SMC_IDEAL,
-                v_limit=v_limit, rho_min=rho_min)
+    """The fields of a ``struct smc_params`` for ``controller`` with the guards ``v_limit`` and ``rho_min``."""
+    return {**controller.c_params(), "v_limit": v_limit, "rho_min": rho_min}
 
 
 def smc_struct(controller: FlatnessSMC, v_limit: float = V_LIMIT, rho_min: float = RHO_MIN):
@@ -100,15 +98,58 @@ def smc_struct(controller: FlatnessSMC, v_limit: float = V_LIMIT, rho_min: float
     return s
 
 
-def _plant(motor: MotorParams, load: float):
-    return ffi.new("struct sim_plant *", dict(motor=_motor(motor), load=float(load)))
+class BoundController(NamedTuple):
+    """A controller's C state and the ``struct controller`` bound to it (the state must outlive the binding)."""
+
+    state: Any
+    iface: Any
 
 
-def _stats(st, key: str) -> dict:
-    return {"steps": st.steps, "rejected": st.rejected, "rhs_evals": st.rhs_evals, key: status_names(st.smc_status)}
+def controller_struct(controller: Any) -> BoundController:
+    """The C twin of a Python controller, initialised and bound into the run loops' interface (controller.h).
+
+    Any controller with ``c_name`` (its C module: ``struct <c_name>``, ``<c_name>_init``,
+    ``<c_name>_controller``) and ``c_params()`` (the fields of ``struct <c_name>_params``) runs on the C
+    engine; the binding knows no controller by name.
+    """
+    name = getattr(controller, "c_name", None)
+    if name is None or not hasattr(lib, f"{name}_init"):
+        raise ValueError(f"{type(controller).__name__} has no C implementation (c_name={name!r}); "
+                         "run it on engine='python'")
+    state = ffi.new(f"struct {name} *")
+    err = getattr(lib, f"{name}_init")(state, ffi.new(f"struct {name}_params *", controller.c_params()))
+    if err != 0:
+        raise ValueError(f"{name}_init rejected the {type(controller).__name__} parameters (error {err}): "
+                         f"{controller.c_params()!r}")
+    iface = ffi.new("struct controller *")
+    getattr(lib, f"{name}_controller")(state, iface)
+    return BoundController(state, iface)
+
+
+def _effects(effects: Optional[PlantEffects]) -> dict:
+    """The fields of a ``struct plant_effects`` (all zero: none)."""
+    if effects is None:
+        return {}
+    return dict(detent_torque=effects.detent_torque, detent_harmonic=4, coulomb_torque=effects.coulomb_torque,
+                coulomb_speed=effects.coulomb_speed, magnetizing_resistance=effects.magnetizing_resistance or 0.0)
+
+
+def _plant_fields(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> dict:
+    """The fields of a ``struct plant``: the simulated motor, its constant load torque and its effects."""
+    return dict(motor=_motor(motor), load=float(load), effects=_effects(effects))
+
+
+def _plant(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None):
+    """A ``struct plant``."""
+    return ffi.new("struct plant *", _plant_fields(motor, load, effects))
+
+
+def _stats(st, key: str = "controller_status") -> dict:
+    return {"steps": st.steps, "rejected": st.rejected, "rhs_evals": st.rhs_evals,
+            key: status_names(st.controller_status)}
 
 
 def _check(rc: int, st, what: str) -> None:
     if rc != lib.SIM_OK:
         raise RuntimeError(f"C {what} run failed at t = {st.t_fail:.6g} s: {_SIM_ERRORS.get(rc, rc)} "
-                           f"(controller status {status_names(st.smc_status)})")
+                           f"(controller status {status_names(st.controller_status)})")

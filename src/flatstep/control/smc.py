@@ -33,9 +33,10 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..flat import flat_voltages, polar
-from ..motor import MotorParams, check_finite, check_positive
-from ..plan import RestToRest
+from ..model.flat import flat_voltages, polar
+from ..validate import check_finite, check_positive
+from ..model.motor import MotorParams
+from ..plan.rest_to_rest import RestToRest
 
 MEASUREMENTS = ("ideal", "model", "observer")
 
@@ -90,6 +91,11 @@ class FlatnessSMC:
         ``J theta'' = Km (ib cos Nr theta - ia sin Nr theta) - B omega``; ``"observer"``: the estimate of a
         :class:`~flatstep.observers.Observer`, passed by the simulator like the ideal one.
     """
+
+    #: The C twin: csrc/smc.h (``struct smc``, ``smc_init``, ``smc_controller``).
+    c_name = "smc"
+    #: The C step's guards: bound on hypot(va, vb) [V] and smallest current norm acted on [A].
+    c_v_limit, c_rho_min = 1e3, 1e-6
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = SMCGains(),
                  measurement: str = "ideal"):
@@ -158,3 +164,13 @@ class FlatnessSMC:
         """
         y = np.asarray(measurement, dtype=float)
         return self.voltages(t, y[:4], None if self.measurement == "model" else y[4]), state
+
+    def c_params(self) -> dict:
+        """The fields of the C ``struct smc_params`` (csrc/smc.h) for this controller."""
+        g = self.gains
+        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+                    gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn,
+                               hold_damping=g.hold_damping or 0.0),
+                    # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state
+                    measurement=1 if self.measurement == "model" else 0,
+                    v_limit=self.c_v_limit, rho_min=self.c_rho_min)
