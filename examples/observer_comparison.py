@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flatstep.observers import Observer
-from flatstep.scenario_file import load_scenario
+from flatstep.loop.observers import Observer
+from flatstep.studies.scenario_file import load_scenario
 
 scenario, _ = load_scenario(Path(__file__).parent / "drive-20khz-14bit.toml")
 count = scenario.sensors.angle_step

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flatstep.drive import Drive
-from flatstep.scenario_file import load_scenario
+from flatstep.loop.drive import Drive
+from flatstep.studies.scenario_file import load_scenario
 
 scenario, _ = load_scenario(Path(__file__).parent / "drive-20khz-14bit.toml")
 count = scenario.sensors.angle_step
@@ -22,7 +22,7 @@ for label, drive in (("averaged", Drive()), ("switched 40 kHz", Drive(pwm="switc
     r = fine.run()
     t, e = r.t, np.abs(r.theta_error) / count
     # ripple: integrate one control period at rest finely under the applied PWM pattern
-    from flatstep.motor import rhs
+    from flatstep.model.motor import rhs
     k = int(np.searchsorted(t, 0.05))
     x = np.array([r.ia[k], r.ib[k], r.omega[k], r.theta[k]])
     dur, lv = drive.pwm_segments(np.array([r.va[k], r.vb[k]]), x[:2], fine.control_period)

@@ -9,9 +9,9 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from flatstep.compare import compare_worst
+from flatstep.studies.compare import compare_worst
 from flatstep.control.smc import SMCGains
-from flatstep.scenario_file import Robustness, load_scenario
+from flatstep.studies.scenario_file import Robustness, load_scenario
 
 here = Path(__file__).parent
 files = sys.argv[1:] or [here / "compare-paper-20khz.toml", here / "compare-nema17-fast.toml"]

@@ -7,7 +7,7 @@ designed law without the files' detent hold and for the standstill strategies tr
 limit cycle (docs/drive.md, "Standstill"), the shipped detent hold (``SMCGains.hold_damping``) among them.
 Each strategy changes the loop only from tf on; the move itself is the designed one.
 
-The loop here is the period-by-period drive loop of flatstep.sampled (averaged bridge), written out so that a strategy can change the observer and the law at rest (no measurement or computation
+The loop here is the period-by-period drive loop of flatstep.loop.reference (averaged bridge), written out so that a strategy can change the observer and the law at rest (no measurement or computation
 delay); on the designed loop it reproduces `flatstep robustness` to the printed digits.
 """
 from __future__ import annotations
@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 
 from flatstep.control.smc import FlatnessSMC
-from flatstep.observers import Observer
-from flatstep.robustness import REST_AFTER, perturbed, plant_errors
-from flatstep.sampled import _rk4  # the reference loop's RK4 step over one substep
-from flatstep.scenario_file import Robustness, load_scenario
+from flatstep.loop.observers import Observer
+from flatstep.studies.robustness import REST_AFTER, perturbed, plant_errors
+from flatstep.loop.reference import _rk4  # the reference loop's RK4 step over one substep
+from flatstep.studies.scenario_file import Robustness, load_scenario
 
 HERE = Path(__file__).parent
 FILES = ("drive-20khz-14bit.toml", "drive-20khz-optical-4000.toml", "nema17-20khz.toml")

@@ -4,10 +4,10 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 
 import flatstep as fs
-from flatstep.batch import run_batch, scenario_grid
-from flatstep.drive import Drive
-from flatstep.sensors import Sensors
-from flatstep.scenario import Scenario
+from flatstep.studies.batch import run_batch, scenario_grid
+from flatstep.loop.drive import Drive
+from flatstep.loop.sensors import Sensors
+from flatstep.studies.scenario import Scenario
 
 SAMPLED = Scenario("s", control_period=5e-5, substeps=4, measurement="model",
                    gains=fs.SMCGains(W1=150, W2=3e5, eps1=0.0375, eps2=75, xi=0.9, wn=400))
@@ -68,7 +68,7 @@ def test_bad_arguments(kwargs, match):
 ])
 def test_the_fast_path_condition_is_explicit(change, plain):
     from dataclasses import replace
-    from flatstep.batch import plain_sampled
+    from flatstep.studies.batch import plain_sampled
 
     assert plain_sampled(replace(SAMPLED, **change)) is plain
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from flatstep.cli import main
-from flatstep.scenario import PAPER_SCENARIOS
+from flatstep.studies.scenario import PAPER_SCENARIOS
 
 KEYS = {"theta_final", "ia_final", "ib_final", "omega_final", "max_abs_theta_error", "max_abs_rho_error",
         "max_abs_va", "max_abs_vb"}

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from flatstep.cli import main
-from flatstep.compare import compare, metrics
-from flatstep.plan import RestToRest
-from flatstep.scenario_file import load_scenario
+from flatstep.studies.compare import compare, metrics
+from flatstep.plan.rest_to_rest import RestToRest
+from flatstep.studies.scenario_file import load_scenario
 
 PLAN = RestToRest(0.0, 0.02, 0.4, 0.4, t0=0.01, tf=0.03)
 EXAMPLES = Path(__file__).parent.parent / "examples"

@@ -1,4 +1,4 @@
-"""The sampled drive loop on the C engine (``sampled_run``) against the Python reference (``flatstep.sampled``).
+"""The sampled drive loop on the C engine (``sampled_run``) against the Python reference (``flatstep.loop.reference``).
 
 Both loops do the same arithmetic in the same order, except where NumPy and libm round differently (the law's
 ``arccos``, the observer's matrix product, which NumPy hands to BLAS): their states then differ by about
@@ -15,10 +15,10 @@ import pytest
 
 import flatstep as fs
 from flatstep import _core
-from flatstep.drive import Drive
-from flatstep.observers import Observer
-from flatstep.plant import PlantEffects
-from flatstep.sensors import Sensors
+from flatstep.loop.drive import Drive
+from flatstep.loop.observers import Observer
+from flatstep.model.plant import PlantEffects
+from flatstep.loop.sensors import Sensors
 
 TS = 5e-5
 DESIGNED = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500)

@@ -7,9 +7,9 @@ import pytest
 
 from flatstep import _core
 from flatstep.control.smc import FlatnessSMC, SMCGains
-from flatstep.flat import FlatFlag
-from flatstep.motor import MotorParams
-from flatstep.plan import RestToRest
+from flatstep.model.flat import FlatFlag
+from flatstep.model.motor import MotorParams
+from flatstep.plan.rest_to_rest import RestToRest
 
 VECTORS = json.loads((Path(__file__).parent / "vectors" / "core.json").read_text())
 RTOL = 1e-12

@@ -6,7 +6,7 @@ from scipy.integrate import solve_ivp
 
 import flatstep as fs
 from flatstep.control.smc import FlatnessSMC, SMCGains
-from flatstep.motor import rhs
+from flatstep.model.motor import rhs
 
 PAPER = fs.MotorParams.preset("paper")
 W300 = SMCGains(W1=300.0, W2=300.0)
@@ -38,8 +38,8 @@ def test_c_result_assembly_matches_the_numpy_one(name):
     """simulate(engine='c') assembles its SimResult in one C call (_core.result_columns); NumPy's collect()
     on the same states gives the same series: references bit for bit (plan_flag is exact), the rest to
     rounding (measured: voltages 5.2e-14 V, reference voltages 1.6e-15 V, phi 2.2e-16 rad)."""
-    from flatstep.motor import torque
-    from flatstep.simulate import collect
+    from flatstep.model.motor import torque
+    from flatstep.engine.simulate import collect
 
     plant, ctrl, load = RUNS[name]
     c = run(name, engine="c")

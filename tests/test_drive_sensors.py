@@ -3,8 +3,8 @@ import math
 import numpy as np
 import pytest
 
-from flatstep.drive import Drive
-from flatstep.sensors import Sensors
+from flatstep.loop.drive import Drive
+from flatstep.loop.sensors import Sensors
 
 
 def test_saturation_keeps_the_direction():

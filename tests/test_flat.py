@@ -5,7 +5,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 import flatstep as fs
-from flatstep.flat import flat_voltages
+from flatstep.model.flat import flat_voltages
 
 # flat flag symbols: r = (rho, rho', rho''), q = (theta, ..., theta'''')
 r = (sp.Symbol("r0", positive=True), *sp.symbols("r1:3", real=True))

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.motor import load_function, torque
+from flatstep.model.motor import load_function, torque
 
 
 def test_paper_preset_values(motor):

@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.observers import Observer
-from flatstep.sampled import DriveLoop, run_reference
-from flatstep.sensors import Sensors
+from flatstep.loop.observers import Observer
+from flatstep.loop.reference import DriveLoop, run_reference
+from flatstep.loop.sensors import Sensors
 
 TS = 5e-5
 

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.plant import PlantEffects, plant_acceleration, plant_rhs
+from flatstep.model.plant import PlantEffects, plant_acceleration, plant_rhs
 
 TS = 5e-5
 

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.drive import Drive
-from flatstep.observers import Observer
-from flatstep.sensors import Sensors
+from flatstep.loop.drive import Drive
+from flatstep.loop.observers import Observer
+from flatstep.loop.sensors import Sensors
 
 TS = 5e-5
 DESIGNED = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500)
@@ -93,7 +93,7 @@ def test_delays_noise_and_switching_cost_accuracy_but_keep_the_move(motor, plan)
 
 def test_compute_delay_needs_smaller_gains(motor, plan):
     """One period of computation delay with lambda Ts = 0.3 still works; the paper's lambda Ts = 1 does not."""
-    from flatstep.design import design_gains
+    from flatstep.control.design import design_gains
 
     d = design_gains(motor, plan, compute_delay=True)
     kw = dict(load=1e-5, control_period=TS, drive=Drive(), sensors=Sensors(), observer=d.observer,

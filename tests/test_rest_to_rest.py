@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.plan import MAX_ORDER, PAPER_R
+from flatstep.plan.rest_to_rest import MAX_ORDER, PAPER_R
 
 T0, TF = 0.02, 0.04
 
@@ -26,7 +26,7 @@ def test_psi_closed_form_derivative():
 def test_psi_boundary_conditions():
     assert fs.psi(T0, T0, TF) == 0.0 and fs.psi(TF, T0, TF) == pytest.approx(1.0, abs=1e-13)
     # eq. (15) and the derivative orders: 4 vanish at t0, 5 at tf, the next one does not
-    from flatstep.plan import _PSI_DERIVS
+    from flatstep.plan.rest_to_rest import _PSI_DERIVS
     assert [abs(_PSI_DERIVS[k](0.0)) < 1e-9 for k in range(1, 6)] == [True, True, True, True, False]
     assert [abs(_PSI_DERIVS[k](1.0)) < 1e-9 for k in range(1, 6)] == [True] * 5
     assert abs(_PSI_DERIVS[0].deriv(6)(1.0)) > 1.0

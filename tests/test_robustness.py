@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from flatstep.cli import main
-from flatstep.robustness import perturbed, plant_errors, run_study
-from flatstep.scenario_file import Robustness, load_scenario
+from flatstep.studies.robustness import perturbed, plant_errors, run_study
+from flatstep.studies.scenario_file import Robustness, load_scenario
 
 DRIVE = Path(__file__).parent.parent / "examples" / "drive-20khz-14bit.toml"
 

@@ -3,7 +3,7 @@ from pathlib import Path
 import pytest
 
 import flatstep as fs
-from flatstep.scenario_file import load_scenario
+from flatstep.studies.scenario_file import load_scenario
 
 EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
 

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.scenario import PAPER_SCENARIOS
-from flatstep.simulate import CONTINUOUS_ENGINES
+from flatstep.studies.scenario import PAPER_SCENARIOS
+from flatstep.engine.simulate import CONTINUOUS_ENGINES
 
 THETA_COUNT = 2 * np.pi / 16384
 

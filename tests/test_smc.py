@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.motor import torque
+from flatstep.model.motor import torque
 
 
 def true_acc(x, motor, load=0.0):

@@ -13,8 +13,8 @@ import argparse
 import statistics
 import time
 
-from flatstep.robustness import run_study
-from flatstep.scenario_file import Robustness, load_scenario
+from flatstep.studies.robustness import run_study
+from flatstep.studies.scenario_file import Robustness, load_scenario
 
 ENGINES = ("python", "c")
 KEYS = ("move", "rest", "final", "peak_voltage")

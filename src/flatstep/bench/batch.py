@@ -10,7 +10,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..scenario import PAPER_SCENARIOS
+from ..studies.scenario import PAPER_SCENARIOS
 from .common import Report, Target, core_module, race
 
 
@@ -23,7 +23,7 @@ def bench_batch(repeat: int = 3, runs: int = 200, control_period: float = 5e-5, 
     and on ``workers`` workers (default: every core), beside the binding's ``run_sampled`` (one C call per run;
     cffi releases the GIL, so threads run on separate cores) on one and on ``workers`` threads.
     """
-    from ..batch import run_batch, scenario_grid
+    from ..studies.batch import run_batch, scenario_grid
 
     core = core_module()
     if core is None:

@@ -6,9 +6,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..motor import MotorParams, rhs, torque
-from ..scenario import PAPER_SCENARIOS
-from ..simulate import simulate
+from ..model.motor import MotorParams, rhs, torque
+from ..studies.scenario import PAPER_SCENARIOS
+from ..engine.simulate import simulate
 from .common import Report, Target, core_module, race
 
 

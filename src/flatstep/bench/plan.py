@@ -8,9 +8,9 @@ from typing import Any, Callable
 import numpy as np
 from numpy.polynomial import Polynomial
 
-from ..flat import FlatFlag, flat_to_state, state_to_flat
-from ..motor import MotorParams, rhs
-from ..plan import PAPER_PLAN, RestToRest
+from ..model.flat import FlatFlag, flat_to_state, state_to_flat
+from ..model.motor import MotorParams, rhs
+from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from .common import Report, Target, core_module, race
 
 

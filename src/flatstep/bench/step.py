@@ -12,10 +12,10 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
-from ..flat import flat_to_state
-from ..motor import MotorParams
-from ..plan import PAPER_PLAN
-from ..scenario import PAPER_SCENARIOS
+from ..model.flat import flat_to_state
+from ..model.motor import MotorParams
+from ..plan.rest_to_rest import PAPER_PLAN
+from ..studies.scenario import PAPER_SCENARIOS
 from .common import ROOT, Report, Target, core_module, race
 
 

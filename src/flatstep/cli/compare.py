@@ -7,9 +7,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Optional
 
-from .compare import bandwidth_sweep, compare, compare_worst, default_band
-from .control.tuning import CONTROLLER_TYPES, LABELS
-from .scenario_file import load_scenario
+from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band
+from ..control.tuning import CONTROLLER_TYPES, LABELS
+from ..studies.scenario_file import load_scenario
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)
 COLUMNS = (("move_max", "max err", "angle"), ("move_rms", "rms err", "angle"), ("final", "final", "angle"),

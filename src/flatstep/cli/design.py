@@ -1,4 +1,4 @@
-"""Command line for real drives: ``flatstep design`` and ``flatstep robustness``."""
+"""Command line: ``flatstep design``, gains and observer for a sampled drive."""
 from __future__ import annotations
 
 import argparse
@@ -6,16 +6,15 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
-from .control.smc import SMCGains
-from .design import design_gains
-from .drive import Drive
-from .robustness import REST_AFTER, run_study
-from .scenario import Scenario
-from .scenario_file import Robustness, load_scenario
-from .sensors import Sensors
+from ..control.smc import SMCGains
+from ..control.design import design_gains
+from ..loop.drive import Drive
+from ..studies.scenario import Scenario
+from ..studies.scenario_file import load_scenario
+from ..loop.sensors import Sensors
 
 
-def _drive_scenario(args: argparse.Namespace) -> Scenario:
+def _design_scenario(args: argparse.Namespace) -> Scenario:
     """The scenario file's drive, or the realistic default: paper motor and move, 24 V, 14-bit, 12-bit."""
     if args.scenario:
         scenario, _ = load_scenario(args.scenario)
@@ -30,7 +29,7 @@ def _drive_scenario(args: argparse.Namespace) -> Scenario:
 
 
 def cmd_design(args: argparse.Namespace) -> int:
-    base = _drive_scenario(args)
+    base = _design_scenario(args)
     s = base.sensors
     d = design_gains(base.motor, base.plan, control_period=base.control_period,
                      v_bus=base.drive.v_bus if base.drive else float("inf"),
@@ -66,39 +65,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_robustness(args: argparse.Namespace) -> int:
-    scenario, study = load_scenario(args.scenario)
-    study = study or Robustness()
-    if args.samples is not None:
-        study = replace(study, samples=args.samples)
-    result = run_study(scenario, study, with_paper_gains=not args.no_paper_gains, progress=args.progress)
-    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else None
-    report = {label: {k: v for k, v in s.items() if k != "rows"} for label, s in result["sets"].items()}
-    report = {"scenario": scenario.name, "relative_error": study.relative_error, "parameters": list(study.parameters),
-              "runs_per_set": len(result["errors"]), "rest_starts_after_tf_s": REST_AFTER, "sets": report}
-    if args.out:
-        from .plots import plot_robustness
-
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        plot_robustness(result, count, scenario.plan, title=f"{scenario.name}: plant parameters off by "
-                        f"+-{study.relative_error:.0%} ({len(result['errors'])} plants)", path=out / "robustness.png")
-        (out / "robustness.json").write_text(json.dumps(report, indent=2) + "\n")
-    if args.json:
-        print(json.dumps(report, indent=2))
-        return 0
-    unit = "counts" if count else "rad"
-    print(f"{scenario.name}: {len(result['errors'])} plants, parameters off by +-{study.relative_error:.0%}")
-    print(f"{'gains':<14}{'runs ok':>9}{'worst move':>14}{'worst rest':>14}{'final':>12}{'peak |v|':>11}  [{unit}, V]")
-    for label, s in report["sets"].items():
-        w, wv = s.get("worst_counts", s["worst_rad"]), s["worst_rad"]
-        print(f"{label:<14}{s['runs'] - s['failed']:>5}/{s['runs']:<3}{w.get('move', float('nan')):>14.3f}"
-              f"{w.get('rest', float('nan')):>14.3f}{w.get('final', float('nan')):>12.3f}"
-              f"{wv.get('peak_voltage', float('nan')):>11.3g}")
-    return 0
-
-
-def add_drive_commands(sub) -> None:
+def add_design_command(sub) -> None:
     des = sub.add_parser("design", help="design sliding gains and observer for a sampled drive")
     des.add_argument("scenario", nargs="?", default=None, help="a scenario file with a [drive] (default: "
                      "the paper's motor and move on the flags' drive)")
@@ -114,12 +81,3 @@ def add_drive_commands(sub) -> None:
                      "design.png, design.json")
     des.add_argument("--json", action="store_true", help="print the design as JSON")
     des.set_defaults(func=cmd_design)
-
-    rob = sub.add_parser("robustness", help="a scenario under plant parameter errors ([robustness] of the file)")
-    rob.add_argument("scenario", help="a scenario file (TOML)")
-    rob.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
-    rob.add_argument("--no-paper-gains", action="store_true", help="skip the paper's gains on the same drive")
-    rob.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
-    rob.add_argument("--out", default=None, help="write robustness.png and robustness.json here")
-    rob.add_argument("--json", action="store_true", help="print the report as JSON")
-    rob.set_defaults(func=cmd_robustness)

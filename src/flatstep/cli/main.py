@@ -7,10 +7,14 @@ import sys
 from pathlib import Path
 from typing import Sequence
 
-from .control.smc import MEASUREMENTS, SMCGains
-from .feasibility import InfeasiblePlanError
-from .plan import PAPER_PLAN, RestToRest
-from .scenario import PAPER_SCENARIOS, Scenario
+from ..control.smc import MEASUREMENTS, SMCGains
+from ..plan.feasibility import InfeasiblePlanError
+from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
+from ..studies.scenario import PAPER_SCENARIOS, Scenario
+from ..studies.scenario_file import load_scenario
+from .compare import add_compare_command
+from .design import add_design_command
+from .robustness import add_robustness_command
 
 TABLE_KEYS = ("theta_final", "max_abs_theta_error", "max_abs_rho_error", "max_abs_va", "max_abs_vb", "omega_final")
 
@@ -63,8 +67,6 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         given = [f"--{k.replace('_', '-')}" for k in SIM_FLAGS if getattr(args, k) is not None]
         if given:
             raise ValueError(f"{given} cannot be combined with a scenario file: set them in {args.scenario}")
-        from .scenario_file import load_scenario
-
         scenario, _ = load_scenario(args.scenario)
     else:
         scenario = _scenario_from_flags(args)
@@ -81,7 +83,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench import main as bench_main
+    from ..bench import main as bench_main
 
     return bench_main(args.which, args.repeat)
 
@@ -118,12 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     sim.set_defaults(func=cmd_simulate)
 
-    from .cli_drive import add_drive_commands
-
-    add_drive_commands(sub)
-
-    from .cli_compare import add_compare_command
-
+    add_design_command(sub)
+    add_robustness_command(sub)
     add_compare_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")

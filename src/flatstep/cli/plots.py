@@ -9,7 +9,7 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .result import SimResult  # noqa: E402
+from ..engine.result import SimResult  # noqa: E402
 
 #: (series, reference or None, label) for each panel, in the paper's order.
 PANELS = (

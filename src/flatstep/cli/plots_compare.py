@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 
 from .plots import _finish, plot_traces, plt
-from .plan import RestToRest
-from .result import SimResult
+from ..plan.rest_to_rest import RestToRest
+from ..engine.result import SimResult
 
 
 def plot_overlay(results: dict[str, SimResult], plan: RestToRest, count: float | None = None, title: str = "",
@@ -34,7 +34,7 @@ def plot_overlay(results: dict[str, SimResult], plan: RestToRest, count: float |
 
 def plot_plants(study: dict[str, dict], labels: dict[str, str], plan: RestToRest, count: float | None = None,
                 title: str = "", path: str | Path | None = None):
-    """One panel per controller: the tracking error on every plant of a :func:`flatstep.compare.compare_worst`
+    """One panel per controller: the tracking error on every plant of a :func:`flatstep.studies.compare.compare_worst`
     study, with its worst move error in the title."""
     fig, axes = plt.subplots(len(study), 1, figsize=(9, 2.8 * len(study)), sharex=True, constrained_layout=True,
                              squeeze=False)

@@ -33,8 +33,9 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..motor import MotorParams, check_positive
-from ..plan import RestToRest
+from ..validate import check_positive
+from ..model.motor import MotorParams
+from ..plan.rest_to_rest import RestToRest
 from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, pi_integrate, pi_output
 
 

@@ -31,11 +31,12 @@ from typing import Optional
 
 import numpy as np
 
-from .control.smc import SMCGains
-from .feasibility import check_feasibility
-from .motor import MotorParams, check_finite, check_positive
-from .observers import Observer
-from .plan import RestToRest
+from .smc import SMCGains
+from ..plan.feasibility import check_feasibility
+from ..validate import check_finite, check_positive
+from ..model.motor import MotorParams
+from ..loop.observers import Observer
+from ..plan.rest_to_rest import RestToRest
 
 LAMBDA_TS = 0.3
 LAMBDA_TS_DELAYED = 0.15

@@ -29,8 +29,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..motor import MotorParams, check_finite, check_positive
-from ..plan import RestToRest
+from ..validate import check_finite, check_positive
+from ..model.motor import MotorParams
+from ..plan.rest_to_rest import RestToRest
 from .smc import MEASUREMENTS
 
 

@@ -17,9 +17,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ..motor import MotorParams, check_positive
-from ..plan import RestToRest
+from ..validate import check_positive
+from ..model.motor import MotorParams
+from ..plan.rest_to_rest import RestToRest
 from .cascade import CascadeFOC, CascadeGains
+from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .smc import FlatnessSMC, SMCGains
@@ -34,8 +36,6 @@ LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade"
 def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
     r"""``(lambda, omega_n)`` [rad/s] for a control period: :math:`\lambda T_s = 0.3` (0.15 delayed),
     :math:`\omega_n = \lambda/4`."""
-    from ..design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA  # design imports control: import late
-
     Ts = check_positive("control_period", control_period, unit=" s")
     lam = (LAMBDA_TS_DELAYED if compute_delay else LAMBDA_TS) / Ts
     return lam, WN_OVER_LAMBDA * lam
@@ -63,6 +63,4 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
         return Microstepping(motor, plan, MicrostepGains(lam), **common)
     if kind == "cascade":
         return CascadeFOC(motor, plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn), **common)
-    from ..design import XI
-
     return ExactLinearization(motor, plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam), **common)

@@ -9,16 +9,17 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
-from .control.smc import FlatnessSMC
-from .flat import flat_to_state, polar
-from .motor import Load, MotorParams, check_positive, load_function, rhs, torque
-from .plan import RestToRest
-from .drive import Drive
-from .observers import Observer
-from .plant import PlantEffects, plant_acceleration
+from ..control.smc import FlatnessSMC
+from ..model.flat import flat_to_state, polar
+from ..validate import check_integer, check_positive
+from ..model.motor import Load, MotorParams, acceleration, load_function, rhs
+from ..plan.rest_to_rest import RestToRest
+from ..loop.drive import Drive
+from ..loop.observers import Observer
+from ..model.plant import PlantEffects, plant_acceleration
 from .result import SimResult
-from .sampled import DriveLoop, run_reference
-from .sensors import Sensors
+from ..loop.reference import DriveLoop, run_reference
+from ..loop.sensors import Sensors
 
 ENGINES = ("c", "scipy", "python")
 CONTINUOUS_ENGINES = ("c", "scipy")
@@ -51,7 +52,7 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
     t_end : horizon [s].
     engine : ``"c"``: the C core, adaptive Dormand-Prince 8(5,3) at ``rtol``/``atol`` (``method`` is not
         used); ``"scipy"``: :func:`scipy.integrate.solve_ivp` with ``method`` at ``rtol``/``atol``;
-        ``"python"``: the readable sampled-loop reference (:mod:`flatstep.sampled`). Default (``None``): the C
+        ``"python"``: the readable sampled-loop reference (:mod:`flatstep.loop.reference`). Default (``None``): the C
         core, which runs the sampled drive loop too (sensors, observer, bus saturation, delays: C
         ``sampled_run``, held to the reference by ``tests/test_core_drive.py``), except for switched PWM,
         plant effects and the baseline controllers, which run on the Python reference loop.
@@ -60,11 +61,11 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
         ``t = k Ts`` with the voltage held in between (C engine only), the plant integrated by ``substeps``
         RK4 steps per period, and returns the samples at the control instants (voltages as applied).
     drive, sensors, observer, compute_delay : a realistic drive around a sampled controller (they need
-        ``control_period``): bus saturation and PWM (:class:`~flatstep.drive.Drive`), quantized and noisy
-        measurements (:class:`~flatstep.sensors.Sensors`), estimated speed, acceleration and load
-        (:class:`~flatstep.observers.Observer`, with ``measurement="observer"``), one period of delay
+        ``control_period``): bus saturation and PWM (:class:`~flatstep.loop.drive.Drive`), quantized and noisy
+        measurements (:class:`~flatstep.loop.sensors.Sensors`), estimated speed, acceleration and load
+        (:class:`~flatstep.loop.observers.Observer`, with ``measurement="observer"``), one period of delay
         between measuring and applying.
-    effects : detent torque, Coulomb friction, iron loss of the plant (:class:`~flatstep.plant.PlantEffects`);
+    effects : detent torque, Coulomb friction, iron loss of the plant (:class:`~flatstep.model.plant.PlantEffects`);
         sampled loop only; the controller and observer do not know them.
     """
     if effects is not None and not effects.active:
@@ -110,11 +111,8 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
         return _simulate_c(motor, plan, controller, load, t_end, x0, engine, rtol, atol, dt_out,
                            control_period, substeps)
 
-    def plant_acceleration(t, x):
-        return (torque(x, motor) - motor.B * x[2] - tau(t)) / motor.J
-
     def closed_loop(t, x):
-        v = controller.voltages(t, x, plant_acceleration(t, x))
+        v = controller.voltages(t, x, acceleration(x, motor, tau(t)))
         return rhs(t, x, v, motor, load)
 
     ts, xs, x = [], [], x0
@@ -126,7 +124,7 @@ def simulate(motor: MotorParams, plan: RestToRest, controller: Optional[Any] = N
         xs.append(sol.y if not xs else sol.y[:, 1:])
         x = sol.y[:, -1]
     t, X = np.concatenate(ts), np.concatenate(xs, axis=1)
-    return collect(t, X, plan, controller, plant_acceleration(t, X), {"engine": engine, "method": method,
+    return collect(t, X, plan, controller, acceleration(X, motor, tau(t)), {"engine": engine, "method": method,
                    "rtol": rtol, "atol": atol})
 
 
@@ -134,14 +132,13 @@ def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, l
                 x0: np.ndarray, engine: str, rtol: float, atol: float, dt_out: float,
                 control_period: Optional[float], substeps: int) -> SimResult:
     """The C engine: continuous (DOP853 on the output grid of :func:`_grid`) or sampled (ZOH + RK4)."""
-    from . import _core
+    from .. import _core
 
     if engine != "c":
         raise ValueError(f"control_period={control_period!r} needs engine='c' (engine={engine!r} is continuous only)")
     if callable(load):
         raise ValueError(f"load={load!r}: engine='c' takes a constant load torque; use engine='scipy' for a function")
     tau = load_function(load)(0.0)[()]
-    acc = lambda X: (torque(X, motor) - motor.B * X[2] - tau) / motor.J  # noqa: E731
     if control_period is None:
         segs = _grid(t_end, [plan.t0, plan.tf], dt_out)
         t = np.concatenate([segs[0]] + [s[1:] for s in segs[1:]])
@@ -153,18 +150,17 @@ def _simulate_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, l
         return _collect_columns(t, X, plan, controller, cols, {"engine": engine, "method": "DOP853", "rtol": rtol,
                                                                 "atol": atol, **stats})
     Ts = check_positive("control_period", control_period, unit=" s")
-    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-        raise ValueError(f"substeps={substeps!r} must be a positive integer (RK4 steps per control period)")
+    substeps = check_integer("substeps", substeps, why="RK4 steps per control period")
     n = max(1, math.ceil(t_end / Ts - 1e-9))
-    X, V, stats = _core.run_sampled(controller, motor, tau, x0, 0.0, n, Ts=Ts, substeps=int(substeps))
+    X, V, stats = _core.run_sampled(controller, motor, tau, x0, 0.0, n, Ts=Ts, substeps=substeps)
     t = np.arange(n + 1) * Ts
-    return collect(t, X, plan, controller, acc(X), {"engine": engine, "method": "RK4", "control_period": Ts,
-                                                    "substeps": int(substeps), **stats}, v=V)
+    return collect(t, X, plan, controller, acceleration(X, motor, tau), {"engine": engine, "method": "RK4",
+                   "control_period": Ts, "substeps": substeps, **stats}, v=V)
 
 
 def _simulate_python(motor: MotorParams, plan: RestToRest, controller: Any, loop: DriveLoop, load: Load,
                      t_end: float, x0: np.ndarray, effects: Optional[PlantEffects] = None) -> SimResult:
-    """The sampled drive loop reference of :mod:`flatstep.sampled`."""
+    """The sampled drive loop reference of :mod:`flatstep.loop.reference`."""
     tau, n = _check_loop(controller, loop, load, t_end)
     r = run_reference(motor, controller, loop, x0, tau, n, effects)
     return _loop_result("python", motor, plan, controller, loop, tau, effects, r)
@@ -173,13 +169,12 @@ def _simulate_python(motor: MotorParams, plan: RestToRest, controller: Any, loop
 def _simulate_drive_c(motor: MotorParams, plan: RestToRest, controller: FlatnessSMC, loop: DriveLoop, load: Load,
                       t_end: float, x0: np.ndarray) -> SimResult:
     """The sampled drive loop on the C engine (``sampled_run``), returned as the reference returns it."""
-    from . import _core
+    from .. import _core
 
     tau, n = _check_loop(controller, loop, load, t_end)
-    if isinstance(loop.substeps, bool) or not isinstance(loop.substeps, (int, np.integer)) or loop.substeps < 1:
-        raise ValueError(f"substeps={loop.substeps!r} must be a positive integer (RK4 steps per control period)")
+    substeps = check_integer("substeps", loop.substeps, why="RK4 steps per control period")
     X, V, Y, status, stats = _core.run_drive(controller, motor, tau, x0, n, Ts=loop.control_period,
-                                             substeps=int(loop.substeps), drive=loop.drive, sensors=loop.sensors,
+                                             substeps=substeps, drive=loop.drive, sensors=loop.sensors,
                                              observer=loop.observer, compute_delay=loop.compute_delay)
     t = np.arange(n + 1) * loop.control_period
     r = {"t": t, "x": X, "v": V, "y": Y, "faults": t[(status & _core.FAULT_BITS) != 0]}
@@ -193,7 +188,7 @@ def _c_unsupported(controller: Any, drive: Optional[Drive], sensors: Optional[Se
         return f"the {type(controller).__name__} controller"
     if effects is not None:
         return "plant effects (detent, Coulomb friction, iron loss)"
-    from . import _core
+    from .. import _core
 
     return _core.drive_unsupported(drive, sensors)
 

@@ -6,7 +6,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .motor import check_finite, check_positive
+from ..validate import check_finite, check_positive
 
 PWM_MODES = ("averaged", "switched")
 

@@ -9,7 +9,8 @@ import scipy.linalg
 from numpy.typing import NDArray
 from scipy.signal import place_poles
 
-from .motor import MotorParams, check_positive
+from ..validate import check_positive
+from ..model.motor import MotorParams
 
 
 @dataclass(frozen=True)

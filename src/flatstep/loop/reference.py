@@ -9,7 +9,7 @@ One control period k, at ``t_k = k Ts``:
 3. the controller computes the voltages; with ``compute_delay`` they are applied one period later;
 4. the drive saturates them at the bus (direction kept) and, in switched mode, chops them into PWM
    segments;
-5. the plant (eq. (1) plus any :class:`~flatstep.plant.PlantEffects`: detent, Coulomb friction, iron loss)
+5. the plant (eq. (1) plus any :class:`~flatstep.model.plant.PlantEffects`: detent, Coulomb friction, iron loss)
    is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
 6. the observer predicts the next angle, speed and load from the torque of the measured currents.
 
@@ -24,9 +24,9 @@ from typing import Optional
 import numpy as np
 
 from .drive import Drive
-from .motor import MotorParams
+from ..model.motor import MotorParams, acceleration, torque
 from .observers import Observer
-from .plant import PlantEffects, plant_acceleration, plant_rhs
+from ..model.plant import PlantEffects, plant_acceleration, plant_rhs
 from .sensors import Sensors
 
 
@@ -87,9 +87,9 @@ def run_reference(plant: MotorParams, controller, loop: DriveLoop, x0: np.ndarra
         th_m, ia_m, ib_m = history[max(0, len(history) - 1 - delay)]
         if observer is not None:
             xh = np.array([th_m] + [0.0] * (observer.order - 1)) if xh is None else xh + Lc * (th_m - xh[0])
-            Te = model.Km * (ib_m * np.cos(model.Nr * xh[0]) - ia_m * np.sin(model.Nr * xh[0]))
-            load_hat = xh[2] if observer.order > 2 else 0.0
-            y = (ia_m, ib_m, xh[1], xh[0], (Te - model.B * xh[1] - load_hat) / model.J)
+            x_m = (ia_m, ib_m, xh[1], xh[0])  # measured currents, estimated speed and angle
+            Te = torque(x_m, model)
+            y = (*x_m, acceleration(x_m, model, xh[2] if observer.order > 2 else 0.0))
         elif sensors is None:
             y = (*x, float(plant_acceleration(x, plant, load, effects)))
         else:

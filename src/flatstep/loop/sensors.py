@@ -8,14 +8,7 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .motor import check_finite, check_positive
-
-
-def _check_count(name: str, value: Optional[int], low: int) -> None:
-    if value is None:
-        return
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name}={value!r} must be an integer >= {low} (or None for an exact measurement)")
+from ..validate import check_finite, check_integer, check_nonnegative, check_positive
 
 
 @dataclass(frozen=True)
@@ -44,9 +37,9 @@ class Sensors:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        _check_count("encoder_counts", self.encoder_counts, 4)
-        _check_count("current_bits", self.current_bits, 2)
-        _check_count("delay", self.delay, 0)
+        for name, low in (("encoder_counts", 4), ("current_bits", 2), ("delay", 0)):
+            if getattr(self, name) is not None:
+                check_integer(name, getattr(self, name), low=low, why="or None for an exact measurement")
         off = check_finite("encoder_offset", self.encoder_offset)
         if not -0.5 <= off < 0.5:
             raise ValueError(f"encoder_offset={off!r} must be in [-0.5, 0.5) counts")
@@ -54,9 +47,7 @@ class Sensors:
         if len(self.current_offset) != 2:
             raise ValueError(f"current_offset={self.current_offset!r} must be two offsets (ia, ib) in A")
         object.__setattr__(self, "current_offset", tuple(check_finite("current_offset", o) for o in self.current_offset))
-        noise = check_finite("current_noise", self.current_noise)
-        if noise < 0:
-            raise ValueError(f"current_noise={noise!r} A must be >= 0")
+        check_nonnegative("current_noise", self.current_noise, unit=" A")
 
     @property
     def angle_step(self) -> float:

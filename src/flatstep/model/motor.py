@@ -11,28 +11,12 @@ from typing import Callable, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..validate import check_finite, check_integer, check_nonnegative, check_positive
+
 Load = Union[float, Callable[[NDArray[np.float64]], ArrayLike]]
 
 STATE_NAMES = ("ia", "ib", "omega", "theta")
 INPUT_NAMES = ("va", "vb")
-
-
-def check_finite(name: str, value: float) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}={value!r} is not a number; give a finite real value") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{name}={value!r} is not finite; give a finite real value")
-    return value
-
-
-def check_positive(name: str, value: float, *, unit: str = "") -> float:
-    """Return ``value`` as float, or raise a ValueError if it is not finite and > 0."""
-    value = check_finite(name, value)
-    if value <= 0.0:
-        raise ValueError(f"{name}={value!r}{unit} must be > 0")
-    return value
 
 
 @dataclass(frozen=True)
@@ -59,18 +43,12 @@ class MotorParams:
     def __post_init__(self) -> None:
         for name, unit in (("R", " ohm"), ("L", " H"), ("Km", " V s/rad"), ("J", " kg m^2")):
             object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=unit))
-        B = check_finite("B", self.B)
-        if B < 0.0:
-            raise ValueError(f"B={B!r} N m s/rad must be >= 0 (viscous friction cannot be negative)")
-        object.__setattr__(self, "B", B)
+        object.__setattr__(self, "B", check_nonnegative("B", self.B, unit=" N m s/rad",
+                                                        why="viscous friction cannot be negative"))
         Nr = self.Nr
-        if isinstance(Nr, bool) or not isinstance(Nr, (int, np.integer, float)) or (
-            isinstance(Nr, float) and (not math.isfinite(Nr) or not Nr.is_integer())
-        ):
-            raise ValueError(f"Nr={Nr!r} must be a positive integer (number of rotor teeth)")
-        if int(Nr) < 1:
-            raise ValueError(f"Nr={Nr!r} must be a positive integer (number of rotor teeth)")
-        object.__setattr__(self, "Nr", int(Nr))
+        if isinstance(Nr, float) and Nr.is_integer() and Nr >= 1:  # a whole float such as 50.0 is 50 teeth
+            Nr = int(Nr)
+        object.__setattr__(self, "Nr", check_integer("Nr", Nr, why="number of rotor teeth"))
 
     @classmethod
     def preset(cls, name: str) -> "MotorParams":
@@ -132,7 +110,7 @@ def rhs(t: ArrayLike, x: ArrayLike, v: ArrayLike, motor: MotorParams, load: Load
     return np.array([
         (va - motor.R * ia + motor.Km * omega * s) / motor.L,
         (vb - motor.R * ib - motor.Km * omega * c) / motor.L,
-        (motor.Km * (ib * c - ia * s) - motor.B * omega - tau) / motor.J,
+        acceleration(x, motor, tau),
         omega + 0.0 * theta,
     ])
 
@@ -141,3 +119,14 @@ def torque(x: ArrayLike, motor: MotorParams) -> NDArray[np.float64]:
     """Electromagnetic torque ``Km (ib cos Nr theta - ia sin Nr theta)`` [N m]."""
     ia, ib, _, theta = np.asarray(x, dtype=float)
     return motor.Km * (ib * np.cos(motor.Nr * theta) - ia * np.sin(motor.Nr * theta))
+
+
+def acceleration(x: ArrayLike, motor: MotorParams, load: ArrayLike = 0.0) -> NDArray[np.float64]:
+    r"""Rotor acceleration of eq. (1) under the load torque ``load`` [N m] (a constant or an array like the
+    state's trailing axes) [rad/s^2].
+
+    .. math::
+        \dot\omega = \big(K_m(i_b\cos N_r\theta - i_a\sin N_r\theta) - B\omega - \tau\big) / J
+    """
+    omega = np.asarray(x, dtype=float)[2]
+    return (torque(x, motor) - motor.B * omega - load) / motor.J

@@ -27,7 +27,8 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .motor import MotorParams, check_finite, check_positive, rhs
+from ..validate import check_nonnegative, check_positive
+from .motor import MotorParams, rhs
 
 
 @dataclass(frozen=True)
@@ -49,10 +50,7 @@ class PlantEffects:
 
     def __post_init__(self) -> None:
         for name in ("detent_torque", "coulomb_torque"):
-            value = check_finite(name, getattr(self, name))
-            if value < 0.0:
-                raise ValueError(f"{name}={value!r} N m must be >= 0 (an amplitude)")
-            object.__setattr__(self, name, value)
+            object.__setattr__(self, name, check_nonnegative(name, getattr(self, name), unit=" N m", why="an amplitude"))
         object.__setattr__(self, "coulomb_speed", check_positive("coulomb_speed", self.coulomb_speed, unit=" rad/s"))
         if self.magnetizing_resistance is not None:
             object.__setattr__(self, "magnetizing_resistance",
@@ -88,7 +86,7 @@ NO_EFFECTS = PlantEffects()
 
 def plant_rhs(x: ArrayLike, v: ArrayLike, motor: MotorParams, load: float = 0.0,
               effects: Optional[PlantEffects] = None) -> NDArray[np.float64]:
-    """Eq. (1) plus the effects' torque on the speed equation (vectorized like :func:`flatstep.motor.rhs`);
+    """Eq. (1) plus the effects' torque on the speed equation (vectorized like :func:`flatstep.model.motor.rhs`);
     ``load`` is a constant load torque [N m]."""
     dx = rhs(0.0, x, v, motor, load)
     if effects is not None and effects.active:

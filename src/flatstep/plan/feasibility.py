@@ -9,9 +9,9 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .flat import flat_to_state
-from .motor import MotorParams
-from .plan import RestToRest
+from ..model.flat import flat_to_state
+from ..model.motor import MotorParams
+from .rest_to_rest import RestToRest
 
 
 class InfeasiblePlanError(ValueError):

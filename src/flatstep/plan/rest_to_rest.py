@@ -18,9 +18,10 @@ import numpy as np
 from numpy.polynomial import Polynomial
 from numpy.typing import ArrayLike, NDArray
 
-from .equilibria import equilibrium_currents, stable_angle
-from .flat import FlatFlag
-from .motor import MotorParams, check_finite, check_positive
+from ..model.equilibria import equilibrium_currents, stable_angle
+from ..model.flat import FlatFlag
+from ..validate import check_finite, check_positive
+from ..model.motor import MotorParams
 
 #: Coefficients r1..r6 of eq. (17).
 PAPER_R = (252.0, 1050.0, 1800.0, 1575.0, 700.0, 126.0)
@@ -123,7 +124,7 @@ def point_to_point(motor: MotorParams, theta1: float, theta2: float, rho1: float
     Raises
     ------
     InfeasiblePlanError
-        (a ValueError) carrying the :class:`~flatstep.feasibility.FeasibilityReport` of the worst point.
+        (a ValueError) carrying the :class:`~flatstep.plan.feasibility.FeasibilityReport` of the worst point.
     """
     from .feasibility import check_feasibility
 

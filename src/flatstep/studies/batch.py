@@ -1,7 +1,7 @@
 """Many closed-loop runs in one call: :func:`run_batch`, on all cores or on any ``concurrent.futures`` executor.
 
 Each worker receives a chunk of scenarios and returns one summary row per run (the keys of
-:meth:`~flatstep.result.SimResult.summary` plus ``index``, ``name`` and ``error``), so that only a few
+:meth:`~flatstep.engine.result.SimResult.summary` plus ``index``, ``name`` and ``error``), so that only a few
 numbers per run cross process boundaries. With ``out=`` the rows are appended to a JSON-lines file as
 chunks finish; running again with the same file skips the rows already there.
 """
@@ -18,7 +18,8 @@ from itertools import product
 from pathlib import Path
 from typing import Any, Iterable, Optional, Sequence, TextIO
 
-from .result import SimResult
+from ..engine.result import SimResult
+from ..validate import check_integer
 from .scenario import Scenario
 
 
@@ -52,7 +53,7 @@ def _run_chunk_c(chunk: list[tuple[int, Scenario]], options: dict[str, Any]) -> 
     """The rows of :func:`_run_chunk` for plain sampled runs (:func:`plain_sampled`), all simulated and
     summarised in one C call; an infeasible plan gives the same error row, and a run the C batch could not
     finish is run again by :func:`_run_one` for its error row."""
-    from . import _core
+    from .. import _core
 
     rows: dict[int, dict[str, Any]] = {}
     todo, runs = [], []
@@ -118,7 +119,7 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
     chunk_size : scenarios per task (default: enough for about 8 tasks per worker).
     progress : draw a progress bar on stderr; default: when stderr is a terminal and there are >= 100 runs.
     out : a JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
-    keep : names of time series (see :meth:`~flatstep.result.SimResult.series`) to return in each row as
+    keep : names of time series (see :meth:`~flatstep.engine.result.SimResult.series`) to return in each row as
         ``series_<name>`` lists, for figures.
     simulate_options : passed to :func:`flatstep.simulate` (e.g. ``engine``, ``dt_out``).
 
@@ -130,10 +131,9 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
     bad = [i for i, s in enumerate(scenarios) if not isinstance(s, Scenario)]
     if bad:
         raise ValueError(f"scenarios[{bad[0]}]={scenarios[bad[0]]!r} is not a flatstep Scenario")
-    if workers is not None and (not isinstance(workers, int) or workers < 1):
-        raise ValueError(f"workers={workers!r} must be a positive integer")
-    if chunk_size is not None and (not isinstance(chunk_size, int) or chunk_size < 1):
-        raise ValueError(f"chunk_size={chunk_size!r} must be a positive integer")
+    for name, value in (("workers", workers), ("chunk_size", chunk_size)):
+        if value is not None:
+            check_integer(name, value)
     valid = set(SimResult.__dataclass_fields__) - {"meta"} | {"theta_error", "rho_error"}
     if set(keep) - valid:
         raise ValueError(f"keep={list(keep)!r} names unknown series; valid: {sorted(valid)}")

@@ -25,9 +25,9 @@ from typing import Any, Optional, Sequence
 import numpy as np
 
 from .batch import run_batch
-from .control.tuning import CONTROLLER_TYPES
-from .plan import RestToRest
-from .result import SimResult
+from ..control.tuning import CONTROLLER_TYPES
+from ..plan.rest_to_rest import RestToRest
+from ..engine.result import SimResult
 from .robustness import perturbed, plant_errors
 from .scenario import Scenario
 from .scenario_file import Robustness
@@ -76,7 +76,7 @@ def metrics(t, theta_error, ia, ib, va, vb, plan: RestToRest, *, band: float, R:
 
 
 def result_metrics(result: SimResult, plan: RestToRest, *, band: float, R: float) -> dict[str, Optional[float]]:
-    """:func:`metrics` of a :class:`~flatstep.result.SimResult`."""
+    """:func:`metrics` of a :class:`~flatstep.engine.result.SimResult`."""
     return metrics(result.t, result.theta_error, result.ia, result.ib, result.va, result.vb, plan, band=band, R=R)
 
 

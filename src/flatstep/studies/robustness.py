@@ -8,7 +8,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .batch import run_batch
-from .control.smc import SMCGains
+from ..control.smc import SMCGains
 from .scenario import Scenario
 from .scenario_file import Robustness
 
@@ -41,7 +41,7 @@ def perturbed(scenario: Scenario, errors: list[dict[str, float]], label: str = "
 def run_study(scenario: Scenario, study: Robustness, *, with_paper_gains: bool = True,
               **batch_options: Any) -> dict[str, Any]:
     """Run the study for the scenario's gains (and the paper's gains on the same drive); return per-set
-    summaries, the worst values in encoder counts, and the traces for :func:`flatstep.plots.plot_robustness`."""
+    summaries, the worst values in encoder counts, and the traces for :func:`flatstep.cli.plots.plot_robustness`."""
     errors = plant_errors(study)
     sets = {"scenario": scenario}
     if with_paper_gains:

@@ -6,17 +6,18 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, Optional
 
-from .control.smc import SMCGains
-from .control.tuning import make_controller
-from .drive import Drive
-from .feasibility import FeasibilityReport, check_feasibility
-from .motor import MotorParams, check_positive
-from .observers import Observer
-from .plant import PlantEffects
-from .plan import PAPER_PLAN, RestToRest
-from .result import SimResult
-from .sensors import Sensors
-from .simulate import simulate
+from ..control.smc import SMCGains
+from ..control.tuning import make_controller
+from ..loop.drive import Drive
+from ..plan.feasibility import FeasibilityReport, check_feasibility
+from ..validate import check_integer, check_positive
+from ..model.motor import MotorParams
+from ..loop.observers import Observer
+from ..model.plant import PlantEffects
+from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
+from ..engine.result import SimResult
+from ..loop.sensors import Sensors
+from ..engine.simulate import simulate
 
 
 @dataclass(frozen=True)
@@ -55,8 +56,7 @@ class Scenario:
         check_positive("t_end", self.t_end, unit=" s")
         if self.control_period is not None:
             check_positive("control_period", self.control_period, unit=" s")
-        if isinstance(self.substeps, bool) or not isinstance(self.substeps, int) or self.substeps < 1:
-            raise ValueError(f"substeps={self.substeps!r} must be a positive integer (RK4 steps per period)")
+        check_integer("substeps", self.substeps, why="RK4 steps per period")
         if self.effects is not None and self.effects.active and self.control_period is None:
             raise ValueError("plant effects (detent, Coulomb friction, iron loss) are modelled on the sampled "
                              "drive loop only: give a control_period")

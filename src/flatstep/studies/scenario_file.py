@@ -14,16 +14,16 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from .control.smc import SMCGains
-from .control.tuning import CONTROLLER_TYPES
-from .design import design_gains
-from .drive import Drive
-from .motor import MotorParams, PRESETS
-from .observers import Observer
-from .plan import PAPER_PLAN, RestToRest
-from .plant import PlantEffects
+from ..control.smc import SMCGains
+from ..control.tuning import CONTROLLER_TYPES
+from ..control.design import design_gains
+from ..loop.drive import Drive
+from ..model.motor import MotorParams, PRESETS
+from ..loop.observers import Observer
+from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
+from ..model.plant import PlantEffects
 from .scenario import Scenario
-from .sensors import Sensors
+from ..loop.sensors import Sensors
 
 MOTOR_KEYS = ("preset", "R", "L", "Km", "J", "B", "Nr")
 EFFECT_KEYS = ("detent_torque", "coulomb_torque", "coulomb_speed", "magnetizing_resistance")

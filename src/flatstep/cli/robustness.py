@@ -1,0 +1,53 @@
+"""Command line: ``flatstep robustness``, a scenario under plant parameter errors."""
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import replace
+from pathlib import Path
+
+from ..studies.robustness import REST_AFTER, run_study
+from ..studies.scenario_file import Robustness, load_scenario
+
+
+def cmd_robustness(args: argparse.Namespace) -> int:
+    scenario, study = load_scenario(args.scenario)
+    study = study or Robustness()
+    if args.samples is not None:
+        study = replace(study, samples=args.samples)
+    result = run_study(scenario, study, with_paper_gains=not args.no_paper_gains, progress=args.progress)
+    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else None
+    report = {label: {k: v for k, v in s.items() if k != "rows"} for label, s in result["sets"].items()}
+    report = {"scenario": scenario.name, "relative_error": study.relative_error, "parameters": list(study.parameters),
+              "runs_per_set": len(result["errors"]), "rest_starts_after_tf_s": REST_AFTER, "sets": report}
+    if args.out:
+        from .plots import plot_robustness
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_robustness(result, count, scenario.plan, title=f"{scenario.name}: plant parameters off by "
+                        f"+-{study.relative_error:.0%} ({len(result['errors'])} plants)", path=out / "robustness.png")
+        (out / "robustness.json").write_text(json.dumps(report, indent=2) + "\n")
+    if args.json:
+        print(json.dumps(report, indent=2))
+        return 0
+    unit = "counts" if count else "rad"
+    print(f"{scenario.name}: {len(result['errors'])} plants, parameters off by +-{study.relative_error:.0%}")
+    print(f"{'gains':<14}{'runs ok':>9}{'worst move':>14}{'worst rest':>14}{'final':>12}{'peak |v|':>11}  [{unit}, V]")
+    for label, s in report["sets"].items():
+        w, wv = s.get("worst_counts", s["worst_rad"]), s["worst_rad"]
+        print(f"{label:<14}{s['runs'] - s['failed']:>5}/{s['runs']:<3}{w.get('move', float('nan')):>14.3f}"
+              f"{w.get('rest', float('nan')):>14.3f}{w.get('final', float('nan')):>12.3f}"
+              f"{wv.get('peak_voltage', float('nan')):>11.3g}")
+    return 0
+
+
+def add_robustness_command(sub) -> None:
+    rob = sub.add_parser("robustness", help="a scenario under plant parameter errors ([robustness] of the file)")
+    rob.add_argument("scenario", help="a scenario file (TOML)")
+    rob.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
+    rob.add_argument("--no-paper-gains", action="store_true", help="skip the paper's gains on the same drive")
+    rob.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
+    rob.add_argument("--out", default=None, help="write robustness.png and robustness.json here")
+    rob.add_argument("--json", action="store_true", help="print the report as JSON")
+    rob.set_defaults(func=cmd_robustness)

@@ -1,0 +1,1 @@
+"""Running a closed loop: ``simulate`` and its result."""

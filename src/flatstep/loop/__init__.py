@@ -1,0 +1,1 @@
+"""The sampled drive loop around a controller: drive (power stage), sensors, observers, the reference loop."""

@@ -1,0 +1,1 @@
+"""Planning: rest-to-rest moves on the flat outputs and their feasibility."""

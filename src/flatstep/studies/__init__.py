@@ -1,0 +1,1 @@
+"""Studies of many runs: scenarios, scenario files, batches, robustness, controller comparison."""
