@@ -30,5 +30,6 @@ int test_smc(void);
 int test_ode(void);
 int test_sim(void);
 int test_drive(void);
+int test_baselines(void);
 
 #endif

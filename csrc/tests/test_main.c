@@ -20,8 +20,10 @@ int main(int argc, char **argv)
         test_sim();
     else if (strcmp(suite, "drive") == 0)
         test_drive();
+    else if (strcmp(suite, "baselines") == 0)
+        test_baselines();
     else {
-        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive\n", argv[0]);
+        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines\n", argv[0]);
         return 2;
     }
     printf("%s: %d checks, %d failed\n", suite, check_count, check_failures);

@@ -1,0 +1,115 @@
+// cascade_init / cascade_reset / cascade_step: the law of flatstep.control.cascade, in its operation order.
+#include "cascade.h"
+
+// Returns true when x is finite and > 0.
+static bool positive(fs_real x)
+{
+    return fs_isfinite(x) && x > 0;
+}
+
+// Returns CASCADE_PARAMS_OK, or the cascade_param_error naming the invalid group (s is then unusable).
+int cascade_init(struct cascade *s, const struct cascade_params *p)
+{
+    const struct motor_params *m = &p->motor;
+    fs_real wc = p->gains.current_bandwidth, w = p->gains.position_bandwidth;
+    if (!motor_params_valid(m))
+        return CASCADE_EMOTOR;
+    if (!plan_valid(&p->plan))
+        return CASCADE_EPLAN;
+    if (!positive(wc) || !positive(w))
+        return CASCADE_EGAINS;
+    s->p = *p;
+    s->k_theta = w / 3;
+    s->k_omega = FS_C(2.25) * w;
+    s->kp = m->L * wc;
+    s->L_Nr = m->L * m->Nr;
+    if (!(fs_isfinite(s->k_omega) && fs_isfinite(FS_C(0.75) * (w * w)) && fs_isfinite(s->kp)
+          && fs_isfinite(m->R * wc) && fs_isfinite(s->L_Nr)))
+        return CASCADE_EGAINS;
+    if (!positive(p->Ts))
+        return CASCADE_EPERIOD;
+    s->ki_omega_Ts = FS_C(0.75) * (w * w) * p->Ts;
+    s->ki_Ts = m->R * wc * p->Ts;
+    if (!(fs_isfinite(s->ki_omega_Ts) && fs_isfinite(s->ki_Ts)))
+        return CASCADE_EPERIOD;
+    if (!(p->v_limit > 0))
+        return CASCADE_ELIMITS;
+    plan_init(&s->plan, &p->plan);
+    cascade_reset(s);
+    return CASCADE_PARAMS_OK;
+}
+
+// Returns nothing; sets the three integrals to 0.
+void cascade_reset(struct cascade *s)
+{
+    s->integral[0] = s->integral[1] = s->integral[2] = 0;
+}
+
+// Returns ctrl_status bits; writes the command v and advances the integrals (cascade.h).
+uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v)
+{
+    // e_w = theta*' + k_theta (theta* - theta) - omega; iq* = (J theta*'' + B theta*' + J (k_omega e_w + I0)) / Km;
+    // v_dq = kp (i_dq* - i_dq) + I12 [+ decoupling]; v = inverse Park; I += ki Ts e unless max|v| > v_limit.
+    const struct motor_params *m = &s->p.motor;
+    const fs_real *I = s->integral;
+    fs_real ref[PLAN_FLAG_LEN], e_w, accel, iq_ref, sn, cs, id, iq, e_d, e_q, vd, vq, out[2], next[3], z;
+    bool hold;
+    v[0] = v[1] = 0;
+    // x - x is 0 for a finite x and NaN otherwise: one test covers every input used and the state.
+    z = (t - t) + (y[0] - y[0]) + (y[1] - y[1]) + (y[2] - y[2]) + (y[3] - y[3]) + (I[0] - I[0]) + (I[1] - I[1])
+        + (I[2] - I[2]);
+    if (z != 0)
+        return CTRL_NONFINITE;
+    plan_flag(&s->plan, t, ref);
+    e_w = ref[PLAN_DTHETA] + s->k_theta * (ref[PLAN_THETA] - y[3]) - y[2];
+    accel = s->k_omega * e_w + I[0];
+    iq_ref = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA] + m->J * accel) / m->Km;
+    // Park transform by Nr theta: id = ia c + ib s, iq = -ia s + ib c.
+    fs_sincos(m->Nr * y[3], &sn, &cs);
+    id = y[0] * cs + y[1] * sn;
+    iq = -y[0] * sn + y[1] * cs;
+    e_d = 0 - id;
+    e_q = iq_ref - iq;
+    vd = s->kp * e_d + I[1];
+    vq = s->kp * e_q + I[2];
+    if (s->p.gains.decoupling) {
+        vd = vd + -s->L_Nr * y[2] * iq;
+        vq = vq + (s->L_Nr * y[2] * id + m->Km * y[2]);
+    }
+    out[0] = vd * cs - vq * sn;
+    out[1] = vd * sn + vq * cs;
+    hold = fs_fabs(out[0]) > s->p.v_limit || fs_fabs(out[1]) > s->p.v_limit;
+    next[0] = hold ? I[0] : I[0] + s->ki_omega_Ts * e_w;
+    next[1] = hold ? I[1] : I[1] + s->ki_Ts * e_d;
+    next[2] = hold ? I[2] : I[2] + s->ki_Ts * e_q;
+    if (!(fs_isfinite(out[0]) && fs_isfinite(out[1]) && fs_isfinite(next[0]) && fs_isfinite(next[1])
+          && fs_isfinite(next[2])))
+        return CTRL_OVERFLOW;
+    v[0] = out[0];
+    v[1] = out[1];
+    s->integral[0] = next[0];
+    s->integral[1] = next[1];
+    s->integral[2] = next[2];
+    return hold ? CTRL_SATURATED : CTRL_OK;
+}
+
+// Returns cascade_step's status for the interface's untyped state.
+static uint32_t cascade_step_any(void *self, fs_real t, const fs_real *y, fs_real *v)
+{
+    return cascade_step(self, t, y, v);
+}
+
+// Returns nothing; cascade_reset for the interface's untyped state.
+static void cascade_reset_any(void *self)
+{
+    cascade_reset(self);
+}
+
+// Returns nothing; binds s into the run loops' interface (not stateless: the integrals advance each step).
+void cascade_controller(struct cascade *s, struct controller *c)
+{
+    c->self = s;
+    c->step = cascade_step_any;
+    c->reset = cascade_reset_any;
+    c->stateless = false;
+}
