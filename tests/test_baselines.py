@@ -42,7 +42,7 @@ def test_park_round_trip_and_torque_axis(motor):
     ia, ib, th = rng.normal(size=(3, 50))
     d, q = park(ia, ib, motor.Nr * th)
     np.testing.assert_allclose(inverse_park(d, q, motor.Nr * th), [ia, ib], atol=1e-14)
-    np.testing.assert_allclose(motor.Km * q, fs.motor.torque(np.array([ia, ib, 0 * ia, th]), motor), atol=1e-14)
+    np.testing.assert_allclose(motor.Km * q, fs.model.motor.torque(np.array([ia, ib, 0 * ia, th]), motor), atol=1e-14)
 
 
 def test_pi_anti_windup_holds_the_integral_while_the_bus_limits(motor):
@@ -69,7 +69,7 @@ def test_cascade_gains_place_the_poles_w_w_w_over_4():
 def test_cascade_windup_is_bounded_under_a_low_bus(motor):
     """A 3 V bus cannot hold the fast plan; with the integrators held the loop recovers after the move."""
     ctrl = CascadeFOC(motor, SLOW, CascadeGains(6000.0, 1500.0), control_period=TS, measurement="ideal", v_limit=3.0)
-    r = fs.simulate(motor, SLOW, ctrl, control_period=TS, drive=fs.drive.Drive(v_bus=3.0), t_end=0.06)
+    r = fs.simulate(motor, SLOW, ctrl, control_period=TS, drive=fs.loop.drive.Drive(v_bus=3.0), t_end=0.06)
     assert np.max(np.abs([r.va, r.vb])) == pytest.approx(3.0)  # the bus did limit
     assert abs(r.theta_error[-1]) < 1e-5
 
@@ -82,7 +82,7 @@ def test_exact_linearization_error_obeys_the_placed_poles(motor):
     ctrl = ExactLinearization(motor, SLOW, gains, measurement="ideal")
     x0 = np.array([*SLOW.x0(motor.Nr)[:2], 0.0, 2e-4])  # the rotor 2e-4 rad off, at rest, before the move
     r = fs.simulate(motor, SLOW, ctrl, control_period=Ts, substeps=2, t_end=0.004, x0=x0, engine="python")
-    e0 = [2e-4, 0.0, float(fs.motor.torque(x0, motor) - 0.0) / motor.J]
+    e0 = [2e-4, 0.0, float(fs.model.motor.torque(x0, motor) - 0.0) / motor.J]
     k0, k1, k2 = gains.k
     lin = solve_ivp(lambda t, z: [z[1], z[2], -k2 * z[2] - k1 * z[1] - k0 * z[0]], (0, r.t[-1]), e0,
                     t_eval=r.t, rtol=1e-10, atol=1e-14)

@@ -88,7 +88,7 @@ def test_c_engine_result_is_the_reference_collect():
     r = run("fig2")
     _, ctrl, load = RUNS["fig2"]
     x = np.array([r.ia, r.ib, r.omega, r.theta])
-    acc = (fs.motor.torque(x, PAPER) - PAPER.B * r.omega - load) / PAPER.J
+    acc = (fs.model.motor.torque(x, PAPER) - PAPER.B * r.omega - load) / PAPER.J
     v = ctrl.voltages(r.t, x, acc)
     np.testing.assert_allclose([r.va, r.vb], v, rtol=1e-12, atol=1e-12)
     assert r.meta["engine"] == "c" and r.meta["method"] == "DOP853" and r.meta["controller_status"] == []
@@ -121,7 +121,7 @@ def zoh_reference(plant, ctrl, load, Ts, n):
         xs.append(x)
         if k == n:
             break
-        acc = (fs.motor.torque(x, plant) - plant.B * x[2] - load) / plant.J
+        acc = (fs.model.motor.torque(x, plant) - plant.B * x[2] - load) / plant.J
         v = ctrl.voltages(k * Ts, x, acc if ctrl.measurement == "ideal" else None)
         sol = solve_ivp(lambda t, y: rhs(t, y, v, plant, load), (k * Ts, (k + 1) * Ts), x, method="DOP853",
                         rtol=1e-12, atol=1e-14)
@@ -159,7 +159,7 @@ def test_sampled_voltages_are_the_applied_ones():
     r = run("fig1", control_period=1e-4, substeps=5)
     _, ctrl, _ = RUNS["fig1"]
     x = np.array([r.ia, r.ib, r.omega, r.theta])
-    acc = (fs.motor.torque(x, PAPER) - PAPER.B * r.omega) / PAPER.J
+    acc = (fs.model.motor.torque(x, PAPER) - PAPER.B * r.omega) / PAPER.J
     np.testing.assert_allclose([r.va, r.vb], ctrl.voltages(r.t, x, acc), rtol=1e-12, atol=1e-12)
 
 

@@ -16,7 +16,7 @@ def test_classification_matches_proposition_2_1(motor, ia, ib):
         if not p.stable:
             assert re[0] < 0 < re[1] and all(abs(e.imag) == 0 for e in p.eigenvalues)
         # each critical point is an equilibrium of eq. (1) at these currents: zero torque
-        assert fs.motor.torque([ia, ib, 0.0, p.theta], motor) == pytest.approx(0.0, abs=1e-15)
+        assert fs.model.motor.torque([ia, ib, 0.0, p.theta], motor) == pytest.approx(0.0, abs=1e-15)
 
 
 def test_eigenvalues_include_the_missing_1_over_J(motor):

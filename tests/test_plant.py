@@ -35,7 +35,7 @@ def test_magnetizing_resistance_is_the_simscape_torque(motor):
     s, c = np.sin(motor.Nr * th), np.cos(motor.Nr * th)
     ea, eb = -motor.Km * w * s, motor.Km * w * c
     simscape = motor.Km * (ib - eb / Rm) * c - motor.Km * (ia - ea / Rm) * s
-    ours = fs.motor.torque(x, motor) + fx.torque(w, th, motor)
+    ours = fs.model.motor.torque(x, motor) + fx.torque(w, th, motor)
     np.testing.assert_allclose(ours, simscape, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(fx.iron_loss_power(w, motor), (ea**2 + eb**2) / Rm, rtol=1e-12)
 
@@ -83,7 +83,7 @@ def test_effects_act_on_the_plant_only(motor, plan):
     assert detent.meta["effects"]["detent_torque"] == 1e-3 and "effects" not in clean.meta
     assert np.max(np.abs(detent.theta - clean.theta)) > 1e-7
     x = np.array([0.3, 0.1, 2.0, 0.004])
-    expected = (fs.motor.torque(x, motor) - motor.B * 2.0 - 1e-3 * np.sin(4 * motor.Nr * 0.004)) / motor.J
+    expected = (fs.model.motor.torque(x, motor) - motor.B * 2.0 - 1e-3 * np.sin(4 * motor.Nr * 0.004)) / motor.J
     assert plant_acceleration(x, motor, 0.0, fx) == pytest.approx(expected, rel=1e-12)
     with pytest.raises(ValueError, match="give control_period"):
         fs.simulate(motor, plan, ctrl, effects=fx)

@@ -45,14 +45,14 @@ def test_fig2_error_decays_on_a_longer_horizon():
 
 def test_model_measurement_under_load_is_biased():
     fig2 = PAPER_SCENARIOS["fig2"]
-    model = fs.scenario.Scenario("m", gains=fig2.gains, load_torque=1e-5, measurement="model")
+    model = fs.Scenario("m", gains=fig2.gains, load_torque=1e-5, measurement="model")
     e_model = model.run(engine="scipy").summary()["final_theta_error"]
     e_ideal = fig2.run(engine="scipy").summary()["final_theta_error"]
     assert e_model < 0 and abs(e_model) > 5 * abs(e_ideal)
 
 
 def test_without_load_model_and_ideal_modes_agree():
-    a = fs.scenario.Scenario("a", measurement="model").run(engine="scipy")
+    a = fs.Scenario("a", measurement="model").run(engine="scipy")
     b = PAPER_SCENARIOS["fig1"].run(engine="scipy")
     np.testing.assert_allclose(a.theta, b.theta, atol=1e-9)
 
