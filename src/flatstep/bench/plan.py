@@ -128,7 +128,7 @@ def bench_plan(repeat: int = 7, n: int = 401, min_time: float = 0.02, stock_basi
 
 
 def _raw_core_plan(core, motor: MotorParams, plan: RestToRest, t: np.ndarray) -> Callable[[], tuple]:
-    """The C work of (a) alone: one batch_plan_flat call into buffers allocated once."""
+    """The C work of (a) alone: one arrays_plan_flat call into buffers allocated once."""
     ffi, lib = core.ffi, core.lib
     m, p = core.motor_struct(motor), core.plan_struct(plan)
     tv, flag = np.ascontiguousarray(t), np.empty((t.size, 6))
@@ -138,7 +138,7 @@ def _raw_core_plan(core, motor: MotorParams, plan: RestToRest, t: np.ndarray) ->
     v_out = ffi.from_buffer("double[]", v, require_writable=True)
 
     def run() -> tuple:
-        lib.batch_plan_flat(p, m, t_in, t.size, 0.0, flag_out, x_out, v_out)
+        lib.arrays_plan_flat(p, m, t_in, t.size, 0.0, flag_out, x_out, v_out)
         return x.T, v.T
 
     return run
