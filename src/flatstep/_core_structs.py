@@ -130,7 +130,7 @@ def _effects(effects: Optional[PlantEffects]) -> dict:
     """The fields of a ``struct plant_effects`` (all zero: none)."""
     if effects is None:
         return {}
-    return dict(detent_torque=effects.detent_torque, detent_harmonic=4, coulomb_torque=effects.coulomb_torque,
+    return dict(detent_torque=effects.detent_torque, detent_harmonic=effects.detent_harmonic, coulomb_torque=effects.coulomb_torque,
                 coulomb_speed=effects.coulomb_speed, magnetizing_resistance=effects.magnetizing_resistance or 0.0)
 
 

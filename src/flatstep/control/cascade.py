@@ -84,6 +84,9 @@ class CascadeFOC(BaselineController):
     v_limit : the bus voltage its anti-windup knows [V].
     """
 
+    #: The C twin: csrc/cascade.h.
+    c_name = "cascade"
+
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: CascadeGains, *, control_period: float,
                  measurement: str = "observer", v_limit: float = math.inf):
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
@@ -116,3 +119,11 @@ class CascadeFOC(BaselineController):
         new = np.concatenate([[pi_integrate(self.pi_omega, e_omega, integral[0], Ts, hold)],
                               pi_integrate(self.pi, e_i, integral[1:], Ts, hold)])
         return v, new
+
+    def c_params(self) -> dict:
+        """The fields of the C ``struct cascade_params`` (csrc/cascade.h)."""
+        g = self.gains
+        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+                    gains=dict(current_bandwidth=g.current_bandwidth, position_bandwidth=g.position_bandwidth,
+                               decoupling=g.decoupling),
+                    Ts=self.control_period, v_limit=self.v_limit)

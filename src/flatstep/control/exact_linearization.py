@@ -79,6 +79,9 @@ class ExactLinearization(BaselineController):
     control_period : accepted for a uniform interface; the law is static.
     """
 
+    #: The C twin: csrc/exact_linearization.h.
+    c_name = "exact_linearization"
+
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: LinearizationGains, *,
                  measurement: str = "observer", control_period: Optional[float] = None, v_limit: float = math.inf):
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
@@ -101,3 +104,10 @@ class ExactLinearization(BaselineController):
         """Controller step ``(state, (ia, ib, omega, theta, ddtheta), t) -> (voltages, state)``; static law."""
         y = np.asarray(measurement, dtype=float)
         return self.voltages(t, y[:4], None if self.measurement == "model" else y[4]), state
+
+    def c_params(self) -> dict:
+        """The fields of the C ``struct exact_linearization_params`` (csrc/exact_linearization.h)."""
+        g = self.gains
+        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+                    gains=dict(wn=g.wn, xi=g.xi, p3=g.p3, pd=g.pd),
+                    measurement=1 if self.measurement == "model" else 0, v_limit=self.v_limit)

@@ -25,6 +25,7 @@ held for that period (conditional integration), so they do not wind up while the
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -111,3 +112,7 @@ class BaselineController:
         self.control_period = None if control_period is None else check_positive(
             "control_period", control_period, unit=" s")
         self.v_limit = check_v_limit(v_limit)
+
+    def initial_state(self) -> Any:
+        """The law's state at the start of a run: ``None`` for a static law (subclasses with state override)."""
+        return None

@@ -71,6 +71,9 @@ class Microstepping(BaselineController):
     v_limit : the bus voltage its anti-windup knows [V].
     """
 
+    #: The C twin: csrc/microstep.h.
+    c_name = "microstep"
+
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: MicrostepGains, *, control_period: float,
                  measurement: str = "model", v_limit: float = math.inf):
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
@@ -107,3 +110,9 @@ class Microstepping(BaselineController):
             v = v + m.R * i_ref + m.L * self.current_reference(t, 1)
         hold = bus_scale(v, self.v_limit) < 1.0
         return v, pi_integrate(self.pi, error, integral, self.control_period, hold)
+
+    def c_params(self) -> dict:
+        """The fields of the C ``struct microstep_params`` (csrc/microstep.h)."""
+        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+                    gains=dict(current_bandwidth=self.gains.current_bandwidth, feedforward=self.gains.feedforward),
+                    Ts=self.control_period, v_limit=self.v_limit)

@@ -157,6 +157,10 @@ class FlatnessSMC:
         return np.array([m.R * ia_ref + m.L * lam * (ia_ref - ia) - emf * np.sin(Nr_theta),
                          m.R * ib_ref + m.L * lam * (ib_ref - ib) + emf * np.cos(Nr_theta)])
 
+    def initial_state(self) -> None:
+        """This law is static: no state between steps."""
+        return None
+
     def step(self, state: None, measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], None]:
         """Controller step ``(state, measurement, t) -> (voltages, new state)``; this law is static.
 

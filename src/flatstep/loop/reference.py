@@ -19,7 +19,7 @@ not the fast path.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 
@@ -28,11 +28,30 @@ from ..model.motor import MotorParams, acceleration, torque
 from .observers import Observer
 from ..model.plant import PlantEffects, plant_acceleration, plant_rhs
 from .sensors import Sensors
+from ..validate import check_integer, check_positive
 
 
 @dataclass(frozen=True)
 class DriveLoop:
-    """The parts of a realistic drive around the controller; ``None`` parts are ideal."""
+    """Sampled control: the control period, the plant's integration, and the parts of the drive around the
+    controller (``None`` parts are ideal).
+
+    Parameters
+    ----------
+    control_period : float
+        Ts [s], > 0: the controller fires at ``t = k Ts`` and its voltage is held over the period.
+    substeps : int
+        RK4 steps of the plant per period (averaged bridge), >= 1.
+    compute_delay : bool
+        Apply each command one period after it is computed.
+    drive : Drive, optional
+        Bus saturation and PWM (:class:`~flatstep.loop.drive.Drive`).
+    sensors : Sensors, optional
+        Quantized and noisy measurements, measurement delay (:class:`~flatstep.loop.sensors.Sensors`).
+    observer : Observer, optional
+        Estimated angle, speed and load (:class:`~flatstep.loop.observers.Observer`), for a controller with
+        ``measurement="observer"``.
+    """
 
     control_period: float = 5e-5
     substeps: int = 4
@@ -40,6 +59,28 @@ class DriveLoop:
     drive: Optional[Drive] = None
     sensors: Optional[Sensors] = None
     observer: Optional[Observer] = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "control_period", check_positive("control_period", self.control_period, unit=" s"))
+        object.__setattr__(self, "substeps", check_integer("substeps", self.substeps, why="RK4 steps per control period"))
+        if not isinstance(self.compute_delay, (bool, np.bool_)):
+            raise ValueError(f"compute_delay={self.compute_delay!r} must be True or False")
+        for name, kind in (("drive", Drive), ("sensors", Sensors), ("observer", Observer)):
+            part = getattr(self, name)
+            if part is not None and not isinstance(part, kind):
+                raise ValueError(f"DriveLoop.{name}={part!r} is not a {kind.__name__} (or None)")
+
+    @classmethod
+    def at(cls, rate: float, **parts: Any) -> "DriveLoop":
+        """The loop at a control rate [Hz] (``control_period = 1 / rate``), with the other settings as keywords."""
+        return cls(control_period=1.0 / check_positive("rate", rate, unit=" Hz"), **parts)
+
+    def as_dict(self) -> dict[str, Any]:
+        """The settings, the parts as their own dicts (absent when ideal), for a result's metadata."""
+        out: dict[str, Any] = {"control_period": self.control_period, "substeps": self.substeps,
+                               "compute_delay": bool(self.compute_delay)}
+        out.update({k: getattr(self, k).as_dict() for k in ("drive", "sensors", "observer") if getattr(self, k)})
+        return out
 
 
 def _rk4(x, v, h, motor, load, effects=None):

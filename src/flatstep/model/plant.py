@@ -27,8 +27,8 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_nonnegative, check_positive
-from .motor import MotorParams, rhs
+from ..validate import check_integer, check_nonnegative, check_positive
+from .motor import Load, MotorParams, load_function, rhs
 
 
 @dataclass(frozen=True)
@@ -37,21 +37,25 @@ class PlantEffects:
 
     Parameters
     ----------
-    detent_torque : amplitude :math:`T_d` [N m] of :math:`-T_d\\sin(4N_r\\theta)`, >= 0.
+    detent_torque : amplitude :math:`T_d` [N m] of :math:`-T_d\\sin(hN_r\\theta)`, >= 0.
     coulomb_torque : Coulomb friction :math:`T_c` [N m], >= 0.
     coulomb_speed : :math:`\\omega_s` [rad/s] of the smooth sign :math:`\\tanh(\\omega/\\omega_s)`, > 0.
     magnetizing_resistance : :math:`R_m` [ohm] > 0, or ``None`` for no iron loss.
+    detent_harmonic : :math:`h`, the detent's harmonic of the electrical angle, a positive integer (4 for a
+        two-phase hybrid or PM stepper: four detent periods per electrical period).
     """
 
     detent_torque: float = 0.0
     coulomb_torque: float = 0.0
     coulomb_speed: float = 0.01
     magnetizing_resistance: Optional[float] = None
+    detent_harmonic: int = 4
 
     def __post_init__(self) -> None:
         for name in ("detent_torque", "coulomb_torque"):
             object.__setattr__(self, name, check_nonnegative(name, getattr(self, name), unit=" N m", why="an amplitude"))
         object.__setattr__(self, "coulomb_speed", check_positive("coulomb_speed", self.coulomb_speed, unit=" rad/s"))
+        object.__setattr__(self, "detent_harmonic", check_integer("detent_harmonic", self.detent_harmonic))
         if self.magnetizing_resistance is not None:
             object.__setattr__(self, "magnetizing_resistance",
                                check_positive("magnetizing_resistance", self.magnetizing_resistance, unit=" ohm"))
@@ -63,9 +67,9 @@ class PlantEffects:
 
     def torque(self, omega: ArrayLike, theta: ArrayLike, motor: MotorParams) -> NDArray[np.float64]:
         r"""The torque the effects add to the rotor [N m]:
-        :math:`-T_d\sin 4N_r\theta - T_c\tanh(\omega/\omega_s) - K_m^2\omega/R_m`."""
+        :math:`-T_d\sin hN_r\theta - T_c\tanh(\omega/\omega_s) - K_m^2\omega/R_m`."""
         omega, theta = np.asarray(omega, dtype=float), np.asarray(theta, dtype=float)
-        out = -self.detent_torque * np.sin(4 * motor.Nr * theta) - self.coulomb_torque * np.tanh(omega / self.coulomb_speed)
+        out = -self.detent_torque * np.sin(self.detent_harmonic * motor.Nr * theta) - self.coulomb_torque * np.tanh(omega / self.coulomb_speed)
         if self.magnetizing_resistance is not None:
             out = out - motor.Km**2 / self.magnetizing_resistance * omega
         return out
@@ -99,3 +103,47 @@ def plant_acceleration(x: ArrayLike, motor: MotorParams, load: float = 0.0,
                        effects: Optional[PlantEffects] = None) -> NDArray[np.float64]:
     r"""The true :math:`\ddot\theta` of the plant in state ``x`` (what the ``ideal`` measurement reads)."""
     return plant_rhs(x, np.zeros(2), motor, load, effects)[2]
+
+
+@dataclass(frozen=True)
+class Plant:
+    """The simulated plant of a run: its motor, the effects eq. (1) leaves out, and its load.
+
+    Parameters
+    ----------
+    motor : MotorParams
+        The simulated motor (a controller keeps its own nominal model, which may differ).
+    effects : PlantEffects, optional
+        Detent torque, Coulomb friction and iron loss; ``None`` (or all zero) for none.
+    load : float or callable
+        Load torque [N m], a constant or a function of time (a function runs on the scipy engine only).
+    """
+
+    motor: MotorParams
+    effects: Optional[PlantEffects] = None
+    load: Load = 0.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.motor, MotorParams):
+            raise ValueError(f"Plant.motor={self.motor!r} is not a MotorParams")
+        if self.effects is not None and not isinstance(self.effects, PlantEffects):
+            raise ValueError(f"Plant.effects={self.effects!r} is not a PlantEffects (or None)")
+        if self.effects is not None and not self.effects.active:
+            object.__setattr__(self, "effects", None)
+        load_function(self.load)  # a constant must be finite; a function is checked where it is called
+
+    @property
+    def constant_load(self) -> Optional[float]:
+        """The load torque [N m] when it is a constant, else ``None``."""
+        return None if callable(self.load) else float(self.load)
+
+    def acceleration(self, x: ArrayLike, t: ArrayLike = 0.0) -> NDArray[np.float64]:
+        r"""The plant's true :math:`\ddot\theta` in states ``x`` at times ``t`` (the ``ideal`` measurement)."""
+        x = np.asarray(x, dtype=float)
+        acc = rhs(t, x, np.zeros(2), self.motor, self.load)[2]
+        return acc + self.effects.torque(x[2], x[3], self.motor) / self.motor.J if self.effects else acc
+
+    def as_dict(self) -> dict:
+        """The motor, the effects and (when constant) the load, for a result's metadata."""
+        return {"motor": self.motor.as_dict(), "effects": self.effects.as_dict() if self.effects else None,
+                "load": self.constant_load if not callable(self.load) else repr(self.load)}

@@ -23,11 +23,10 @@ from ..validate import check_integer
 from .scenario import Scenario
 
 
-def _run_one(index: int, scenario: Scenario, options: dict[str, Any]) -> dict[str, Any]:
+def _run_one(index: int, scenario: Scenario, engine: str, keep: Sequence[str]) -> dict[str, Any]:
     row: dict[str, Any] = {"index": index, "name": scenario.name}
-    keep = options.pop("keep", ())
     try:
-        result = scenario.run(**options)
+        result = scenario.run(engine=engine)
         row.update(result.summary())
         series = result.series()
         row.update({f"series_{k}": series[k].tolist() for k in keep})
@@ -37,22 +36,24 @@ def _run_one(index: int, scenario: Scenario, options: dict[str, Any]) -> dict[st
     return row
 
 
-def _run_chunk(chunk: list[tuple[int, Scenario]], options: dict[str, Any]) -> list[dict[str, Any]]:
-    return [_run_one(i, s, dict(options)) for i, s in chunk]
+def _run_chunk(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[str]) -> list[dict[str, Any]]:
+    return [_run_one(i, s, engine, keep) for i, s in chunk]
 
 
-def plain_sampled(scenario: Scenario) -> bool:
-    """The condition of :func:`run_batch`'s fast path: a sampled run of the paper's law with no sensors, drive,
-    observer, computation delay or plant effects (what C ``batch_sampled`` simulates)."""
-    return (scenario.control_period is not None and scenario.controller_type == "smc" and scenario.drive is None
-            and scenario.sensors is None and scenario.observer is None and not scenario.compute_delay
-            and (scenario.effects is None or not scenario.effects.active))
+def summarised_in_c(scenario: Scenario) -> bool:
+    """Whether C ``batch_sampled`` can run the scenario and summarise it: a sampled run (any controller, plant
+    effect, sensors, observer, averaged bridge) with a constant load."""
+    from .. import _core
+
+    loop = scenario.loop
+    return (loop is not None and _core.drive_unsupported(loop.drive, loop.sensors) is None
+            and scenario.simulated_plant.constant_load is not None)
 
 
-def _run_chunk_c(chunk: list[tuple[int, Scenario]], options: dict[str, Any]) -> list[dict[str, Any]]:
-    """The rows of :func:`_run_chunk` for plain sampled runs (:func:`plain_sampled`), all simulated and
-    summarised in one C call; an infeasible plan gives the same error row, and a run the C batch could not
-    finish is run again by :func:`_run_one` for its error row."""
+def _run_chunk_c(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[str]) -> list[dict[str, Any]]:
+    """The rows of :func:`_run_chunk` for scenarios that :func:`summarised_in_c`, all simulated and summarised in
+    one C call; an infeasible plan gives the same error row, and a run the C batch could not finish is run
+    again by :func:`_run_one` for its error row."""
     from .. import _core
 
     rows: dict[int, dict[str, Any]] = {}
@@ -60,36 +61,46 @@ def _run_chunk_c(chunk: list[tuple[int, Scenario]], options: dict[str, Any]) -> 
     for i, s in chunk:
         try:
             s.feasibility().raise_if_infeasible()
+            ctrl = s.controller()
         except ValueError:
-            rows[i] = _run_one(i, s, dict(options))
+            rows[i] = _run_one(i, s, engine, keep)
             continue
-        plant, Ts = s.plant_motor, float(s.control_period)
+        plant, loop = s.simulated_plant, s.loop
+        assert loop is not None and plant.constant_load is not None  # summarised_in_c
         todo.append((i, s))
-        runs.append((s.controller(), plant, float(s.load_torque), s.plan.x0(plant.Nr),
-                     max(1, math.ceil(s.t_end / Ts - 1e-9)), Ts, s.substeps))
+        runs.append(dict(controller=ctrl, motor=plant.motor, load=plant.constant_load, effects=plant.effects,
+                         x0=s.plan.x0(plant.motor.Nr), n_periods=max(1, math.ceil(s.t_end / loop.control_period - 1e-9)),
+                         Ts=loop.control_period, substeps=loop.substeps, drive=loop.drive, sensors=loop.sensors,
+                         observer=loop.observer, compute_delay=loop.compute_delay))
     for (i, s), summary in zip(todo, _core.run_sampled_summaries(runs)):
         rows[i] = {"index": i, "name": s.name, **summary, "error": None} if summary is not None \
-            else _run_one(i, s, dict(options))
+            else _run_one(i, s, engine, keep)
     return [rows[i] for i, _ in chunk]
 
 
 class _Progress:
-    """A one-line progress bar on a stream (stderr), redrawn at most 10 times a second."""
+    """A one-line progress bar on a stream (stderr), from ``after`` seconds on (short work stays quiet), redrawn
+    at most 10 times a second on a terminal and every 2 s elsewhere (one line each)."""
 
-    def __init__(self, total: int, stream: TextIO, enabled: bool):
-        self.total, self.stream, self.enabled = total, stream, enabled
-        self.done, self.start, self.last = 0, time.perf_counter(), 0.0
+    def __init__(self, total: int, stream: TextIO, enabled: bool, after: float = 2.0):
+        self.total, self.stream, self.enabled, self.after = total, stream, enabled, after
+        self.done, self.start, self.last, self.shown = 0, time.perf_counter(), 0.0, False
+        self.tty = hasattr(stream, "isatty") and stream.isatty()
 
     def update(self, n: int) -> None:
         self.done += n
         now = time.perf_counter()
-        if self.enabled and (now - self.last > 0.1 or self.done == self.total):
+        if not self.enabled or (now - self.start < self.after and not self.shown):
+            return
+        if now - self.last > (0.1 if self.tty else 2.0) or self.done == self.total:
+            self.shown = True
             self.last = now
             rate = self.done / max(now - self.start, 1e-9)
             eta = (self.total - self.done) / rate if rate > 0 else float("inf")
             bar = "#" * int(30 * self.done / max(self.total, 1))
-            self.stream.write(f"\r[{bar:<30}] {self.done}/{self.total} runs, {rate:.0f} runs/s, eta {eta:.1f} s")
-            if self.done == self.total:
+            self.stream.write(f"{chr(13) if self.tty else ''}[{bar:<30}] {self.done}/{self.total} runs, {rate:.0f} runs/s, "
+                              f"eta {eta:.1f} s")
+            if self.done == self.total or not self.tty:
                 self.stream.write("\n")
             self.stream.flush()
 
@@ -106,9 +117,9 @@ def _done_indices(out: Path) -> set[int]:
     return done
 
 
-def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = None, workers: Optional[int] = None,
-              chunk_size: Optional[int] = None, progress: Optional[bool] = None, out: str | Path | None = None,
-              keep: Sequence[str] = (), **simulate_options: Any) -> list[dict[str, Any]]:
+def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Optional[Executor] = None,
+              workers: Optional[int] = None, chunk_size: Optional[int] = None, progress: Optional[bool] = None,
+              out: str | Path | None = None, keep: Sequence[str] = ()) -> list[dict[str, Any]]:
     """Run every scenario and return one summary row per scenario, in input order.
 
     Parameters
@@ -121,11 +132,12 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
     out : a JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
     keep : names of time series (see :meth:`~flatstep.engine.result.SimResult.series`) to return in each row as
         ``series_<name>`` lists, for figures.
-    simulate_options : passed to :func:`flatstep.simulate` (e.g. ``engine``, ``dt_out``).
+    engine : ``"c"`` (default) or a reference engine, as for :func:`flatstep.simulate`.
 
-    When every scenario is a plain sampled run (:func:`plain_sampled`) and neither ``keep`` nor
-    ``simulate_options`` is given, the runs go to the C core in batches (``_core.run_sampled_summaries``: one C
-    call per chunk, summaries computed in C, threads instead of processes); the rows are the same.
+    Summary rows of sampled runs on the C engine (:func:`summarised_in_c`, no ``keep``) are computed in C, one
+    call per chunk (``_core.run_sampled_summaries``: runs and summaries in C, threads instead of processes,
+    since the C call releases the GIL); the rows equal those of one ``Scenario.run`` per scenario.
+    Progress is drawn on stderr once the work has taken more than 2 s, unless ``progress=False``.
     """
     scenarios = list(scenarios)
     bad = [i for i, s in enumerate(scenarios) if not isinstance(s, Scenario)]
@@ -137,10 +149,8 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
     valid = set(SimResult.__dataclass_fields__) - {"meta"} | {"theta_error", "rho_error"}
     if set(keep) - valid:
         raise ValueError(f"keep={list(keep)!r} names unknown series; valid: {sorted(valid)}")
-    # Fast path: plain sampled runs with no series kept and no simulate options run in C batches on threads
-    # (the C call releases the GIL), summarised in C; the rows equal the per-run path's.
-    fast = not keep and not simulate_options and all(plain_sampled(s) for s in scenarios)
-    simulate_options = {**simulate_options, "keep": tuple(keep)}
+    in_c = engine == "c" and not keep and all(summarised_in_c(s) for s in scenarios)
+    keep = tuple(keep)
     out_path = Path(out) if out is not None else None
     rows: dict[int, dict[str, Any]] = {}
     if out_path is not None:
@@ -155,8 +165,7 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
     n_workers = workers or os.cpu_count() or 1
     size = chunk_size or max(1, len(todo) // (8 * n_workers))
     chunks = [todo[k:k + size] for k in range(0, len(todo), size)]
-    bar = _Progress(len(todo), sys.stderr,
-                    progress if progress is not None else (sys.stderr.isatty() and len(todo) >= 100))
+    bar = _Progress(len(todo), sys.stderr, progress is not False)
     sink = open(out_path, "a") if out_path is not None else None
     if sink is not None and out_path.stat().st_size and not out_path.read_bytes().endswith(b"\n"):
         sink.write("\n")  # close a line cut by an interruption
@@ -170,17 +179,17 @@ def run_batch(scenarios: Sequence[Scenario], *, executor: Optional[Executor] = N
             sink.flush()
         bar.update(len(batch))
 
-    run_chunk = _run_chunk_c if fast else _run_chunk
+    run_chunk = _run_chunk_c if in_c else _run_chunk
     try:
         if executor is None and (n_workers == 1 or len(chunks) <= 1):
             for chunk in chunks:
-                record(run_chunk(chunk, simulate_options))
+                record(run_chunk(chunk, engine, keep))
         else:
             own = executor is None
-            pool = executor if not own else (ThreadPoolExecutor(max_workers=n_workers) if fast
+            pool = executor if not own else (ThreadPoolExecutor(max_workers=n_workers) if in_c
                                              else ProcessPoolExecutor(max_workers=n_workers))
             try:
-                futures: list[Future] = [pool.submit(run_chunk, chunk, simulate_options) for chunk in chunks]
+                futures: list[Future] = [pool.submit(run_chunk, chunk, engine, keep) for chunk in chunks]
                 for fut in as_completed(futures):
                     record(fut.result())
             finally:

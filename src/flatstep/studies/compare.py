@@ -28,7 +28,7 @@ from .batch import run_batch
 from ..control.tuning import CONTROLLER_TYPES
 from ..plan.rest_to_rest import RestToRest
 from ..engine.result import SimResult
-from .robustness import perturbed, plant_errors
+from .robustness import encoder_count, perturbed, plant_errors
 from .scenario import Scenario
 from .scenario_file import Robustness
 
@@ -82,9 +82,9 @@ def result_metrics(result: SimResult, plan: RestToRest, *, band: float, R: float
 
 def default_band(scenario: Scenario) -> float:
     """One encoder count, or 1e-3 of the move (at least 1e-6 rad) without an encoder."""
-    s = scenario.sensors
-    if s is not None and s.angle_step:
-        return s.angle_step
+    count = encoder_count(scenario)
+    if count is not None:
+        return count
     return max(1e-3 * abs(scenario.plan.theta2 - scenario.plan.theta1), 1e-6)
 
 
@@ -104,7 +104,7 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
     for kind in _check_kinds(kinds):
         sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
         r = sc.run()
-        out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.plant_motor.R),
+        out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.simulated_plant.motor.R),
                      "result": r, "faults": int(r.meta.get("controller_faults", 0))}
     return out
 
@@ -132,7 +132,7 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
         for row, run in zip(rows, runs):
             if row["error"] is not None:
                 continue
-            m = metrics(*(row[f"series_{k}"] for k in KEEP), scenario.plan, band=band, R=run.plant_motor.R)
+            m = metrics(*(row[f"series_{k}"] for k in KEEP), scenario.plan, band=band, R=run.simulated_plant.motor.R)
             row["metrics"] = m
             worst = m if not worst else {k: _worse(worst[k], m[k], k) for k in METRICS}
         failed = [r["error"] for r in rows if r["error"] is not None]

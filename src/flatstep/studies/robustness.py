@@ -16,6 +16,12 @@ from .scenario_file import Robustness
 REST_AFTER = 5e-3
 
 
+def encoder_count(scenario: Scenario) -> Optional[float]:
+    """One encoder count [rad] of the scenario's sensors, or ``None`` without an encoder."""
+    sensors = scenario.loop.sensors if scenario.loop is not None else None
+    return sensors.angle_step if sensors is not None and sensors.angle_step else None
+
+
 def plant_errors(study: Robustness) -> list[dict[str, float]]:
     """Relative plant errors: every sign combination (``samples == 0``) or a seeded uniform sample."""
     names = study.parameters
@@ -29,12 +35,12 @@ def plant_errors(study: Robustness) -> list[dict[str, float]]:
 
 def perturbed(scenario: Scenario, errors: list[dict[str, float]], label: str = "") -> list[Scenario]:
     """The scenario once per plant error set, the plant built from the controller's model ``motor``."""
-    m = scenario.motor
+    m, base = scenario.motor, scenario.simulated_plant
     out = []
     for err in errors:
-        plant = m.replace(**{k: getattr(m, k) * (1.0 + e) for k, e in err.items()})
+        motor = m.replace(**{k: getattr(m, k) * (1.0 + e) for k, e in err.items()})
         tag = ",".join(f"{k}{e:+.3g}" for k, e in err.items())
-        out.append(replace(scenario, name=f"{scenario.name}{label}[{tag}]", plant=plant))
+        out.append(replace(scenario, name=f"{scenario.name}{label}[{tag}]", plant=replace(base, motor=motor)))
     return out
 
 
@@ -47,7 +53,7 @@ def run_study(scenario: Scenario, study: Robustness, *, with_paper_gains: bool =
     if with_paper_gains:
         sets["paper gains"] = replace(scenario, gains=SMCGains())
     out: dict[str, Any] = {"errors": errors, "sets": {}}
-    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else None
+    count = encoder_count(scenario)
     for label, sc in sets.items():
         rows = run_batch(perturbed(sc, errors, f"/{label}"), keep=("t", "theta_error", "va", "vb"), **batch_options)
         out["sets"][label] = _summarise(rows, sc, count)

@@ -1,4 +1,4 @@
-"""A closed-loop scenario: the motor, the move, the controller settings and the load, run in one call."""
+"""A closed-loop scenario: the plant, the move, the controller and the loop or solver, run in one call."""
 from __future__ import annotations
 
 import math
@@ -8,84 +8,102 @@ from typing import Any, Optional
 
 from ..control.smc import SMCGains
 from ..control.tuning import make_controller
-from ..loop.drive import Drive
-from ..plan.feasibility import FeasibilityReport, check_feasibility
-from ..validate import check_integer, check_positive
-from ..model.motor import MotorParams
-from ..loop.observers import Observer
-from ..model.plant import PlantEffects
-from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..engine.result import SimResult
-from ..loop.sensors import Sensors
+from ..engine.settings import Continuous
 from ..engine.simulate import simulate
+from ..loop.reference import DriveLoop
+from ..model.motor import MotorParams
+from ..model.plant import Plant
+from ..plan.feasibility import FeasibilityReport, check_feasibility
+from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
+from ..validate import check_positive
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything one closed-loop run needs; defaults are the paper's Fig. 1 (Section 3).
+    """Everything one closed-loop run needs, as the objects :func:`~flatstep.engine.simulate.simulate` takes;
+    defaults are the paper's Fig. 1 (Section 3).
 
-    ``motor`` is the controller's model; ``plant`` the simulated motor (default: the same, a perfect model).
-    ``control_period`` ``None`` evaluates the law continuously (the paper); a period [s] samples it with a
-    zero-order hold, the plant integrated by ``substeps`` RK4 steps per period. ``drive``, ``sensors``,
-    ``observer`` and ``compute_delay`` describe a realistic drive around the sampled controller
-    (see :func:`flatstep.simulate`). ``controller_type`` names the law (:data:`flatstep.control.CONTROLLER_TYPES`):
-    the paper's ``"smc"`` with ``gains``, or a baseline tuned for this drive by
-    :func:`flatstep.control.make_controller` (``bandwidth_scale`` scales its bandwidths). ``effects`` are the
-    plant's detent, Coulomb friction and iron loss (sampled loop only; the controllers do not know them).
+    Parameters
+    ----------
+    name : str
+        A label for tables, rows and figures.
+    motor : MotorParams
+        The controller's model of the motor (and the plant's, when ``plant`` is ``None``).
+    plan : RestToRest
+        The move.
+    controller_type : str
+        The law (:data:`flatstep.control.CONTROLLER_TYPES`): the paper's ``"smc"`` with ``gains``, or a
+        baseline tuned for this loop by :func:`flatstep.control.make_controller`.
+    gains : SMCGains
+        The sliding controller's gains (``controller_type="smc"``).
+    measurement : str
+        Where the controller's speed and acceleration come from: ``"ideal"``, ``"model"`` or ``"observer"``.
+    bandwidth_scale : float
+        Multiplies every bandwidth of a baseline (1: the tuning rule).
+    plant : Plant, optional
+        The simulated plant (motor, effects, load); ``None``: ``Plant(motor)``, a perfect model, no load.
+    loop : DriveLoop, optional
+        Sampled control in a drive (period, substeps, drive, sensors, observer, delay); ``None``:
+        continuous-time control, as in the paper.
+    solver : Continuous, optional
+        How continuous-time control is solved (``None``: the defaults of
+        :class:`~flatstep.engine.settings.Continuous`); only without a loop.
+    t_end : float
+        Horizon [s].
     """
 
     name: str = "run"
     motor: MotorParams = field(default_factory=lambda: MotorParams.preset("paper"))
     plan: RestToRest = PAPER_PLAN
+    controller_type: str = "smc"
     gains: SMCGains = SMCGains()
     measurement: str = "ideal"
-    load_torque: float = 0.0
-    t_end: float = 0.06
-    plant: Optional[MotorParams] = None
-    control_period: Optional[float] = None
-    substeps: int = 10
-    drive: Optional[Drive] = None
-    sensors: Optional[Sensors] = None
-    observer: Optional[Observer] = None
-    compute_delay: bool = False
-    controller_type: str = "smc"
-    effects: Optional[PlantEffects] = None
     bandwidth_scale: float = 1.0
+    plant: Optional[Plant] = None
+    loop: Optional[DriveLoop] = None
+    solver: Optional[Continuous] = None
+    t_end: float = 0.06
 
     def __post_init__(self) -> None:
         check_positive("t_end", self.t_end, unit=" s")
-        if self.control_period is not None:
-            check_positive("control_period", self.control_period, unit=" s")
-        check_integer("substeps", self.substeps, why="RK4 steps per period")
-        if self.effects is not None and self.effects.active and self.control_period is None:
-            raise ValueError("plant effects (detent, Coulomb friction, iron loss) are modelled on the sampled "
-                             "drive loop only: give a control_period")
+        for name, kind in (("motor", MotorParams), ("plan", RestToRest), ("gains", SMCGains), ("plant", Plant),
+                           ("loop", DriveLoop), ("solver", Continuous)):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, kind):
+                raise ValueError(f"Scenario.{name}={value!r} is not a {kind.__name__}")
+        if self.loop is not None and self.solver is not None:
+            raise ValueError("a scenario has either a loop (sampled control) or a solver (continuous control)")
         self.controller()  # validates the measurement mode and the controller type
 
     @property
-    def plant_motor(self) -> MotorParams:
-        return self.motor if self.plant is None else self.plant
+    def simulated_plant(self) -> Plant:
+        """The plant that is simulated: ``plant``, or the controller's model with no effects and no load."""
+        return self.plant if self.plant is not None else Plant(self.motor)
 
-    def controller(self):
-        """The scenario's controller: :class:`~flatstep.control.smc.FlatnessSMC` or a tuned baseline."""
+    @property
+    def control_period(self) -> Optional[float]:
+        """The loop's control period [s], ``None`` for continuous-time control."""
+        return self.loop.control_period if self.loop is not None else None
+
+    def controller(self) -> Any:
+        """The scenario's controller: :class:`~flatstep.control.smc.FlatnessSMC` or a baseline tuned for its loop."""
+        loop = self.loop
+        v_bus = loop.drive.v_bus if loop is not None and loop.drive is not None else math.inf
         return make_controller(self.controller_type, self.motor, self.plan, control_period=self.control_period,
-                               measurement=self.measurement, smc_gains=self.gains,
-                               v_limit=self.drive.v_bus if self.drive is not None else math.inf,
-                               bandwidth_scale=self.bandwidth_scale, compute_delay=self.compute_delay)
+                               measurement=self.measurement, smc_gains=self.gains, v_limit=v_bus,
+                               bandwidth_scale=self.bandwidth_scale,
+                               compute_delay=loop.compute_delay if loop is not None else False)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""
         return _feasibility(self.plan, self.motor)
 
-    def run(self, **simulate_options: Any) -> SimResult:
-        """Refuse an infeasible plan, then simulate the closed loop."""
+    def run(self, engine: str = "c") -> SimResult:
+        """Refuse an infeasible plan, then simulate the closed loop on ``engine``."""
         self.feasibility().raise_if_infeasible()
-        if self.control_period is not None:
-            simulate_options = {"control_period": self.control_period, "substeps": self.substeps,
-                                "drive": self.drive, "sensors": self.sensors, "observer": self.observer,
-                                "compute_delay": self.compute_delay, "effects": self.effects, **simulate_options}
-        return simulate(self.plant_motor, self.plan, self.controller(), load=self.load_torque, t_end=self.t_end,
-                        **simulate_options)
+        return simulate(self.simulated_plant, self.plan, self.controller(), loop=self.loop, solver=self.solver,
+                        engine=engine, t_end=self.t_end)
 
 
 @lru_cache(maxsize=256)
@@ -96,5 +114,5 @@ def _feasibility(plan: RestToRest, motor: MotorParams) -> FeasibilityReport:
 #: The paper's two simulations (Section 3): t0 = 0.02 s, tf = 0.04 s, 0.06 s horizon, ideal measurement.
 PAPER_SCENARIOS = {
     "fig1": Scenario("fig1"),
-    "fig2": Scenario("fig2", gains=SMCGains(W1=300.0, W2=300.0), load_torque=1e-5),
+    "fig2": Scenario("fig2", gains=SMCGains(W1=300.0, W2=300.0), plant=Plant(MotorParams.preset("paper"), load=1e-5)),
 }

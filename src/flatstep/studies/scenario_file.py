@@ -21,7 +21,8 @@ from ..loop.drive import Drive
 from ..model.motor import MotorParams, PRESETS
 from ..loop.observers import Observer
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
-from ..model.plant import PlantEffects
+from ..model.plant import Plant, PlantEffects
+from ..loop.reference import DriveLoop
 from .scenario import Scenario
 from ..loop.sensors import Sensors
 
@@ -146,11 +147,13 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
         observer = _wrap(where, "observer", Observer, **{**(observer.as_dict() if observer else {}), **sec["observer"]})
     if measurement is None:  # what the drive can give: an observer's estimate, the model, or the truth
         measurement = "observer" if observer else "model" if sensors else "ideal"
+    loop = None if period is None else _wrap(where, "drive", DriveLoop, control_period=period, substeps=substeps,
+                                             compute_delay=compute_delay, drive=drive, sensors=sensors,
+                                             observer=observer)
+    simulated = _wrap(where, "plant", Plant, motor=plant if plant is not None else motor, effects=effects, load=load)
     scenario = _wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
-                     gains=gains, measurement=measurement, load_torque=load, t_end=doc.get("t_end", 0.06),
-                     plant=plant, control_period=period, substeps=substeps, drive=drive, sensors=sensors,
-                     observer=observer, compute_delay=compute_delay, controller_type=controller_type,
-                     effects=effects, bandwidth_scale=bandwidth_scale)
+                     gains=gains, measurement=measurement, t_end=doc.get("t_end", 0.06), plant=simulated,
+                     loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale)
     robustness = None
     if "robustness" in doc:
         r = dict(sec["robustness"])
