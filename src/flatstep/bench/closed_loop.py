@@ -6,7 +6,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..model.motor import MotorParams, rhs, torque
+from ..model.motor import MotorParams, acceleration, rhs
 from ..studies.scenario import PAPER_SCENARIOS
 from ..engine.simulate import simulate
 from .common import Report, Target, core_module, race
@@ -18,7 +18,7 @@ def closed_loop_system(motor: MotorParams, controller, load_torque: float = 0.0)
     import control
 
     def updfcn(t, x, u, params=None):
-        acc = (torque(x, motor) - motor.B * x[2] - load_torque) / motor.J
+        acc = acceleration(x, motor, load_torque)
         return rhs(t, x, controller.voltages(t, x, acc), motor, load_torque)
 
     return control.NonlinearIOSystem(updfcn, None, inputs=0, outputs=4, states=4, name="closed_loop")
