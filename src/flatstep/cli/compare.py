@@ -3,12 +3,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+import time
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Optional
 
 from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band
 from ..control.tuning import CONTROLLER_TYPES, LABELS
+from ..studies.robustness import encoder_count
 from ..studies.scenario_file import load_scenario
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)
@@ -45,23 +48,38 @@ def _target_line(rows: dict[str, dict[str, Optional[float]]]) -> Optional[str]:
             f"{'met' if met else 'missed'})")
 
 
+class _Log:
+    """Progress of the comparison's stages on stderr, each with the time since the start."""
+
+    def __init__(self, enabled: bool):
+        self.enabled, self.start = enabled, time.perf_counter()
+
+    def __call__(self, what: str) -> None:
+        if self.enabled:
+            print(f"[compare {time.perf_counter() - self.start:6.1f} s] {what}", file=sys.stderr, flush=True)
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     scenario, study = load_scenario(args.scenario)
-    if args.clean:
-        scenario = replace(scenario, name=f"{scenario.name} (clean)", load_torque=0.0, effects=None, plant=None)
+    if args.clean:  # the plant equal to the model: no load, no effects
+        scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None)
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
     kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else CONTROLLER_TYPES
     band = args.band if args.band is not None else default_band(scenario)
-    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else None
-    nominal = compare(scenario, kinds, band=band)
+    count = encoder_count(scenario)
+    log = _Log(enabled=not args.quiet)
+    nominal = compare(scenario, kinds, band=band, engine=args.engine)
+    log(f"{len(nominal)} controllers on the scenario's plant")
     report: dict[str, Any] = {"scenario": scenario.name, "band_rad": band, "count_rad": count,
                               "controllers": {k: {"label": LABELS[k], "metrics": v["metrics"], "faults": v["faults"],
-                                                  "gains": v["result"].meta["gains"]} for k, v in nominal.items()}}
+                                                  "gains": v["result"].meta["gains"],
+                                                  "engine": v["result"].meta["engine"]} for k, v in nominal.items()}}
     worst = None
     if study is not None and not args.no_robustness:
         study = replace(study, samples=args.samples) if args.samples is not None else study
-        worst = compare_worst(scenario, study, kinds, band=band, progress=args.progress)
+        worst = compare_worst(scenario, study, kinds, band=band, engine=args.engine, progress=not args.quiet,
+                              log=log)
         report["robustness"] = {"relative_error": study.relative_error, "parameters": list(study.parameters),
                                 "plants": len(next(iter(worst.values()))["rows"]),
                                 "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"]}
@@ -70,7 +88,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         scales = [float(x) for x in args.scales.split(",")]
         baselines = [k for k in kinds if k != "smc"]
         sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,
-                                progress=args.progress)
+                                engine=args.engine, progress=not args.quiet, log=log)
         report["bandwidth_sweep"] = {str(s): v for s, v in sweep.items()}
     if args.out:
         from .plots_compare import plot_overlay, plot_plants
@@ -126,7 +144,9 @@ def add_compare_command(sub) -> None:
     cmp_.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
     cmp_.add_argument("--scales", default=None, help="also run the baselines with every bandwidth scaled by these "
                       "comma-separated factors (e.g. 0.5,2): the check that their tuning does not cripple them")
-    cmp_.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
+    cmp_.add_argument("--engine", choices=("c", "python"), default="c",
+                      help="who runs the loops: the C core (default) or the Python reference loop (slow)")
+    cmp_.add_argument("--quiet", action="store_true", help="no progress on stderr")
     cmp_.add_argument("--out", default=None, help="write overlay.png, plants.png and compare.json here")
     cmp_.add_argument("--json", action="store_true", help="print the report as JSON")
     cmp_.set_defaults(func=cmd_compare)

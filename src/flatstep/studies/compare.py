@@ -20,7 +20,7 @@ trapezoids over the control instants.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
@@ -96,14 +96,14 @@ def _check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
 
 
 def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band: Optional[float] = None,
-            bandwidth_scale: float = 1.0) -> dict[str, dict[str, Any]]:
+            bandwidth_scale: float = 1.0, engine: str = "c") -> dict[str, dict[str, Any]]:
     """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects);
     returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n}}``."""
     band = default_band(scenario) if band is None else band
     out = {}
     for kind in _check_kinds(kinds):
         sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
-        r = sc.run()
+        r = sc.run(engine)
         out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.simulated_plant.motor.R),
                      "result": r, "faults": int(r.meta.get("controller_faults", 0))}
     return out
@@ -117,10 +117,11 @@ def _worse(a: Optional[float], b: Optional[float], key: str) -> Optional[float]:
 
 def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = CONTROLLER_TYPES, *,
                   band: Optional[float] = None, bandwidth_scale: float = 1.0,
-                  **batch_options: Any) -> dict[str, dict[str, Any]]:
+                  log: Optional[Callable[[str], None]] = None, **batch_options: Any) -> dict[str, dict[str, Any]]:
     """Each controller on every plant of the study (the controllers keep the nominal model); returns per
     kind the worst of each metric over the plants (``"worst"``), the failed runs, and the rows with the
-    series of :data:`KEEP` for figures."""
+    series of :data:`KEEP` for figures. ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch`
+    (``engine``, ``workers``, ...); ``log`` is told when each controller's batch is done."""
     band = default_band(scenario) if band is None else band
     errors = plant_errors(study)
     out = {}
@@ -137,20 +138,24 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
             worst = m if not worst else {k: _worse(worst[k], m[k], k) for k in METRICS}
         failed = [r["error"] for r in rows if r["error"] is not None]
         out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed, "rows": rows}
+        if log is not None:
+            log(f"{kind}{'' if bandwidth_scale == 1 or kind == 'smc' else f' x{bandwidth_scale:g}'} on "
+                f"{len(rows)} plants")
     return out
 
 
 def bandwidth_sweep(scenario: Scenario, kinds: Sequence[str], scales: Sequence[float], *,
                     study: Optional[Robustness] = None, band: Optional[float] = None,
+                    log: Optional[Callable[[str], None]] = None,
                     **batch_options: Any) -> dict[float, dict[str, dict[str, Optional[float]]]]:
     """The baselines' metrics (worst over the study's plants, or on the scenario's plant) with every bandwidth
     scaled by each factor: the check that the tuning rule does not cripple them."""
     out = {}
     for scale in scales:
         if study is None:
-            res = compare(scenario, kinds, band=band, bandwidth_scale=scale)
+            res = compare(scenario, kinds, band=band, bandwidth_scale=scale, engine=batch_options.get("engine", "c"))
             out[float(scale)] = {k: v["metrics"] for k, v in res.items()}
         else:
-            res = compare_worst(scenario, study, kinds, band=band, bandwidth_scale=scale, **batch_options)
+            res = compare_worst(scenario, study, kinds, band=band, bandwidth_scale=scale, log=log, **batch_options)
             out[float(scale)] = {k: v["worst"] for k, v in res.items()}
     return out
