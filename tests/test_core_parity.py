@@ -5,7 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import flatstep as fs
 from flatstep import _core
+from flatstep._core_structs import _plant
 from flatstep.control.smc import FlatnessSMC, SMCGains
 from flatstep.model.flat import FlatFlag
 from flatstep.model.motor import MotorParams
@@ -131,3 +133,53 @@ def test_smc_hold_matches_the_reference(motor, plan):
     ref = ctrl.voltages(t, x)
     np.testing.assert_allclose(v[:, held], ref[:, held], rtol=1e-13, atol=1e-12)
     np.testing.assert_allclose(v[:, ~held], ref[:, ~held], rtol=1e-10)  # the law's arccos amplifies rounding at speed
+
+
+BASELINES = {"microstep": (fs.Microstepping, fs.MicrostepGains), "cascade": (fs.CascadeFOC, fs.CascadeGains),
+             "exact_linearization": (fs.ExactLinearization, fs.LinearizationGains)}
+GAIN_FIELDS = {"microstep": ("current_bandwidth", "feedforward"),
+               "cascade": ("current_bandwidth", "position_bandwidth", "decoupling"),
+               "exact_linearization": ("wn", "xi", "p3", "pd")}
+ABS_FLOOR = 1e-13  # integrals that cancel to ~1e-16 need a floor (tools/gen_vectors.py)
+
+
+def _baseline(kind, r):
+    cls, gains_cls = BASELINES[kind]
+    gains = gains_cls(**{k: r["gains"][k] for k in GAIN_FIELDS[kind]})
+    v_limit = np.inf if r["v_limit"] is None else r["v_limit"]
+    return cls(MotorParams(**r["motor"]), RestToRest(**r["plan"]), gains, measurement=r["measurement"],
+               control_period=r["control_period"], v_limit=v_limit)
+
+
+@pytest.mark.parametrize("kind", list(BASELINES))
+def test_baseline_steps_match_the_reference(kind):
+    """One step of each baseline's C twin (bound through controller_struct) from the recorded state."""
+    records = VECTORS[kind]
+    assert len(records) >= 200
+    for r in records:
+        ctrl = _baseline(kind, r)
+        bound = _core.controller_struct(ctrl)
+        if r["state"] is not None:
+            for i, value in enumerate(r["state"]):
+                bound.state.integral[i] = value
+        v = _core.ffi.new("double[2]")
+        status = bound.iface.step(bound.iface.self, r["t"], _core.ffi.new("double[5]", r["y"]), v)
+        assert not status & _core.FAULT_BITS
+        c = np.array([v[0], v[1]] + ([bound.state.integral[i] for i in range(len(r["state"]))] if r["state"] else []))
+        p = np.array(r["v"] + (r["state_after"] or []))
+        err = np.abs(c - p)
+        assert np.all(err <= 1e-12 * np.abs(p) + ABS_FLOOR), f"{kind}: C {c} vs Python {p}"
+
+
+def test_plant_effects_match_the_reference():
+    """plant_rhs (csrc/plant.c) against flatstep.model.plant.plant_rhs with detent, Coulomb and iron loss."""
+    active = 0
+    for r in VECTORS["plant"]:
+        effects = None if r["effects"] is None else fs.PlantEffects(**r["effects"])
+        active += effects is not None and effects.active
+        plant = _plant(MotorParams(**r["motor"]), r["load"], effects)
+        dx = _core.ffi.new("double[4]")
+        _core.lib.plant_rhs(plant, _core.ffi.new("double[4]", r["x"]), _core.ffi.new("double[2]", r["v"]), dx)
+        c, p = np.array(list(dx)), np.array(r["dx"])
+        assert np.all(np.abs(c - p) <= 1e-12 * np.abs(p) + ABS_FLOOR), f"C {c} vs Python {p} ({r['effects']})"
+    assert active >= 100
