@@ -5,21 +5,27 @@ BIN := $(VENV)/bin
 OUT ?= out
 STAMP := $(VENV)/.installed-flatstep
 
-.PHONY: demo test venv clean ctest fuzz fuzz-ci
+.PHONY: demo test venv clean ctest fuzz fuzz-ci lint
 
 venv: $(STAMP)
 
 $(STAMP): pyproject.toml $(wildcard setup.py) $(wildcard src/flatstep/*.py src/flatstep/*/*.py csrc/*.c csrc/*.h)
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e '.[test,bench]'
+	$(BIN)/python -m pip install -q -e '.[test,bench,lint]'
 	touch $@
 
 demo: venv
 	$(BIN)/flatstep reproduce --out $(OUT)
 
-test: venv ctest
+test: venv lint ctest
 	$(BIN)/python -m pytest -q
+
+# ruff (pyflakes, isort, bugbear, numpydoc docstrings) and mypy on the package; clang-format on the C core.
+lint: venv
+	$(BIN)/ruff check src/flatstep
+	$(BIN)/mypy
+	$(BIN)/clang-format --dry-run --Werror csrc/*.c csrc/*.h csrc/tests/*.c csrc/tests/*.h
 
 # The C core's unit tests (ctest), then the same tests under ASan+UBSan.
 ctest:
