@@ -126,7 +126,8 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     ----------
     scenarios : the runs; build grids with :func:`scenario_grid`.
     executor : any :class:`concurrent.futures.Executor` (e.g. a Dask ``distributed.Client``'s
-        ``get_executor()``); default: a process pool with ``workers`` processes (default: all cores).
+        ``get_executor()``); default: ``workers`` threads on the C engine (its runs release the GIL), a
+        process pool of ``workers`` processes on the reference engines (default: all cores).
     chunk_size : scenarios per task (default: enough for about 8 tasks per worker).
     progress : draw a progress bar on stderr; default: when stderr is a terminal and there are >= 100 runs.
     out : a JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
@@ -186,7 +187,9 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
                 record(run_chunk(chunk, engine, keep))
         else:
             own = executor is None
-            pool = executor if not own else (ThreadPoolExecutor(max_workers=n_workers) if in_c
+            # C runs release the GIL: threads share the work without a process pool's start-up; the Python
+            # reference engines hold it and need processes.
+            pool = executor if not own else (ThreadPoolExecutor(max_workers=n_workers) if engine == "c"
                                              else ProcessPoolExecutor(max_workers=n_workers))
             try:
                 futures: list[Future] = [pool.submit(run_chunk, chunk, engine, keep) for chunk in chunks]

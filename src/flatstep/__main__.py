@@ -1,0 +1,6 @@
+"""``python -m flatstep``: the command line (:func:`flatstep.cli.main`)."""
+import sys
+
+from .cli import main
+
+sys.exit(main())
