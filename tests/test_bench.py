@@ -101,7 +101,7 @@ def test_bench_batch_api_and_binding_agree():
     c = checks(report)
     assert c["runs that failed"] == 0
     assert c["max |theta_final(run_batch) - theta_final(binding)| over the runs"] == 0
-    assert c["rows of the C batch path that differ from the per-run path's"] == 0
+    assert c["rows of run_batch that differ from Scenario.run's summaries"] == 0
     assert len(report.times) == 6
 
 

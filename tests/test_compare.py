@@ -48,8 +48,9 @@ def _file(tmp_path, **tables):
 def test_scenario_file_controller_type_and_plant_effects(tmp_path):
     sc, _ = load_scenario(_file(tmp_path, plant="detent_torque = 1e-3\ncoulomb_torque = 2e-4\nmagnetizing_resistance = 40.0",
                                 controller='design = true\ntype = "cascade"\nbandwidth_scale = 2.0'))
-    assert sc.controller_type == "cascade" and sc.plant is None and sc.bandwidth_scale == 2.0
-    assert (sc.effects.detent_torque, sc.effects.coulomb_torque, sc.effects.magnetizing_resistance) == (1e-3, 2e-4, 40.0)
+    assert sc.controller_type == "cascade" and sc.simulated_plant.motor == sc.motor and sc.bandwidth_scale == 2.0
+    fx = sc.simulated_plant.effects
+    assert (fx.detent_torque, fx.coulomb_torque, fx.magnetizing_resistance) == (1e-3, 2e-4, 40.0)
     assert sc.controller().gains.position_bandwidth == pytest.approx(2 * 1500.0)
     # the sliding controller's design is told the detent and friction as expected disturbance torque
     smc, _ = load_scenario(_file(tmp_path, plant="detent_torque = 1e-3"))

@@ -17,8 +17,8 @@ import flatstep as fs
 from flatstep import _core
 from flatstep.loop.drive import Drive
 from flatstep.loop.observers import Observer
-from flatstep.model.plant import PlantEffects
 from flatstep.loop.sensors import Sensors
+from flatstep.model.plant import PlantEffects
 
 TS = 5e-5
 DESIGNED = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500)
@@ -26,7 +26,7 @@ COUNT = 2 * np.pi / 16384
 EXACT = Sensors(encoder_counts=None, current_bits=None)
 NOISY = Sensors(current_noise=5e-3, seed=2, current_offset=(2e-3, -1e-3), encoder_offset=0.25)
 
-RUNS = {  # name: (measurement, simulate options)
+RUNS = {  # name: (measurement, DriveLoop settings)
     "exact sensors, observer": ("observer", dict(sensors=EXACT, observer=Observer(1500.0))),
     "14-bit, 12-bit, noise, speed observer": ("observer", dict(sensors=NOISY, observer=Observer(1500.0, 0))),
     "14-bit, 12-bit, noise, load observer": ("observer", dict(sensors=NOISY, observer=Observer(1500.0, 1))),
@@ -40,12 +40,14 @@ RUNS = {  # name: (measurement, simulate options)
 }
 
 
-def run_pair(motor, plan, measurement, options, gains=DESIGNED, **kw):
+def run_pair(motor, plan, measurement, options, gains=DESIGNED, effects=None, **kw):
     """The same run on the C engine and on the Python reference: 60 ms at 20 kHz, perturbed plant, 1e-5 N m."""
-    plant = motor.replace(R=1.1 * motor.R, L=0.9 * motor.L, Km=0.9 * motor.Km, J=1.1 * motor.J, B=0.9 * motor.B)
+    perturbed = motor.replace(R=1.1 * motor.R, L=0.9 * motor.L, Km=0.9 * motor.Km, J=1.1 * motor.J, B=0.9 * motor.B)
+    plant = fs.Plant(perturbed, effects=effects, load=1e-5)
     ctrl = fs.FlatnessSMC(motor, plan, gains, measurement)
-    kw = {"load": 1e-5, "control_period": TS, "substeps": 4, "drive": Drive(), **options, **kw}
-    return fs.simulate(plant, plan, ctrl, engine="c", **kw), fs.simulate(plant, plan, ctrl, engine="python", **kw)
+    loop = fs.DriveLoop(**{"control_period": TS, "substeps": 4, "drive": Drive(), **options})
+    return (fs.simulate(plant, plan, ctrl, loop=loop, engine="c", **kw),
+            fs.simulate(plant, plan, ctrl, loop=loop, engine="python", **kw))
 
 
 @pytest.mark.parametrize("name", RUNS)
@@ -108,32 +110,44 @@ def test_controller_faults_are_counted_alike(motor, plan):
     assert "rho" in c.meta["controller_status"]
 
 
-@pytest.mark.parametrize("options, engine", [
-    (dict(sensors=Sensors(), observer=Observer()), "c"),
-    (dict(compute_delay=True), "c"),
-    (dict(drive=Drive(pwm="switched")), "python"),
-    (dict(sensors=Sensors(delay=9), observer=Observer()), "python"),
-    (dict(effects=PlantEffects(detent_torque=1e-4)), "python"),
+@pytest.mark.parametrize("options", [
+    dict(sensors=Sensors(), observer=Observer()),
+    dict(compute_delay=True),
+    dict(sensors=Sensors(delay=8), observer=Observer()),
 ])
-def test_default_engine_is_c_where_it_models_the_loop(motor, plan, options, engine):
+def test_default_engine_is_c(motor, plan, options):
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "observer" if "observer" in options else "ideal")
-    r = fs.simulate(motor, plan, ctrl, control_period=TS, t_end=2e-3, **options)
-    assert r.meta["engine"] == engine
+    r = fs.simulate(motor, plan, ctrl, loop=fs.DriveLoop(TS, **options), t_end=2e-3)
+    assert r.meta["engine"] == "c" and r.meta["control_period"] == TS
+
+
+def test_c_engine_runs_plant_effects_like_the_reference(motor, plan):
+    """Detent (2nd harmonic), Coulomb friction and iron loss on the plant, in the loop the C engine runs."""
+    effects = PlantEffects(detent_torque=2e-4, detent_harmonic=2, coulomb_torque=1e-4, coulomb_speed=0.5,
+                           magnetizing_resistance=50.0)
+    c, py = run_pair(motor, plan, "observer", dict(sensors=NOISY, observer=Observer(1500.0, 2)), effects=effects)
+    plain, _ = run_pair(motor, plan, "observer", dict(sensors=NOISY, observer=Observer(1500.0, 2)))
+    assert c.meta["engine"] == "c" and c.meta["plant"]["effects"] == effects.as_dict()
+    np.testing.assert_allclose(c.theta, py.theta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose([c.ia, c.ib], [py.ia, py.ib], rtol=0, atol=1e-12)
+    np.testing.assert_allclose([c.va, c.vb], [py.va, py.vb], rtol=0, atol=1e-9)
+    assert np.max(np.abs(c.theta - plain.theta)) > 1e-6  # the effects act on the C plant
 
 
 @pytest.mark.parametrize("options, match", [
-    (dict(drive=Drive(pwm="switched")), "engine='c' does not model pwm='switched'"),
+    (dict(drive=Drive(pwm="switched")), r"does not model pwm='switched'.*use engine='python'"),
     (dict(sensors=Sensors(delay=9), observer=Observer()), r"sensors.delay=9 periods \(the C loop holds at most 8\)"),
-    (dict(effects=PlantEffects(coulomb_torque=1e-4)), "engine='c' does not model plant effects"),
 ])
 def test_c_engine_refuses_what_it_does_not_model(motor, plan, options, match):
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "observer" if "observer" in options else "ideal")
+    loop = fs.DriveLoop(TS, **options)
     with pytest.raises(ValueError, match=match):
-        fs.simulate(motor, plan, ctrl, control_period=TS, engine="c", **options)
+        fs.simulate(motor, plan, ctrl, loop=loop, engine="c")
+    assert fs.simulate(motor, plan, ctrl, loop=loop, engine="python", t_end=2e-3).meta["engine"] == "python"
 
 
-def test_run_drive_checks_the_noise_shape(motor, plan):
+def test_run_sampled_checks_the_noise_shape(motor, plan):
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "model")
     with pytest.raises(ValueError, match=r"noise has shape \(10, 2\); expected \(11, 2\)"):
-        _core.run_drive(ctrl, motor, 0.0, plan.x0(motor.Nr), 10, Ts=TS, substeps=4, sensors=Sensors(),
-                        noise=np.zeros((10, 2)))
+        _core.run_sampled(ctrl, motor, 0.0, plan.x0(motor.Nr), 10, Ts=TS, substeps=4, sensors=Sensors(),
+                          noise=np.zeros((10, 2)))

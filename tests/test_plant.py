@@ -77,13 +77,45 @@ def test_effects_act_on_the_plant_only(motor, plan):
     """The detent moves the sampled run's rest position; the ideal measurement reads the true acceleration."""
     fx = PlantEffects(detent_torque=1e-3)
     ctrl = fs.FlatnessSMC(motor, plan, fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500), "ideal")
-    kw = dict(control_period=TS, engine="python", substeps=4, t_end=0.03)
+    kw = dict(loop=fs.DriveLoop(TS, substeps=4), engine="python", t_end=0.03)
     clean = fs.simulate(motor, plan, ctrl, **kw)
-    detent = fs.simulate(motor, plan, ctrl, effects=fx, **kw)
-    assert detent.meta["effects"]["detent_torque"] == 1e-3 and "effects" not in clean.meta
+    detent = fs.simulate(fs.Plant(motor, fx), plan, ctrl, **kw)
+    assert detent.meta["plant"]["effects"]["detent_torque"] == 1e-3 and clean.meta["plant"]["effects"] is None
     assert np.max(np.abs(detent.theta - clean.theta)) > 1e-7
     x = np.array([0.3, 0.1, 2.0, 0.004])
     expected = (fs.model.motor.torque(x, motor) - motor.B * 2.0 - 1e-3 * np.sin(4 * motor.Nr * 0.004)) / motor.J
     assert plant_acceleration(x, motor, 0.0, fx) == pytest.approx(expected, rel=1e-12)
-    with pytest.raises(ValueError, match="give control_period"):
-        fs.simulate(motor, plan, ctrl, effects=fx)
+    assert fs.Plant(motor, fx).acceleration(x) == pytest.approx(expected, rel=1e-12)
+
+
+def test_effects_act_in_continuous_time_on_both_engines(motor, plan):
+    """The C continuous loop and solve_ivp integrate the same plant with its effects."""
+    plant = fs.Plant(motor, PlantEffects(detent_torque=1e-3, coulomb_torque=1e-4, magnetizing_resistance=40.0))
+    ctrl = fs.FlatnessSMC(motor, plan, fs.SMCGains(W1=300.0, W2=300.0))
+    c = fs.simulate(plant, plan, ctrl)
+    ref = fs.simulate(plant, plan, ctrl, engine="scipy", solver=fs.Continuous("LSODA"))
+    clean = fs.simulate(motor, plan, ctrl)
+    assert np.max(np.abs(c.theta - clean.theta)) > 1e-6  # the effects act
+    assert np.max(np.abs(c.theta - ref.theta)) < 1e-8
+
+
+def test_a_plant_is_a_motor_its_effects_and_its_load(motor):
+    plant = fs.Plant(motor, PlantEffects(), load=2e-5)
+    assert plant.effects is None and plant.constant_load == 2e-5  # all-zero effects are none
+    assert plant.as_dict() == {"motor": motor.as_dict(), "effects": None, "load": 2e-5}
+    x = np.array([0.3, 0.1, 2.0, 0.004])
+    assert plant.acceleration(x) == pytest.approx(plant_acceleration(x, motor, 2e-5), rel=1e-15)
+    ramp = fs.Plant(motor, load=lambda t: 1e-5 * t)
+    assert ramp.constant_load is None
+    assert ramp.acceleration(x, 2.0) == pytest.approx(plant_acceleration(x, motor, 2e-5), rel=1e-12)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(motor="paper"), r"Plant.motor='paper' is not a MotorParams"),
+    (dict(effects=1e-3), r"Plant.effects=0.001 is not a PlantEffects"),
+    (dict(load=float("nan")), r"load_torque=nan"),
+    (dict(load=float("inf")), r"load_torque=inf"),
+])
+def test_bad_plants_are_refused(motor, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        fs.Plant(**{"motor": motor, **kwargs})

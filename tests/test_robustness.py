@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flatstep.cli import main
-from flatstep.studies.robustness import perturbed, plant_errors, run_study
+from flatstep.studies.robustness import encoder_count, perturbed, plant_errors, run_study
 from flatstep.studies.scenario_file import Robustness, load_scenario
 
 DRIVE = Path(__file__).parent.parent / "examples" / "drive-20khz-14bit.toml"
@@ -25,8 +25,18 @@ def test_corners_and_random_samples():
 def test_perturbed_plants_leave_the_model_alone():
     scenario, _ = load_scenario(DRIVE)
     runs = perturbed(scenario, [{"J": 0.1, "Km": -0.1}])
-    assert runs[0].motor == scenario.motor
-    assert runs[0].plant.J == pytest.approx(1.1 * scenario.motor.J) and runs[0].plant.Km == pytest.approx(0.9 * scenario.motor.Km)
+    plant = runs[0].simulated_plant
+    assert runs[0].motor == scenario.motor and runs[0].loop == scenario.loop
+    assert plant.motor.J == pytest.approx(1.1 * scenario.motor.J)
+    assert plant.motor.Km == pytest.approx(0.9 * scenario.motor.Km)
+    assert (plant.effects, plant.load) == (scenario.simulated_plant.effects, scenario.simulated_plant.load)
+
+
+def test_encoder_count_is_the_loops_sensors():
+    scenario, _ = load_scenario(DRIVE)
+    assert encoder_count(scenario) == pytest.approx(2 * np.pi / 16384)
+    assert encoder_count(replace(scenario, loop=replace(scenario.loop, sensors=None))) is None
+    assert encoder_count(replace(scenario, loop=None, measurement="ideal")) is None
 
 
 def test_study_reports_worst_values_in_counts():
@@ -37,7 +47,7 @@ def test_study_reports_worst_values_in_counts():
     assert designed["worst_counts"]["move"] < 1.0  # the 20 kHz target, on these four corners
     assert paper["worst_counts"]["move"] > 10 * designed["worst_counts"]["move"]
     row = designed["rows"][0]
-    e = np.abs(np.array(row["series_theta_error"])) / scenario.sensors.angle_step
+    e = np.abs(np.array(row["series_theta_error"])) / scenario.loop.sensors.angle_step
     assert designed["worst_counts"]["final"] >= e[-1]
 
 
@@ -50,7 +60,7 @@ def test_realistic_drives_meet_the_targets(name):
     held = run_study(scenario, study, with_paper_gains=False)["sets"]["scenario"]
     assert held["failed"] == 0 and held["runs"] == 32
     assert held["worst_counts"]["move"] <= 1.0 and held["worst_counts"]["rest"] <= 0.5
-    assert held["worst_rad"]["peak_voltage"] <= scenario.drive.v_bus
+    assert held["worst_rad"]["peak_voltage"] <= scenario.loop.drive.v_bus
     plain = replace(scenario, gains=replace(scenario.gains, hold_damping=None))
     hunting = run_study(plain, study, with_paper_gains=False)["sets"]["scenario"]
     assert hunting["worst_counts"]["rest"] > 0.5

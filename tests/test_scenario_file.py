@@ -18,17 +18,19 @@ def test_every_example_loads_and_runs(path):
 def test_paper_files_are_the_papers_scenarios():
     fig2, study = load_scenario(EXAMPLES[0].parent / "paper-fig2.toml")
     ref = fs.PAPER_SCENARIOS["fig2"]
-    assert (fig2.gains, fig2.load_torque, fig2.plan, fig2.motor, fig2.measurement) == (
-        ref.gains, ref.load_torque, ref.plan, ref.motor, ref.measurement)
-    assert study is None and fig2.control_period is None
+    assert (fig2.gains, fig2.simulated_plant, fig2.plan, fig2.motor, fig2.measurement) == (
+        ref.gains, ref.simulated_plant, ref.plan, ref.motor, ref.measurement)
+    assert fig2.simulated_plant.load == 1e-5
+    assert study is None and fig2.control_period is None and fig2.loop is None
 
 
 def test_realistic_drive_file():
     s, study = load_scenario(EXAMPLES[0].parent / "drive-20khz-14bit.toml")
-    assert s.control_period == pytest.approx(5e-5) and s.drive.v_bus == 24.0
-    assert s.sensors.encoder_counts == 16384 and s.sensors.current_bits == 12
-    assert s.measurement == "observer" and s.observer is not None
-    assert s.plant.Km == pytest.approx(0.9 * s.motor.Km) and s.plant.J == pytest.approx(1.1 * s.motor.J)
+    loop, plant = s.loop, s.simulated_plant
+    assert s.control_period == loop.control_period == pytest.approx(5e-5) and loop.drive.v_bus == 24.0
+    assert loop.sensors.encoder_counts == 16384 and loop.sensors.current_bits == 12
+    assert s.measurement == "observer" and loop.observer is not None
+    assert plant.motor.Km == pytest.approx(0.9 * s.motor.Km) and plant.motor.J == pytest.approx(1.1 * s.motor.J)
     assert study.samples == 0 and study.parameters == ("R", "L", "Km", "J", "B")
 
 

@@ -6,9 +6,10 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..engine.settings import Continuous
+from ..engine.simulate import simulate
 from ..model.motor import MotorParams, acceleration, rhs
 from ..studies.scenario import PAPER_SCENARIOS
-from ..engine.simulate import simulate
 from .common import Report, Target, core_module, race
 
 
@@ -63,15 +64,15 @@ def bench_closed_loop(repeat: int = 5, dt_out: float = 1e-5, rtol: float = 1e-10
         return float(np.abs(theta - plan.flag(t).theta).max())
 
     engines: dict[str, Callable[[float], Callable[[], Any]]] = {
-        "scipy LSODA": lambda r: lambda: simulate(motor, plan, ctrl, engine="scipy", method="LSODA", rtol=r,
-                                                  atol=r / 100, dt_out=dt_out, t_end=sc.t_end),
+        "scipy LSODA": lambda r: lambda: simulate(motor, plan, ctrl, engine="scipy", t_end=sc.t_end,
+                                                  solver=Continuous("LSODA", rtol=r, atol=r / 100, dt_out=dt_out)),
         "python-control LSODA": lambda r: lambda: control.input_output_response(
             system, T, 0, x0, solve_ivp_method="LSODA", solve_ivp_kwargs=dict(rtol=r, atol=r / 100)),
     }
     core = core_module()
     if core is not None:
-        engines["C engine end to end"] = lambda r: lambda: simulate(motor, plan, ctrl, engine="c", rtol=r,
-                                                                    atol=r / 100, dt_out=dt_out, t_end=sc.t_end)
+        engines["C engine end to end"] = lambda r: lambda: simulate(
+            motor, plan, ctrl, engine="c", t_end=sc.t_end, solver=Continuous(rtol=r, atol=r / 100, dt_out=dt_out))
     baseline = f"scipy LSODA, rtol {rtol:g} (baseline)"
     cases: dict[str, Callable[[], Any]] = {baseline: engines["scipy LSODA"](rtol)}
     checks, targets, chosen = [], [], {}

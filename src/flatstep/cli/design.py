@@ -6,49 +6,56 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
-from ..control.smc import SMCGains
 from ..control.design import design_gains
+from ..control.smc import SMCGains
 from ..loop.drive import Drive
+from ..loop.reference import DriveLoop
+from ..loop.sensors import Sensors
+from ..model.motor import MotorParams
+from ..model.plant import Plant
+from ..studies.robustness import encoder_count
 from ..studies.scenario import Scenario
 from ..studies.scenario_file import load_scenario
-from ..loop.sensors import Sensors
 
 
 def _design_scenario(args: argparse.Namespace) -> Scenario:
     """The scenario file's drive, or the realistic default: paper motor and move, 24 V, 14-bit, 12-bit."""
     if args.scenario:
         scenario, _ = load_scenario(args.scenario)
-        if scenario.control_period is None:
+        if scenario.loop is None:
             raise ValueError(f"{args.scenario} has no [drive] control_rate: gain design is for sampled drives")
         return scenario
     sensors = Sensors(encoder_counts=args.encoder_counts, current_bits=args.current_bits,
                       current_range=args.current_range)
-    return Scenario("drive", control_period=1.0 / args.control_rate, substeps=4, drive=Drive(v_bus=args.v_bus),
-                    sensors=sensors, load_torque=args.load_torque, compute_delay=args.compute_delay,
+    loop = DriveLoop.at(args.control_rate, substeps=4, drive=Drive(v_bus=args.v_bus), sensors=sensors,
+                        compute_delay=args.compute_delay)
+    motor = MotorParams.preset("paper")
+    return Scenario("drive", motor=motor, plant=Plant(motor, load=args.load_torque), loop=loop,
                     measurement="observer")
 
 
 def cmd_design(args: argparse.Namespace) -> int:
     base = _design_scenario(args)
-    s = base.sensors
-    d = design_gains(base.motor, base.plan, control_period=base.control_period,
-                     v_bus=base.drive.v_bus if base.drive else float("inf"),
+    loop, load = base.loop, base.simulated_plant.load
+    assert loop is not None  # _design_scenario
+    s = loop.sensors
+    d = design_gains(base.motor, base.plan, control_period=loop.control_period,
+                     v_bus=loop.drive.v_bus if loop.drive else float("inf"),
                      encoder_counts=s.encoder_counts if s else None, current_step=s.current_step if s else 0.0,
-                     load_torque=base.load_torque, uncertainty=args.uncertainty, compute_delay=base.compute_delay)
+                     load_torque=load, uncertainty=args.uncertainty, compute_delay=loop.compute_delay)
     report = d.as_dict()
     if args.out:
         from .plots_compare import plot_overlay
 
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        designed = replace(base, gains=d.gains, observer=d.observer if s else None)
+        designed = replace(base, gains=d.gains, loop=replace(loop, observer=d.observer if s else None))
         paper = replace(designed, gains=SMCGains())
         runs = {"paper's gains": paper.run(), "designed gains": designed.run()}
         report["runs"] = {k: {**r.summary(), "controller_faults": r.meta.get("controller_faults", 0)}
                           for k, r in runs.items()}
-        count = s.angle_step if s and s.angle_step else None
-        plot_overlay(runs, base.plan, count, title=f"{base.name}: {1 / base.control_period:g} Hz control, "
-                     f"load {base.load_torque:g} N m", path=out / "design.png")
+        plot_overlay(runs, base.plan, encoder_count(base), title=f"{base.name}: {1 / loop.control_period:g} Hz "
+                     f"control, load {load:g} N m", path=out / "design.png")
         (out / "design.json").write_text(json.dumps(report, indent=2) + "\n")
     if args.json:
         print(json.dumps(report, indent=2))

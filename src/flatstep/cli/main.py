@@ -8,6 +8,9 @@ from pathlib import Path
 from typing import Sequence
 
 from ..control.smc import MEASUREMENTS, SMCGains
+from ..engine.simulate import simulate
+from ..model.motor import MotorParams
+from ..model.plant import Plant
 from ..plan.feasibility import InfeasiblePlanError
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..studies.scenario import PAPER_SCENARIOS, Scenario
@@ -58,8 +61,9 @@ def _scenario_from_flags(args: argparse.Namespace) -> Scenario:
     val = {k: v if v is not None else p.get(k, g.get(k)) for k, v in val.items()}
     plan = RestToRest(**{k: val[k] for k in p})
     gains = SMCGains(**{k: val[k] for k in g})
-    return Scenario("run", plan=plan, gains=gains, measurement=val["measurement"] or "ideal",
-                    load_torque=val["load_torque"] or 0.0, t_end=val["t_end"] or 0.06)
+    motor = MotorParams.preset("paper")
+    return Scenario("run", motor=motor, plan=plan, gains=gains, measurement=val["measurement"] or "ideal",
+                    plant=Plant(motor, load=val["load_torque"] or 0.0), t_end=val["t_end"] or 0.06)
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -70,13 +74,18 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         scenario, _ = load_scenario(args.scenario)
     else:
         scenario = _scenario_from_flags(args)
-    result = scenario.run(**({} if args.x0 is None else {"x0": args.x0}))
+    if args.x0 is None:
+        result = scenario.run()
+    else:
+        scenario.feasibility().raise_if_infeasible()
+        result = simulate(scenario.simulated_plant, scenario.plan, scenario.controller(), loop=scenario.loop,
+                          solver=scenario.solver, t_end=scenario.t_end, x0=args.x0)
     summary = result.summary()
     if args.out:
         out = Path(args.out)
         plan = scenario.plan
         _write(out, "run", scenario, result, f"{scenario.name}: theta {plan.theta1:g} -> {plan.theta2:g} rad, "
-               f"load {scenario.load_torque:g} N m, {scenario.measurement} measurement")
+               f"load {scenario.simulated_plant.load:g} N m, {scenario.measurement} measurement")
         (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(json.dumps(summary, indent=2) if args.json else _table({"run": summary}))
     return 0

@@ -6,7 +6,7 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
-from ..studies.robustness import REST_AFTER, run_study
+from ..studies.robustness import REST_AFTER, encoder_count, run_study
 from ..studies.scenario_file import Robustness, load_scenario
 
 
@@ -16,7 +16,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     if args.samples is not None:
         study = replace(study, samples=args.samples)
     result = run_study(scenario, study, with_paper_gains=not args.no_paper_gains, progress=args.progress)
-    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else None
+    count = encoder_count(scenario)
     report = {label: {k: v for k, v in s.items() if k != "rows"} for label, s in result["sets"].items()}
     report = {"scenario": scenario.name, "relative_error": study.relative_error, "parameters": list(study.parameters),
               "runs_per_set": len(result["errors"]), "rest_starts_after_tf_s": REST_AFTER, "sets": report}
