@@ -67,7 +67,6 @@ def test_observer_removes_the_model_mode_bias_under_load(motor, plan):
 @pytest.mark.parametrize("kwargs, match", [
     (dict(loop=loop(observer=Observer())), "needs measurement='observer'"),
     (dict(loop=loop(observer=Observer()), engine="python"), "needs measurement='observer'"),
-    (dict(loop=loop(drive=Drive(pwm="switched")), engine="c"), "does not model pwm='switched'"),
     (dict(engine="python"), "engine='python' does not run continuous control"),
 ])
 def test_inconsistent_loops_are_refused(motor, plan, kwargs, match):
