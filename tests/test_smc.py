@@ -75,6 +75,18 @@ def test_model_mode_is_biased_by_an_unknown_load(motor, plan):
     assert s_model == pytest.approx(0.0, abs=1e-12)  # the model mode cannot
 
 
+def test_model_mode_acceleration_is_the_motor_models(motor, plan):
+    """One formula in one place: the model mode reads flatstep.model.motor.acceleration, bit for bit."""
+    rng = np.random.default_rng(7)
+    for m in (motor, fs.MotorParams.preset("nema17")):
+        ctrl = fs.FlatnessSMC(m, plan, measurement="model")
+        x = rng.normal(size=(4, 500)) * np.array([[0.5], [0.5], [50.0], [3.0]])
+        assert np.array_equal(ctrl.acceleration(x), fs.model.motor.acceleration(x, m))
+        assert np.array_equal(ctrl.acceleration(x[:, 0]), fs.model.motor.acceleration(x[:, 0], m))
+    ideal = fs.FlatnessSMC(motor, plan, measurement="ideal")
+    assert ideal.acceleration(x, 3.0) == 3.0
+
+
 def test_step_interface(motor, plan):
     ctrl = fs.FlatnessSMC(motor, plan, measurement="model")
     x = plan.x0(motor.Nr)

@@ -19,7 +19,7 @@ and in these coordinates eq. (1) reads
 zero-order hold, the current error decays by :math:`1 - \omega_c T_s` a period.
 
 **Anti-windup by clamping.** The drive scales a voltage vector beyond the bus back onto it (direction kept,
-:meth:`flatstep.drive.Drive.saturate`); when the controller's own command is scaled, its integrators are
+:meth:`flatstep.loop.drive.Drive.saturate`); when the controller's own command is scaled, its integrators are
 held for that period (conditional integration), so they do not wind up while the bus limits.
 """
 from __future__ import annotations

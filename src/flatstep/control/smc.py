@@ -6,7 +6,7 @@ r"""The paper's flatness + sliding-mode law, eqs. (12)-(14), corrected, with the
     \Gamma_2 = \theta^{*(3)} - \alpha_2\ddot e - \alpha_1\dot e - W_2\frac{s_2}{|s_2| + \epsilon_2}
 
 and the voltages are the flat inverse (eq. 9) with :math:`\dot\rho \to \Gamma_1`,
-:math:`\theta^{(3)} \to \Gamma_2`, evaluated at the measured state (:func:`flatstep.flat.flat_voltages`).
+:math:`\theta^{(3)} \to \Gamma_2`, evaluated at the measured state (:func:`flatstep.model.flat.flat_voltages`).
 
 **Hold** (``SMCGains.hold_damping``, not in the paper). On a quantized encoder the law above, fed by an
 observer, hunts across a count edge at rest (docs/drive.md, "Standstill"). With ``hold_damping`` = zeta, from
@@ -34,9 +34,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.flat import flat_voltages, polar
-from ..validate import check_finite, check_positive
 from ..model.motor import MotorParams
+from ..model.motor import acceleration as motor_acceleration
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_finite, check_positive
 
 MEASUREMENTS = ("ideal", "model", "observer")
 
@@ -79,7 +80,7 @@ class SMCGains:
 
 
 class FlatnessSMC:
-    """Flatness-based sliding-mode controller tracking a :class:`~flatstep.plan.RestToRest` plan.
+    """Flatness-based sliding-mode controller tracking a :class:`~flatstep.plan.rest_to_rest.RestToRest` plan.
 
     Parameters
     ----------
@@ -89,7 +90,7 @@ class FlatnessSMC:
     measurement : where theta'' comes from. ``"ideal"``: the true acceleration, passed by the simulator
         (the paper's assumption); ``"model"``: computed from the measured state by the zero-load model,
         ``J theta'' = Km (ib cos Nr theta - ia sin Nr theta) - B omega``; ``"observer"``: the estimate of a
-        :class:`~flatstep.observers.Observer`, passed by the simulator like the ideal one.
+        :class:`~flatstep.loop.observers.Observer`, passed by the simulator like the ideal one.
     """
 
     #: The C twin: csrc/smc.h (``struct smc``, ``smc_init``, ``smc_controller``).
@@ -104,15 +105,17 @@ class FlatnessSMC:
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
 
     def acceleration(self, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> NDArray[np.float64]:
-        """theta'' as the controller sees it: the given value in ``ideal`` mode, the zero-load model otherwise."""
+        """The acceleration theta'' as the controller sees it.
+
+        The given ``ddtheta`` in ``ideal`` and ``observer`` mode; in ``model`` mode the zero-load model of the
+        measured state, :func:`flatstep.model.motor.acceleration`.
+        """
         if self.measurement != "model":
             if ddtheta is None:
                 raise ValueError(f"measurement={self.measurement!r} needs the acceleration ddtheta; "
                                  "use measurement='model' to compute it from the state")
             return np.asarray(ddtheta, dtype=float)
-        ia, ib, omega, theta = np.asarray(x, dtype=float)
-        m = self.motor
-        return (m.Km * (ib * np.cos(m.Nr * theta) - ia * np.sin(m.Nr * theta)) - m.B * omega) / m.J
+        return motor_acceleration(x, self.motor)
 
     def sliding_variables(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None):
         """Return ``(s1, s2)`` of eq. (12) at times ``t`` for states ``x`` (vectorized)."""

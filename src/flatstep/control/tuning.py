@@ -1,6 +1,6 @@
 r"""Every controller built for one drive: the sliding controller with its gains, the baselines tuned by rule.
 
-The baselines take their bandwidths from the same design quantities :func:`flatstep.design.design_gains`
+The baselines take their bandwidths from the same design quantities :func:`flatstep.control.design.design_gains`
 uses for the sliding controller on that drive, so that none is faster or slower by choice:
 
 * inner (current) bandwidth :math:`\lambda = 0.3/T_s` (0.15/T_s with a computation delay), the sliding
