@@ -21,8 +21,8 @@ import numpy as np
 
 from flatstep.control.smc import FlatnessSMC
 from flatstep.loop.observers import Observer
-from flatstep.studies.robustness import REST_AFTER, perturbed, plant_errors
 from flatstep.loop.reference import _rk4  # the reference loop's RK4 step over one substep
+from flatstep.studies.robustness import REST_AFTER, encoder_count, perturbed, plant_errors
 from flatstep.studies.scenario_file import Robustness, load_scenario
 
 HERE = Path(__file__).parent
@@ -58,10 +58,12 @@ def run(scenario, dead_band=0.0, rest_bandwidth=None, rest_load_states=None, hol
     (t, theta - theta*)."""
     scenario = replace(scenario, gains=replace(scenario.gains, hold_damping=hold_damping))
     if exact_encoder:
-        scenario = replace(scenario, sensors=replace(scenario.sensors, encoder_counts=None))
-    ctrl, plant, sensors, drive = scenario.controller(), scenario.plant_motor, scenario.sensors, scenario.drive
-    model, plan, Ts, sub = ctrl.motor, ctrl.plan, scenario.control_period, scenario.substeps
-    obs = scenario.observer
+        loop = scenario.loop
+        scenario = replace(scenario, loop=replace(loop, sensors=replace(loop.sensors, encoder_counts=None)))
+    ctrl, plant, loop = scenario.controller(), scenario.simulated_plant, scenario.loop
+    sensors, drive = loop.sensors, loop.drive
+    model, plan, Ts, sub = ctrl.motor, ctrl.plan, loop.control_period, loop.substeps
+    obs = loop.observer
     order = obs.order
     moving = _embedded(obs, model, Ts, order)
     resting, rest_ctrl = moving, ctrl
@@ -91,7 +93,7 @@ def run(scenario, dead_band=0.0, rest_bandwidth=None, rest_load_states=None, hol
         if k == n:
             break
         for _ in range(sub):
-            x = _rk4(x, v, Ts / sub, plant, scenario.load_torque)
+            x = _rk4(x, v, Ts / sub, plant.motor, plant.load, plant.effects)
         xh = Ad @ xh + Bd * Te
     t = np.arange(n + 1) * Ts
     return t, theta - plan.flag(t).theta
@@ -101,7 +103,7 @@ def worst(job):
     """Worst move / rest / final error in counts of one strategy over the file's plants."""
     file, options = job
     scenario, study = load_scenario(HERE / file)
-    plan, q = scenario.plan, scenario.sensors.angle_step
+    plan, q = scenario.plan, encoder_count(scenario)
     out = np.zeros(3)
     for plant_case in perturbed(scenario, plant_errors(study or Robustness())):
         t, e = run(plant_case, **options)

@@ -13,7 +13,7 @@ import argparse
 import statistics
 import time
 
-from flatstep.studies.robustness import run_study
+from flatstep.studies.robustness import encoder_count, run_study
 from flatstep.studies.scenario_file import Robustness, load_scenario
 
 ENGINES = ("python", "c")
@@ -40,7 +40,7 @@ def main() -> None:
     print(f"{scenario.name}: {runs} runs per study, median of {args.repeats}, workers={args.workers or 'all cores'}")
     print(f"  python reference loop {med['python']:.3f} s, C drive loop {med['c']:.3f} s, "
           f"ratio {med['python'] / med['c']:.1f}x")
-    count = scenario.sensors.angle_step if scenario.sensors and scenario.sensors.angle_step else 1.0
+    count = encoder_count(scenario) or 1.0
     print(f"  {'gains':<14}{'engine':<8}{'worst move':>12}{'worst rest':>12}{'final':>10}{'peak |v|':>10}  [counts, V]")
     for label in results["c"]["sets"]:
         for engine in ENGINES:
