@@ -21,21 +21,24 @@ class CriticalPoint:
 
     @property
     def kind(self) -> str:
+        """``"stable"`` or ``"saddle"``."""
         return "stable" if self.stable else "saddle"
 
 
 def _currents(motor: MotorParams, ia: Optional[float], ib: Optional[float],
               va: Optional[float], vb: Optional[float]) -> tuple[float, float]:
+    """The constant phase currents, given directly or through eq. (2) from constant voltages."""
     if (ia is None) == (va is None) or (ib is None) == (vb is None):
         raise ValueError("give the constant phase currents (ia, ib) or the constant voltages (va, vb), not both")
-    ia = va / motor.R if ia is None else ia  # eq. (2): ia = va / R
-    ib = vb / motor.R if ib is None else ib
-    ia, ib = float(ia), float(ib)
-    if not (math.isfinite(ia) and math.isfinite(ib)):
-        raise ValueError(f"currents (ia, ib)=({ia!r}, {ib!r}) must be finite")
-    if ia == 0.0 and ib == 0.0:
-        raise ValueError("currents (ia, ib)=(0, 0) define no rest position: the rotor is free; give a nonzero current vector")
-    return ia, ib
+    # eq. (2): ia = va / R; the check above leaves exactly one of each pair given
+    a = float(ia) if ia is not None else float(va / motor.R) if va is not None else math.nan
+    b = float(ib) if ib is not None else float(vb / motor.R) if vb is not None else math.nan
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise ValueError(f"currents (ia, ib)=({a!r}, {b!r}) must be finite")
+    if a == 0.0 and b == 0.0:
+        raise ValueError("currents (ia, ib)=(0, 0) define no rest position: the rotor is free; "
+                         "give a nonzero current vector")
+    return a, b
 
 
 def rest_positions(motor: MotorParams, ia: Optional[float] = None, ib: Optional[float] = None, *,
@@ -80,6 +83,8 @@ def stable_angle(ia: float, ib: float, Nr: int, near: float = 0.0) -> float:
 
 
 def equilibrium_currents(theta: float, rho: float, Nr: int) -> tuple[float, float]:
-    r"""Phase currents holding the rotor at rest at ``theta`` with current norm ``rho`` (eqs. (19)-(21)):
-    :math:`\bar i_a = \rho\cos N_r\theta,\ \bar i_b = \rho\sin N_r\theta`."""
+    r"""Phase currents holding the rotor at rest at ``theta`` with current norm ``rho`` (eqs. (19)-(21)).
+
+    .. math:: \bar i_a = \rho\cos N_r\theta,\qquad \bar i_b = \rho\sin N_r\theta
+    """
     return rho * math.cos(Nr * theta), rho * math.sin(Nr * theta)

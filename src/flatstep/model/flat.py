@@ -38,8 +38,12 @@ class FlatFlag(NamedTuple):
 
 
 def polar(ia: ArrayLike, ib: ArrayLike) -> tuple[Array, Array]:
-    r"""Eq. (7): :math:`\rho = \sqrt{i_a^2 + i_b^2}`, :math:`\phi = \operatorname{atan2}(i_a, i_b)`
-    (the quadrant-correct form of the printed :math:`\arctan(i_a/i_b)`)."""
+    r"""Eq. (7): the current vector's norm and phase.
+
+    .. math:: \rho = \sqrt{i_a^2 + i_b^2},\qquad \phi = \operatorname{atan2}(i_a, i_b)
+
+    (the quadrant-correct form of the printed :math:`\arctan(i_a/i_b)`).
+    """
     ia, ib = np.asarray(ia, dtype=float), np.asarray(ib, dtype=float)
     return np.hypot(ia, ib), np.arctan2(ia, ib)
 
@@ -71,40 +75,47 @@ def polar_rhs(z: ArrayLike, v: ArrayLike, motor: MotorParams, load_torque: Array
 
 
 def input_map(phi: ArrayLike, X: ArrayLike, Y: ArrayLike) -> Array:
-    r"""Phase voltages from the polar-frame voltages: :math:`v_a = X\sin\phi + Y\cos\phi`,
-    :math:`v_b = X\cos\phi - Y\sin\phi` (the corrected matrix of eqs. (9) and (13))."""
+    r"""Phase voltages from the polar-frame voltages (the corrected matrix of eqs. (9) and (13)).
+
+    .. math:: v_a = X\sin\phi + Y\cos\phi,\qquad v_b = X\cos\phi - Y\sin\phi
+    """
     sp, cp = np.sin(phi), np.cos(phi)
-    return np.array([X * sp + Y * cp, X * cp - Y * sp])
+    x, y = np.asarray(X, dtype=float), np.asarray(Y, dtype=float)
+    return np.array([x * sp + y * cp, x * cp - y * sp])
 
 
 def flat_voltages(motor: MotorParams, rho: ArrayLike, drho: ArrayLike, theta: ArrayLike, dtheta: ArrayLike,
                   ddtheta: ArrayLike, dddtheta: ArrayLike, phi: ArrayLike, torque_demand: ArrayLike) -> Array:
-    r"""Voltages that give :math:`\dot\rho` = ``drho`` and :math:`\theta^{(3)}` = ``dddtheta`` from the
-    current (rho, phi, theta, theta', theta''), given the torque demand ``A`` the model believes in.
+    r"""Voltages that give :math:`\dot\rho` = ``drho`` and :math:`\theta^{(3)}` = ``dddtheta``.
 
-    This is the shared core of the feedforward (eq. 9) and of the controller (eq. 13), where ``drho``
+    They act from the current (rho, phi, theta, theta', theta''), given the torque demand ``A`` the model
+    believes in. This is the shared core of the feedforward (eq. 9) and of the controller (eq. 13), where ``drho``
     and ``dddtheta`` are replaced by :math:`\Gamma_1, \Gamma_2` of eq. (14).
     """
     rho, A = np.asarray(rho, dtype=float), np.asarray(torque_demand, dtype=float)
+    d_rho, d_theta, dd_theta, ddd_theta = (np.asarray(a, dtype=float) for a in (drho, dtheta, ddtheta, dddtheta))
     m = motor
     S = np.sqrt(m.Km**2 * rho**2 - A**2)
-    dphi = -((m.J * dddtheta + m.B * ddtheta) * rho - A * drho) / (rho * S) - m.Nr * dtheta
+    dphi = -((m.J * ddd_theta + m.B * dd_theta) * rho - A * d_rho) / (rho * S) - m.Nr * d_theta
     delta = m.Nr * np.asarray(theta) + phi
-    X = m.L * drho + m.R * rho + m.Km * dtheta * np.cos(delta)
-    Y = m.L * rho * dphi - m.Km * dtheta * np.sin(delta)
+    X = m.L * d_rho + m.R * rho + m.Km * d_theta * np.cos(delta)
+    Y = m.L * rho * dphi - m.Km * d_theta * np.sin(delta)
     return input_map(phi, X, Y)
 
 
 def check_flag_domain(flag: FlatFlag, motor: MotorParams, load_torque: float = 0.0) -> Array:
-    """Return ``cos(delta) = A / (Km rho)``; raise a ValueError where the flag leaves the domain of the maps
-    (rho <= 0 or ``|J theta'' + B theta' + tau| >= Km rho``)."""
+    """Return ``cos(delta) = A / (Km rho)``; raise a ValueError where the flag leaves the domain of the maps.
+
+    The domain is rho > 0 and ``|J theta'' + B theta' + tau| < Km rho``.
+    """
     rho = np.asarray(flag.rho, dtype=float)
     A = motor.J * np.asarray(flag.ddtheta) + motor.B * np.asarray(flag.dtheta) + load_torque
     if not (np.all(np.isfinite(rho)) and np.all(np.isfinite(A))):
         raise ValueError("the flat flag contains NaN or infinite values")
     if np.any(rho <= 0):
         i = int(np.argmin(rho))
-        raise ValueError(f"rho={float(rho.flat[i])!r} A at sample {i}: the flat maps need rho > 0 (phi is undefined at 0)")
+        raise ValueError(f"rho={float(rho.flat[i])!r} A at sample {i}: the flat maps need rho > 0 "
+                         "(phi is undefined at 0)")
     c = A / (motor.Km * rho)
     if np.any(np.abs(c) >= 1):
         i = int(np.argmax(np.abs(c)))
@@ -114,8 +125,9 @@ def check_flag_domain(flag: FlatFlag, motor: MotorParams, load_torque: float = 0
 
 
 def flat_to_state(flag: FlatFlag, motor: MotorParams, load_torque: float = 0.0) -> tuple[Array, Array]:
-    r"""Eqs. (9)-(10), corrected: the state ``x = (ia, ib, omega, theta)`` and inputs ``v = (va, vb)``
-    along a flat-output trajectory, for a known constant load torque :math:`\tau`.
+    r"""Eqs. (9)-(10), corrected: the state ``x = (ia, ib, omega, theta)`` and inputs ``v = (va, vb)``.
+
+    They are taken along a flat-output trajectory, for a known constant load torque :math:`\tau`.
 
     .. math::
         \phi = \arccos\frac{J\ddot\theta + B\dot\theta + \tau}{K_m\rho} - N_r\theta,\quad
@@ -124,14 +136,15 @@ def flat_to_state(flag: FlatFlag, motor: MotorParams, load_torque: float = 0.0) 
     c = check_flag_domain(flag, motor, load_torque)
     phi = np.arccos(c) - motor.Nr * np.asarray(flag.theta)
     ia, ib = cartesian(flag.rho, phi)
-    x = np.array([ia, ib, np.asarray(flag.dtheta, dtype=float) + 0.0 * ia, np.asarray(flag.theta, dtype=float) + 0.0 * ia])
+    x = np.array([ia, ib, np.asarray(flag.dtheta, dtype=float) + 0.0 * ia,
+                  np.asarray(flag.theta, dtype=float) + 0.0 * ia])
     A = c * motor.Km * np.asarray(flag.rho)
     v = flat_voltages(motor, flag.rho, flag.drho, flag.theta, flag.dtheta, flag.ddtheta, flag.dddtheta, phi, A)
     return x, v
 
 
 def state_to_flat(x: ArrayLike, v: ArrayLike, motor: MotorParams, load_torque: float = 0.0) -> FlatFlag:
-    r"""The flat flag from state and input (the inverse of :func:`flat_to_state`), through eq. (8):
+    r"""The flat flag from state and input (the inverse of :func:`flat_to_state`), through eq. (8).
 
     .. math::
         J\ddot\theta = K_m\rho\cos\delta - B\omega - \tau,\quad

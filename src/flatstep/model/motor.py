@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Callable, Union
+from typing import Callable, TypedDict, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -19,18 +19,35 @@ STATE_NAMES = ("ia", "ib", "omega", "theta")
 INPUT_NAMES = ("va", "vb")
 
 
+class MotorFields(TypedDict):
+    """The fields of :class:`MotorParams` as keyword arguments (a preset)."""
+
+    R: float
+    L: float
+    Km: float
+    J: float
+    B: float
+    Nr: int
+
+
 @dataclass(frozen=True)
 class MotorParams:
     """Parameters of the two-phase PM stepper of eq. (1).
 
     Parameters
     ----------
-    R : phase resistance [ohm], > 0
-    L : phase inductance [H], > 0
-    Km : torque (and back-emf) constant [N m/A = V s/rad], > 0
-    J : rotor and load inertia [kg m^2], > 0
-    B : viscous friction [N m s/rad], >= 0
-    Nr : number of rotor teeth, a positive integer
+    R : float
+        Phase resistance [ohm], > 0.
+    L : float
+        Phase inductance [H], > 0.
+    Km : float
+        Torque (and back-emf) constant [N m/A = V s/rad], > 0.
+    J : float
+        Rotor and load inertia [kg m^2], > 0.
+    B : float
+        Viscous friction [N m s/rad], >= 0.
+    Nr : int
+        Number of rotor teeth, a positive integer.
     """
 
     R: float
@@ -45,7 +62,7 @@ class MotorParams:
             object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=unit))
         object.__setattr__(self, "B", check_nonnegative("B", self.B, unit=" N m s/rad",
                                                         why="viscous friction cannot be negative"))
-        Nr = self.Nr
+        Nr: object = self.Nr
         if isinstance(Nr, float) and Nr.is_integer() and Nr >= 1:  # a whole float such as 50.0 is 50 teeth
             Nr = int(Nr)
         object.__setattr__(self, "Nr", check_integer("Nr", Nr, why="number of rotor teeth"))
@@ -66,6 +83,7 @@ class MotorParams:
         return MotorParams(**{**asdict(self), **changes})
 
     def as_dict(self) -> dict[str, float]:
+        """The parameters by name (``R``, ``L``, ``Km``, ``J``, ``B``, ``Nr``)."""
         return asdict(self)
 
 
@@ -75,9 +93,9 @@ class MotorParams:
 #: data at https://infosys.beckhoff.com/content/1033/as1000_ba/1426750347.html . Km is the standstill
 #: torque over the current-vector norm with both phases at rated current, 0.38 / (sqrt(2) * 1.0 A); B is
 #: not in the datasheet and is taken as 1e-4 N m s/rad, the paper's value.
-PRESETS: dict[str, dict[str, float]] = {
-    "paper": dict(R=8.4, L=0.010, Km=0.05, J=3.6e-6, B=1e-4, Nr=50),
-    "nema17": dict(R=4.10, L=9.50e-3, Km=0.38 / math.sqrt(2.0), J=5.6e-6, B=1e-4, Nr=50),
+PRESETS: dict[str, MotorFields] = {
+    "paper": MotorFields(R=8.4, L=0.010, Km=0.05, J=3.6e-6, B=1e-4, Nr=50),
+    "nema17": MotorFields(R=4.10, L=9.50e-3, Km=0.38 / math.sqrt(2.0), J=5.6e-6, B=1e-4, Nr=50),
 }
 
 
@@ -122,8 +140,9 @@ def torque(x: ArrayLike, motor: MotorParams) -> NDArray[np.float64]:
 
 
 def acceleration(x: ArrayLike, motor: MotorParams, load: ArrayLike = 0.0) -> NDArray[np.float64]:
-    r"""Rotor acceleration of eq. (1) under the load torque ``load`` [N m] (a constant or an array like the
-    state's trailing axes) [rad/s^2].
+    r"""Rotor acceleration of eq. (1) [rad/s^2] under the load torque ``load``.
+
+    ``load`` [N m] is a constant or an array like the state's trailing axes.
 
     .. math::
         \dot\omega = \big(K_m(i_b\cos N_r\theta - i_a\sin N_r\theta) - B\omega - \tau\big) / J

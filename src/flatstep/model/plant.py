@@ -22,7 +22,7 @@ sees a Lipschitz right-hand side (keep :math:`T_c h/(J\omega_s)` below about 2 f
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -33,16 +33,21 @@ from .motor import Load, MotorParams, load_function, rhs
 
 @dataclass(frozen=True)
 class PlantEffects:
-    """Detent torque, Coulomb friction and iron loss of the simulated plant.
+    r"""Detent torque, Coulomb friction and iron loss of the simulated plant.
 
     Parameters
     ----------
-    detent_torque : amplitude :math:`T_d` [N m] of :math:`-T_d\\sin(hN_r\\theta)`, >= 0.
-    coulomb_torque : Coulomb friction :math:`T_c` [N m], >= 0.
-    coulomb_speed : :math:`\\omega_s` [rad/s] of the smooth sign :math:`\\tanh(\\omega/\\omega_s)`, > 0.
-    magnetizing_resistance : :math:`R_m` [ohm] > 0, or ``None`` for no iron loss.
-    detent_harmonic : :math:`h`, the detent's harmonic of the electrical angle, a positive integer (4 for a
-        two-phase hybrid or PM stepper: four detent periods per electrical period).
+    detent_torque : float
+        Amplitude :math:`T_d` [N m] of :math:`-T_d\sin(hN_r\theta)`, >= 0.
+    coulomb_torque : float
+        Coulomb friction :math:`T_c` [N m], >= 0.
+    coulomb_speed : float
+        :math:`\omega_s` [rad/s] of the smooth sign :math:`\tanh(\omega/\omega_s)`, > 0.
+    magnetizing_resistance : float, optional
+        :math:`R_m` [ohm] > 0, or ``None`` for no iron loss.
+    detent_harmonic : int
+        :math:`h`, the detent's harmonic of the electrical angle, a positive integer (4 for a two-phase hybrid
+        or PM stepper: four detent periods per electrical period).
     """
 
     detent_torque: float = 0.0
@@ -53,7 +58,8 @@ class PlantEffects:
 
     def __post_init__(self) -> None:
         for name in ("detent_torque", "coulomb_torque"):
-            object.__setattr__(self, name, check_nonnegative(name, getattr(self, name), unit=" N m", why="an amplitude"))
+            object.__setattr__(self, name, check_nonnegative(name, getattr(self, name), unit=" N m",
+                                                             why="an amplitude"))
         object.__setattr__(self, "coulomb_speed", check_positive("coulomb_speed", self.coulomb_speed, unit=" rad/s"))
         object.__setattr__(self, "detent_harmonic", check_integer("detent_harmonic", self.detent_harmonic))
         if self.magnetizing_resistance is not None:
@@ -66,10 +72,13 @@ class PlantEffects:
         return self.detent_torque > 0 or self.coulomb_torque > 0 or self.magnetizing_resistance is not None
 
     def torque(self, omega: ArrayLike, theta: ArrayLike, motor: MotorParams) -> NDArray[np.float64]:
-        r"""The torque the effects add to the rotor [N m]:
-        :math:`-T_d\sin hN_r\theta - T_c\tanh(\omega/\omega_s) - K_m^2\omega/R_m`."""
+        r"""The torque the effects add to the rotor [N m].
+
+        .. math:: -T_d\sin hN_r\theta - T_c\tanh(\omega/\omega_s) - K_m^2\omega/R_m
+        """
         omega, theta = np.asarray(omega, dtype=float), np.asarray(theta, dtype=float)
-        out = -self.detent_torque * np.sin(self.detent_harmonic * motor.Nr * theta) - self.coulomb_torque * np.tanh(omega / self.coulomb_speed)
+        out = (-self.detent_torque * np.sin(self.detent_harmonic * motor.Nr * theta)
+               - self.coulomb_torque * np.tanh(omega / self.coulomb_speed))
         if self.magnetizing_resistance is not None:
             out = out - motor.Km**2 / self.magnetizing_resistance * omega
         return out
@@ -81,7 +90,8 @@ class PlantEffects:
             return np.zeros_like(omega)
         return motor.Km**2 * omega**2 / self.magnetizing_resistance
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
+        """The effects' fields by name, for a result's metadata and the C ``struct plant_effects``."""
         return asdict(self)
 
 
@@ -90,8 +100,10 @@ NO_EFFECTS = PlantEffects()
 
 def plant_rhs(x: ArrayLike, v: ArrayLike, motor: MotorParams, load: float = 0.0,
               effects: Optional[PlantEffects] = None) -> NDArray[np.float64]:
-    """Eq. (1) plus the effects' torque on the speed equation (vectorized like :func:`flatstep.model.motor.rhs`);
-    ``load`` is a constant load torque [N m]."""
+    """Eq. (1) plus the effects' torque on the speed equation (vectorized like :func:`flatstep.model.motor.rhs`).
+
+    ``load`` is a constant load torque [N m].
+    """
     dx = rhs(0.0, x, v, motor, load)
     if effects is not None and effects.active:
         x = np.asarray(x, dtype=float)
@@ -143,7 +155,7 @@ class Plant:
         acc = rhs(t, x, np.zeros(2), self.motor, self.load)[2]
         return acc + self.effects.torque(x[2], x[3], self.motor) / self.motor.J if self.effects else acc
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         """The motor, the effects and (when constant) the load, for a result's metadata."""
         return {"motor": self.motor.as_dict(), "effects": self.effects.as_dict() if self.effects else None,
                 "load": self.constant_load if not callable(self.load) else repr(self.load)}

@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import math
-
 from dataclasses import asdict, dataclass, field
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar
 
 from ..model.flat import flat_to_state
@@ -17,7 +17,7 @@ from .rest_to_rest import RestToRest
 class InfeasiblePlanError(ValueError):
     """A requested plan violates a feasibility condition; ``.report`` says where and by how much."""
 
-    def __init__(self, report: "FeasibilityReport"):
+    def __init__(self, report: FeasibilityReport) -> None:
         super().__init__(report.describe())
         self.report = report
 
@@ -45,6 +45,7 @@ class FeasibilityReport:
     violations: tuple[str, ...] = field(default_factory=tuple)
 
     def describe(self) -> str:
+        """One line: feasible or not, the violations, the worst rho and torque margin and the peaks."""
         head = "feasible plan" if self.feasible else "infeasible plan: " + "; ".join(self.violations)
         peaks = "" if math.isnan(self.peak_voltage) else (
             f"; peak feedforward |v| {self.peak_voltage:.6g} V at t={self.peak_voltage_time:.6g} s, "
@@ -52,18 +53,21 @@ class FeasibilityReport:
         return (f"{head} (min rho {self.min_rho:.6g} A at t={self.min_rho_time:.6g} s; torque margin "
                 f"{self.torque_margin:.6g} N m, ratio {self.torque_ratio:.4f} at t={self.worst_time:.6g} s{peaks})")
 
-    def raise_if_infeasible(self) -> "FeasibilityReport":
+    def raise_if_infeasible(self) -> FeasibilityReport:
+        """Return the report if the plan is feasible, else raise :class:`InfeasiblePlanError` with it."""
         if not self.feasible:
             raise InfeasiblePlanError(self)
         return self
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
+        """The report's fields by name (``violations`` as a list), for JSON."""
         d = asdict(self)
         d["violations"] = list(self.violations)
         return d
 
 
-def _torque_margin(plan: RestToRest, motor: MotorParams, load_torque: float, t):
+def _torque_margin(plan: RestToRest, motor: MotorParams, load_torque: float, t: ArrayLike) -> NDArray[np.float64]:
+    """``Km rho* - |J theta*'' + B theta*' + tau|`` [N m] at times ``t``: > 0 where the flat maps are regular."""
     f = plan.flag(t)
     return motor.Km * f.rho - np.abs(motor.J * f.ddtheta + motor.B * f.dtheta + load_torque)
 
@@ -71,12 +75,12 @@ def _torque_margin(plan: RestToRest, motor: MotorParams, load_torque: float, t):
 def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: float = 0.0,
                       v_max: Optional[float] = None, i_max: Optional[float] = None,
                       n: int = 2001) -> FeasibilityReport:
-    r"""Check the whole plan: :math:`\rho^* > 0`, :math:`|J\ddot\theta^* + B\dot\theta^* + \tau| < K_m\rho^*`
-    (where the flat maps and the controller (13) are singular) and, if given, the feedforward phase voltages
-    against ``v_max`` and phase currents against ``i_max``.
+    r"""Check the whole plan before anything is simulated.
 
-    The plan is sampled at ``n`` points over [t0, tf] and the worst torque margin is refined by a bounded
-    scalar minimisation around the worst sample.
+    The conditions are :math:`\rho^* > 0` and :math:`|J\ddot\theta^* + B\dot\theta^* + \tau| < K_m\rho^*`
+    (where they fail the flat maps and the controller (13) are singular) and, if given, the feedforward phase
+    voltages against ``v_max`` and phase currents against ``i_max``. The plan is sampled at ``n`` points over
+    [t0, tf] and the worst torque margin is refined by a bounded scalar minimisation around the worst sample.
     """
     if n < 3:
         raise ValueError(f"n={n!r} samples is too few; use at least 3")

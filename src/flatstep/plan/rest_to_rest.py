@@ -20,8 +20,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.equilibria import equilibrium_currents, stable_angle
 from ..model.flat import FlatFlag
-from ..validate import check_finite, check_positive
 from ..model.motor import MotorParams
+from ..validate import check_finite, check_positive
 
 #: Coefficients r1..r6 of eq. (17).
 PAPER_R = (252.0, 1050.0, 1800.0, 1575.0, 700.0, 126.0)
@@ -34,8 +34,9 @@ _PSI_HORNER = [d.coef[::-1].copy() for d in _PSI_DERIVS]  # highest power first,
 
 
 def psi(t: ArrayLike, t0: float, tf: float, order: int = 0) -> NDArray[np.float64]:
-    r"""The paper's interpolating polynomial :math:`\psi(t, t_0, t_f)` (eq. 17) or its ``order``-th time
-    derivative, held at 0 before :math:`t_0` and at 1 after :math:`t_f` (derivatives 0 outside).
+    r"""The paper's interpolating polynomial :math:`\psi(t, t_0, t_f)` (eq. 17) or its ``order``-th time derivative.
+
+    It is held at 0 before :math:`t_0` and at 1 after :math:`t_f` (derivatives 0 outside).
 
     .. math:: \frac{d^k\psi}{dt^k} = \frac{\psi^{(k)}(\tau)}{(t_f - t_0)^k}
     """
@@ -54,7 +55,7 @@ def psi(t: ArrayLike, t0: float, tf: float, order: int = 0) -> NDArray[np.float6
 
 @dataclass(frozen=True)
 class RestToRest:
-    r"""Equilibrium-to-equilibrium transfer of the flat outputs, eqs. (16) and (18):
+    r"""Equilibrium-to-equilibrium transfer of the flat outputs, eqs. (16) and (18).
 
     .. math::
         \theta^*(t) = \bar\theta^1 + \psi(t)(\bar\theta^2 - \bar\theta^1),\qquad
@@ -109,6 +110,7 @@ class RestToRest:
         return np.array([*equilibrium_currents(self.theta2, self.rho2, Nr), 0.0, self.theta2])
 
     def as_dict(self) -> dict[str, float]:
+        """The plan's fields by name, as the C ``struct plan`` and a result's metadata take them."""
         return dict(theta1=self.theta1, theta2=self.theta2, rho1=self.rho1, rho2=self.rho2, t0=self.t0, tf=self.tf)
 
 
@@ -124,7 +126,7 @@ def point_to_point(motor: MotorParams, theta1: float, theta2: float, rho1: float
     Raises
     ------
     InfeasiblePlanError
-        (a ValueError) carrying the :class:`~flatstep.plan.feasibility.FeasibilityReport` of the worst point.
+        A ValueError carrying the :class:`~flatstep.plan.feasibility.FeasibilityReport` of the worst point.
     """
     from .feasibility import check_feasibility
 
