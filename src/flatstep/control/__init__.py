@@ -6,6 +6,6 @@ from .protocol import Controller, StaticController, is_static
 from .smc import MEASUREMENTS, FlatnessSMC, SMCGains
 from .tuning import CONTROLLER_TYPES, LABELS, make_controller
 
-__all__ = ["Controller", "StaticController", "is_static", "FlatnessSMC", "SMCGains", "MEASUREMENTS", "Microstepping", "MicrostepGains", "CascadeFOC",
-           "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "LABELS",
-           "make_controller"]
+__all__ = ["Controller", "StaticController", "is_static", "FlatnessSMC", "SMCGains", "MEASUREMENTS",
+           "Microstepping", "MicrostepGains", "CascadeFOC", "CascadeGains", "ExactLinearization", "LinearizationGains",
+           "CONTROLLER_TYPES", "LABELS", "make_controller"]

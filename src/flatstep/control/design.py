@@ -27,16 +27,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 
-from .smc import SMCGains
-from ..plan.feasibility import check_feasibility
-from ..validate import check_finite, check_positive
-from ..model.motor import MotorParams
 from ..loop.observers import Observer
+from ..model.motor import MotorParams
+from ..plan.feasibility import check_feasibility
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_finite, check_positive
+from .smc import SMCGains
 
 LAMBDA_TS = 0.3
 LAMBDA_TS_DELAYED = 0.15
@@ -54,7 +54,8 @@ class Design:
     rationale: dict[str, float]
     warnings: tuple[str, ...] = field(default_factory=tuple)
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
+        """The gains, the observer, the rationale and the warnings, for JSON."""
         return {"gains": self.gains.as_dict(), "observer": self.observer.as_dict(),
                 "rationale": dict(self.rationale), "warnings": list(self.warnings)}
 
@@ -66,14 +67,30 @@ def design_gains(motor: MotorParams, plan: RestToRest, *, control_period: float 
 
     Parameters
     ----------
-    motor, plan : the controller's model and the move it must track.
-    control_period : Ts [s] (default 50 us, 20 kHz).
-    v_bus : bus voltage [V]; the design warns when the plan's feedforward leaves less than 25 % headroom.
-    encoder_counts, current_step : sensor resolution (counts per revolution; ADC step [A]); used to check
-        that quantization noise stays inside the boundary layers.
-    load_torque : the largest load torque expected [N m].
-    uncertainty : relative error of every model parameter (0.1 for +-10 %).
-    compute_delay : one control period between measuring and applying.
+    motor : MotorParams
+        The controller's model of the motor.
+    plan : RestToRest
+        The move it must track.
+    control_period : float
+        Ts [s] (default 50 us, 20 kHz).
+    v_bus : float
+        Bus voltage [V]; the design warns when the plan's feedforward leaves less than 25 % headroom.
+    encoder_counts : int, optional
+        Encoder resolution (counts per revolution), ``None`` without an encoder; with ``current_step``, used
+        to check that quantization noise stays inside the boundary layers.
+    current_step : float
+        Current ADC step [A].
+    load_torque : float
+        The largest load torque expected [N m].
+    uncertainty : float
+        Relative error of every model parameter (0.1 for +-10 %).
+    compute_delay : bool
+        One control period between measuring and applying.
+
+    Returns
+    -------
+    Design
+        The gains, the observer and the numbers behind them, with any warnings.
     """
     Ts = check_positive("control_period", control_period, unit=" s")
     v_bus = check_positive("v_bus", v_bus, unit=" V")

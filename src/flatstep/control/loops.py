@@ -25,26 +25,34 @@ held for that period (conditional integration), so they do not wind up while the
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_finite, check_positive
 from ..model.motor import MotorParams
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_finite, check_positive
 from .smc import MEASUREMENTS
 
 
-def park(ia: ArrayLike, ib: ArrayLike, electrical_angle: ArrayLike) -> tuple[NDArray, NDArray]:
-    r"""Phase currents (or voltages) to the rotor frame: :math:`(i_d, i_q)` at :math:`N_r\theta` = ``electrical_angle``."""
+def park(ia: ArrayLike, ib: ArrayLike,
+         electrical_angle: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    r"""Phase currents (or voltages) to the rotor frame, at :math:`N_r\theta` = ``electrical_angle``.
+
+    .. math:: i_d = i_a\cos N_r\theta + i_b\sin N_r\theta,\qquad i_q = -i_a\sin N_r\theta + i_b\cos N_r\theta
+    """
     c, s = np.cos(electrical_angle), np.sin(electrical_angle)
     ia, ib = np.asarray(ia, dtype=float), np.asarray(ib, dtype=float)
     return ia * c + ib * s, -ia * s + ib * c
 
 
-def inverse_park(d: ArrayLike, q: ArrayLike, electrical_angle: ArrayLike) -> tuple[NDArray, NDArray]:
-    r"""Rotor frame to phases: :math:`a = d\cos N_r\theta - q\sin N_r\theta`, :math:`b = d\sin N_r\theta + q\cos N_r\theta`."""
+def inverse_park(d: ArrayLike, q: ArrayLike,
+                 electrical_angle: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    r"""Rotor frame to phases, the inverse of :func:`park`.
+
+    .. math:: a = d\cos N_r\theta - q\sin N_r\theta,\qquad b = d\sin N_r\theta + q\cos N_r\theta
+    """
     c, s = np.cos(electrical_angle), np.sin(electrical_angle)
     d, q = np.asarray(d, dtype=float), np.asarray(q, dtype=float)
     return d * c - q * s, d * s + q * c
@@ -71,6 +79,7 @@ class PIGains:
         return cls(motor.L * wc, motor.R * wc)
 
     def as_dict(self) -> dict[str, float]:
+        """The gains by name (``kp``, ``ki``)."""
         return asdict(self)
 
 
@@ -99,13 +108,19 @@ def check_v_limit(v_limit: float) -> float:
     return v
 
 
-class BaselineController:
-    """What every baseline shares: its nominal model, the move, its gains, what it measures (as
-    :class:`~flatstep.control.smc.FlatnessSMC`), its control period (``None``: continuous) and the bus its
-    anti-windup knows."""
+#: The gains type of a baseline (a frozen dataclass with ``as_dict()``).
+GainsT = TypeVar("GainsT")
 
-    def __init__(self, motor: MotorParams, plan: RestToRest, gains, *, measurement: str,
-                 control_period: float | None, v_limit: float):
+
+class BaselineController(Generic[GainsT]):
+    """What every baseline shares.
+
+    Its nominal model, the move, its gains, what it measures (as :class:`~flatstep.control.smc.FlatnessSMC`),
+    its control period (``None``: continuous) and the bus its anti-windup knows.
+    """
+
+    def __init__(self, motor: MotorParams, plan: RestToRest, gains: GainsT, *, measurement: str,
+                 control_period: float | None, v_limit: float) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement

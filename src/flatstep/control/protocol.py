@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from typing import Any, Optional, Protocol, runtime_checkable
 
+import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
@@ -39,11 +40,11 @@ class Controller(Protocol):
         """The controller's state at the start of a run (``None`` for a static law)."""
         ...
 
-    def step(self, state: Any, measurement: ArrayLike, t: float) -> tuple[NDArray, Any]:
+    def step(self, state: Any, measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], Any]:
         """One control period: the phase voltages ``(va, vb)`` and the next state."""
         ...
 
-    def c_params(self) -> dict:
+    def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct <c_name>_params``."""
         ...
 
@@ -52,7 +53,7 @@ class Controller(Protocol):
 class StaticController(Controller, Protocol):
     """A controller whose voltages depend on ``(t, y)`` alone: it also runs in the continuous loop."""
 
-    def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> NDArray:
+    def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> NDArray[np.float64]:
         """Phase voltages ``(va, vb)`` at times ``t`` for states ``x`` (4, n), vectorized over time."""
         ...
 

@@ -15,11 +15,11 @@ that none of them is crippled by the rule (halving or doubling does not make it 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Union
 
-from ..validate import check_positive
 from ..model.motor import MotorParams
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
 from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
 from .exact_linearization import ExactLinearization, LinearizationGains
@@ -31,19 +31,25 @@ CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization"}
+#: The sliding controller's default gains, the paper's.
+_PAPER_SMC_GAINS = SMCGains()
+#: What :func:`make_controller` returns.
+AnyController = Union[FlatnessSMC, Microstepping, CascadeFOC, ExactLinearization]
 
 
 def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
-    r"""``(lambda, omega_n)`` [rad/s] for a control period: :math:`\lambda T_s = 0.3` (0.15 delayed),
-    :math:`\omega_n = \lambda/4`."""
+    r"""``(lambda, omega_n)`` [rad/s] for a control period.
+
+    .. math:: \lambda T_s = 0.3 \text{ (0.15 delayed)},\qquad \omega_n = \lambda/4
+    """
     Ts = check_positive("control_period", control_period, unit=" s")
     lam = (LAMBDA_TS_DELAYED if compute_delay else LAMBDA_TS) / Ts
     return lam, WN_OVER_LAMBDA * lam
 
 
 def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_period: float | None,
-                    measurement: str, smc_gains: SMCGains = SMCGains(), v_limit: float = math.inf,
-                    bandwidth_scale: float = 1.0, compute_delay: bool = False) -> Any:
+                    measurement: str, smc_gains: SMCGains = _PAPER_SMC_GAINS, v_limit: float = math.inf,
+                    bandwidth_scale: float = 1.0, compute_delay: bool = False) -> AnyController:
     """The controller ``kind`` (one of :data:`CONTROLLER_TYPES`) for this motor model, plan and drive.
 
     ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` with ``smc_gains`` (the scenario's, designed or
@@ -58,9 +64,11 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
                          "([drive] control_rate); only 'smc' runs in continuous time")
     scale = check_positive("bandwidth_scale", bandwidth_scale)
     lam, wn = (scale * w for w in bandwidths(control_period, compute_delay))
-    common = dict(control_period=control_period, measurement=measurement, v_limit=v_limit)
     if kind == "microstep":
-        return Microstepping(motor, plan, MicrostepGains(lam), **common)
+        return Microstepping(motor, plan, MicrostepGains(lam), control_period=control_period,
+                             measurement=measurement, v_limit=v_limit)
     if kind == "cascade":
-        return CascadeFOC(motor, plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn), **common)
-    return ExactLinearization(motor, plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam), **common)
+        return CascadeFOC(motor, plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn),
+                          control_period=control_period, measurement=measurement, v_limit=v_limit)
+    return ExactLinearization(motor, plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam),
+                              control_period=control_period, measurement=measurement, v_limit=v_limit)
