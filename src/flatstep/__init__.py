@@ -1,24 +1,36 @@
 """flatstep: flatness-based planning and sliding-mode control of permanent-magnet stepping motors.
 
-The public API, in the order a move flows through it: model, plan, flat maps, control, loop, engine, studies.
+The public API, listed in ``__all__`` in the order a move flows through it: model, plan, flat maps, control, loop,
+engine, studies.
 """
-from .model.motor import PRESETS, MotorParams, rhs
-from .model.plant import Plant, PlantEffects
-from .model.equilibria import CriticalPoint, equilibrium_currents, rest_positions, stable_angle
-from .model.flat import FlatFlag, cartesian, flat_to_state, polar, polar_rhs, state_to_flat
-from .plan.rest_to_rest import PAPER_PLAN, RestToRest, point_to_point, psi
-from .plan.feasibility import FeasibilityReport, InfeasiblePlanError, check_feasibility
-from .control import (CONTROLLER_TYPES, CascadeFOC, CascadeGains, Controller, ExactLinearization, FlatnessSMC,
-                      LinearizationGains, MicrostepGains, Microstepping, SMCGains, make_controller)
+from .control import (
+    CONTROLLER_TYPES,
+    CascadeFOC,
+    CascadeGains,
+    Controller,
+    ExactLinearization,
+    FlatnessSMC,
+    LinearizationGains,
+    MicrostepGains,
+    Microstepping,
+    SMCGains,
+    make_controller,
+)
+from .engine.result import SimResult
+from .engine.settings import Continuous
+from .engine.simulate import simulate
 from .loop.drive import Drive
 from .loop.observers import Observer
-from .loop.sensors import Sensors
 from .loop.reference import DriveLoop
-from .engine.settings import Continuous
-from .engine.result import SimResult
-from .engine.simulate import simulate
-from .studies.scenario import PAPER_SCENARIOS, Scenario
+from .loop.sensors import Sensors
+from .model.equilibria import CriticalPoint, equilibrium_currents, rest_positions, stable_angle
+from .model.flat import FlatFlag, cartesian, flat_to_state, polar, polar_rhs, state_to_flat
+from .model.motor import PRESETS, MotorParams, rhs
+from .model.plant import Plant, PlantEffects
+from .plan.feasibility import FeasibilityReport, InfeasiblePlanError, check_feasibility
+from .plan.rest_to_rest import PAPER_PLAN, RestToRest, point_to_point, psi
 from .studies.batch import run_batch, scenario_grid
+from .studies.scenario import PAPER_SCENARIOS, Scenario
 
 __version__ = "0.1.0"
 

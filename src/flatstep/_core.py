@@ -11,13 +11,36 @@ The binding follows the data flow in three modules, re-exported here:
   ``continuous_result``, ``run_sampled``, ``run_sampled_summaries``, ``drive_unsupported``).
 """
 from ._core_maps import flat_to_state, flat_voltages, plan_flag, plan_to_state, smc_voltages, state_to_flat
-from ._core_runs import (CONTINUOUS_METHODS, RESULT_COLUMNS, SUMMARY_KEYS, continuous_result, drive_unsupported,
-                         result_columns, run_continuous, run_sampled, run_sampled_summaries)
-from ._core_structs import (FAULT_BITS, RHO_MIN, STATUS_BITS, V_LIMIT, Array, BoundController, controller_struct,
-                            ffi, lib, motor_struct, plan_struct, smc_struct, status_names)
+from ._core_runs import (
+    CONTINUOUS_METHODS,
+    RESULT_COLUMNS,
+    SUMMARY_KEYS,
+    continuous_result,
+    drive_unsupported,
+    result_columns,
+    run_continuous,
+    run_sampled,
+    run_sampled_summaries,
+)
+from ._core_structs import (
+    FAULT_BITS,
+    RHO_MIN,
+    STATUS_BITS,
+    V_LIMIT,
+    Array,
+    BoundController,
+    controller_struct,
+    ffi,
+    lib,
+    motor_struct,
+    plan_struct,
+    smc_struct,
+    status_names,
+)
 
 __all__ = ["CONTINUOUS_METHODS", "FAULT_BITS", "RESULT_COLUMNS", "RHO_MIN", "STATUS_BITS", "SUMMARY_KEYS",
-           "V_LIMIT", "Array", "BoundController", "continuous_result", "controller_struct", "drive_unsupported", "ffi", "flat_to_state", "flat_voltages",
+           "V_LIMIT", "Array", "BoundController", "continuous_result", "controller_struct", "drive_unsupported", "ffi",
+           "flat_to_state", "flat_voltages",
            "lib", "motor_struct", "plan_flag", "plan_struct", "plan_to_state", "result_columns", "run_continuous",
            "run_sampled", "run_sampled_summaries", "smc_struct", "smc_voltages", "state_to_flat",
            "status_names"]

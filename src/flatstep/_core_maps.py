@@ -1,6 +1,8 @@
-"""The planner, flat maps and controller of the C core over arrays: one C call per array
-(csrc/arrays.h: ``arrays_plan_eval``, ``arrays_plan_flat``, ``arrays_flat_*``, ``arrays_state_to_flat``,
-``arrays_smc_step``, ``arrays_controller_step``)."""
+"""The planner, flat maps and controller of the C core over arrays: one C call per array.
+
+The C side is csrc/arrays.h: ``arrays_plan_eval``, ``arrays_plan_flat``, ``arrays_flat_*``,
+``arrays_state_to_flat``, ``arrays_smc_step``, ``arrays_controller_step``.
+"""
 from __future__ import annotations
 
 from typing import Optional
@@ -8,12 +10,26 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._core_structs import (RHO_MIN, V_LIMIT, Array, _in, _out, _rows, _shape, _u32, _vec, lib, motor_struct,
-                            plan_struct, smc_struct)
+from ._core_structs import (
+    RHO_MIN,
+    V_LIMIT,
+    Array,
+    _in,
+    _out,
+    _rows,
+    _shape,
+    _u32,
+    _vec,
+    lib,
+    motor_struct,
+    plan_struct,
+    smc_struct,
+)
 from .control.smc import FlatnessSMC
 from .model.flat import FlatFlag
 from .model.motor import MotorParams
 from .plan.rest_to_rest import RestToRest
+
 
 def plan_flag(plan: RestToRest, t: ArrayLike) -> FlatFlag:
     """C ``plan_eval`` at times ``t``; the same values as :meth:`RestToRest.flag`."""
@@ -35,7 +51,7 @@ def flat_voltages(motor: MotorParams, rho: ArrayLike, drho: ArrayLike, theta: Ar
     return _nan_outside(_shape(out, args[0].shape), rows, motor)
 
 
-def _nan_outside(v: Array, rows: np.ndarray, motor: MotorParams) -> Array:
+def _nan_outside(v: Array, rows: Array, motor: MotorParams) -> Array:
     """Mark samples outside the domain (rho <= 0 or |A| >= Km rho) with NaN instead of the C core's 0 V."""
     rho, A = rows[:, 0], rows[:, 7]
     bad = ~((rho > 0) & (motor.Km**2 * rho**2 - A**2 > 0))
@@ -91,8 +107,10 @@ def smc_voltages(controller: FlatnessSMC, t: ArrayLike, x: ArrayLike, ddtheta: O
 
 
 def plan_to_state(plan: RestToRest, motor: MotorParams, t: ArrayLike, load_torque: float = 0.0) -> tuple[Array, Array]:
-    """C ``arrays_plan_flat``: the planned state (4, n) and feedforward voltages (2, n) at the times ``t`` (1-D),
-    plan and flat map in one C loop; the values of ``flat_to_state(plan_flag(plan, t), motor)``."""
+    """C ``arrays_plan_flat``: the planned state (4, n) and feedforward voltages (2, n) at the times ``t`` (1-D).
+
+    Plan and flat map run in one C loop; the values are those of ``flat_to_state(plan_flag(plan, t), motor)``.
+    """
     tv = _vec(t)
     flag, x, v = np.empty((tv.size, 6)), np.empty((tv.size, 4)), np.empty((tv.size, 2))
     bad = lib.arrays_plan_flat(plan_struct(plan), motor_struct(motor), _in(tv), tv.size, float(load_torque),

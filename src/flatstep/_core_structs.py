@@ -1,8 +1,7 @@
-"""The cffi handle of the C core (csrc/), its status and error codes, the struct builders and the array
-marshalling that :mod:`flatstep._core_maps` and :mod:`flatstep._core_runs` share.
+"""The cffi handle of the C core (csrc/), its status and error codes, struct builders and array marshalling.
 
-Arrays are float64, C-contiguous, row-major ``(n, k)`` on the C side and ``(k, n)`` (components first, as
-in the Python reference) on this side.
+:mod:`flatstep._core_maps` and :mod:`flatstep._core_runs` share them. Arrays are float64, C-contiguous,
+row-major ``(n, k)`` on the C side and ``(k, n)`` (components first, as in the Python reference) on this side.
 """
 from __future__ import annotations
 
@@ -12,14 +11,18 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._flatstep_core import ffi, lib
+from .control.protocol import Controller
 from .control.smc import FlatnessSMC
-from .validate import check_positive
 from .model.motor import MotorParams
 from .model.plant import PlantEffects
 from .plan.rest_to_rest import RestToRest
+from .validate import check_positive
 
 Array = NDArray[np.float64]
-#: Controller status bits by name (csrc/controller.h); every bit but ``saturated`` is a fault (the step then outputs 0 V).
+#: A cffi cdata object (a C pointer or buffer): cffi ships no type information, so it is ``Any`` to mypy.
+CData = Any
+#: Controller status bits by name (csrc/controller.h); every bit but ``saturated`` is a fault (the step then
+#: outputs 0 V).
 STATUS_BITS = {"nonfinite": lib.CTRL_NONFINITE, "rho": lib.CTRL_RHO, "sqrt": lib.CTRL_SQRT,
                "overflow": lib.CTRL_OVERFLOW, "saturated": lib.CTRL_SATURATED}
 #: The status bits that are faults (the step then outputs 0 V): all but ``saturated``.
@@ -38,56 +41,60 @@ def status_names(status: int) -> list[str]:
     return [name for name, bit in STATUS_BITS.items() if int(status) & bit]
 
 
-def _rows(a: ArrayLike, k: int, name: str) -> np.ndarray:
+def _rows(a: ArrayLike, k: int, name: str) -> Array:
     """(k, n) or (k,) components-first input -> C-contiguous (n, k) float64 rows."""
-    a = np.asarray(a, dtype=np.float64)
-    if a.shape[:1] != (k,):
-        raise ValueError(f"{name} has shape {a.shape}; expected ({k},) or ({k}, n)")
-    return np.ascontiguousarray(a.reshape(k, -1).T)
+    arr = np.asarray(a, dtype=np.float64)
+    if arr.shape[:1] != (k,):
+        raise ValueError(f"{name} has shape {arr.shape}; expected ({k},) or ({k}, n)")
+    return np.ascontiguousarray(arr.reshape(k, -1).T)
 
 
-def _vec(a: ArrayLike) -> np.ndarray:
+def _vec(a: ArrayLike) -> Array:
+    """Any input -> a C-contiguous 1-D float64 array."""
     return np.ascontiguousarray(np.asarray(a, dtype=np.float64).ravel())
 
 
-def _in(a: np.ndarray):
+def _in(a: Array) -> CData:
+    """A ``double *`` view of a C-contiguous float64 array, read by C."""
     return ffi.from_buffer("double[]", a)
 
 
-def _out(a: np.ndarray):
+def _out(a: Array) -> CData:
+    """A ``double *`` view of a C-contiguous float64 array, written by C."""
     return ffi.from_buffer("double[]", a, require_writable=True)
 
 
-def _u32(a: np.ndarray):
+def _u32(a: NDArray[np.uint32]) -> CData:
+    """A ``uint32_t *`` view of a C-contiguous uint32 array, written by C."""
     return ffi.from_buffer("uint32_t[]", a, require_writable=True)
 
 
-def _shape(out: np.ndarray, like: tuple) -> np.ndarray:
+def _shape(out: Array, like: tuple[int, ...]) -> Array:
     """(n, k) C rows -> (k, *like) components first."""
     return out.T.reshape((out.shape[1],) + like)
 
 
-def _motor(m: MotorParams) -> dict:
+def _motor(m: MotorParams) -> dict[str, float]:
     """The fields of a ``struct motor_params`` holding ``m``."""
     return dict(R=m.R, L=m.L, Km=m.Km, J=m.J, B=m.B, Nr=m.Nr)
 
 
-def motor_struct(m: MotorParams):
+def motor_struct(m: MotorParams) -> CData:
     """A ``struct motor_params`` holding ``m``."""
     return ffi.new("struct motor_params *", _motor(m))
 
 
-def plan_struct(p: RestToRest):
+def plan_struct(p: RestToRest) -> CData:
     """A ``struct plan`` holding ``p``."""
     return ffi.new("struct plan *", p.as_dict())
 
 
-def _smc_params(controller: FlatnessSMC, v_limit: float, rho_min: float) -> dict:
+def _smc_params(controller: FlatnessSMC, v_limit: float, rho_min: float) -> dict[str, Any]:
     """The fields of a ``struct smc_params`` for ``controller`` with the guards ``v_limit`` and ``rho_min``."""
     return {**controller.c_params(), "v_limit": v_limit, "rho_min": rho_min}
 
 
-def smc_struct(controller: FlatnessSMC, v_limit: float = V_LIMIT, rho_min: float = RHO_MIN):
+def smc_struct(controller: FlatnessSMC, v_limit: float = V_LIMIT, rho_min: float = RHO_MIN) -> CData:
     """An initialised ``struct smc`` for ``controller`` (its motor model, plan, gains and measurement)."""
     check_positive("v_limit", v_limit, unit=" V")
     check_positive("rho_min", rho_min, unit=" A")
@@ -101,11 +108,11 @@ def smc_struct(controller: FlatnessSMC, v_limit: float = V_LIMIT, rho_min: float
 class BoundController(NamedTuple):
     """A controller's C state and the ``struct controller`` bound to it (the state must outlive the binding)."""
 
-    state: Any
-    iface: Any
+    state: CData
+    iface: CData
 
 
-def controller_struct(controller: Any) -> BoundController:
+def controller_struct(controller: Controller) -> BoundController:
     """The C twin of a Python controller, initialised and bound into the run loops' interface (controller.h).
 
     Any controller with ``c_name`` (its C module: ``struct <c_name>``, ``<c_name>_init``,
@@ -126,30 +133,33 @@ def controller_struct(controller: Any) -> BoundController:
     return BoundController(state, iface)
 
 
-def _effects(effects: Optional[PlantEffects]) -> dict:
+def _effects(effects: Optional[PlantEffects]) -> dict[str, float]:
     """The fields of a ``struct plant_effects`` (all zero: none)."""
     if effects is None:
         return {}
-    return dict(detent_torque=effects.detent_torque, detent_harmonic=effects.detent_harmonic, coulomb_torque=effects.coulomb_torque,
-                coulomb_speed=effects.coulomb_speed, magnetizing_resistance=effects.magnetizing_resistance or 0.0)
+    return dict(detent_torque=effects.detent_torque, detent_harmonic=effects.detent_harmonic,
+                coulomb_torque=effects.coulomb_torque, coulomb_speed=effects.coulomb_speed,
+                magnetizing_resistance=effects.magnetizing_resistance or 0.0)
 
 
-def _plant_fields(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> dict:
+def _plant_fields(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> dict[str, Any]:
     """The fields of a ``struct plant``: the simulated motor, its constant load torque and its effects."""
     return dict(motor=_motor(motor), load=float(load), effects=_effects(effects))
 
 
-def _plant(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None):
+def _plant(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> CData:
     """A ``struct plant``."""
     return ffi.new("struct plant *", _plant_fields(motor, load, effects))
 
 
-def _stats(st, key: str = "controller_status") -> dict:
+def _stats(st: CData, key: str = "controller_status") -> dict[str, Any]:
+    """A run's statistics from its C ``struct sim_stats``, the controller status as bit names under ``key``."""
     return {"steps": st.steps, "rejected": st.rejected, "rhs_evals": st.rhs_evals,
             key: status_names(st.controller_status)}
 
 
-def _check(rc: int, st, what: str) -> None:
+def _check(rc: int, st: CData, what: str) -> None:
+    """Raise a RuntimeError naming the failure and when it happened if a C run returned ``rc != SIM_OK``."""
     if rc != lib.SIM_OK:
         raise RuntimeError(f"C {what} run failed at t = {st.t_fail:.6g} s: {_SIM_ERRORS.get(rc, rc)} "
                            f"(controller status {status_names(st.controller_status)})")
