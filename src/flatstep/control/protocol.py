@@ -17,7 +17,7 @@ else, so adding a controller touches its Python file, its C file and nothing mor
 """
 from __future__ import annotations
 
-from typing import Any, Optional, Protocol, runtime_checkable
+from typing import Any, Optional, Protocol, TypeGuard, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,7 +34,11 @@ class Controller(Protocol):
     plan: RestToRest
     gains: Any  # a frozen dataclass with ``as_dict()``, recorded in each result's metadata
     measurement: str
-    c_name: Optional[str]
+
+    @property
+    def c_name(self) -> Optional[str]:
+        """The C module of the law (``csrc/<c_name>.h``), ``None`` for a law with no C twin."""
+        ...
 
     def initial_state(self) -> Any:
         """The controller's state at the start of a run (``None`` for a static law)."""
@@ -58,6 +62,6 @@ class StaticController(Controller, Protocol):
         ...
 
 
-def is_static(controller: Any) -> bool:
+def is_static(controller: Any) -> TypeGuard[StaticController]:
     """Whether ``controller`` can run in the continuous loop (it has no state between steps)."""
     return isinstance(controller, StaticController) and controller.initial_state() is None

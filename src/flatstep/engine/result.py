@@ -14,10 +14,11 @@ Array = NDArray[np.float64]
 
 @dataclass
 class SimResult:
-    """Closed-loop time series (SI units). ``*_ref`` are the planned values, errors are actual - planned.
+    """Closed-loop time series (SI units).
 
-    ``s1``, ``s2`` are the sliding variables of eq. (12); ``None`` for a controller without them (the
-    baselines), and then left out of :meth:`series`."""
+    ``*_ref`` are the planned values, errors are actual - planned. ``s1``, ``s2`` are the sliding variables of
+    eq. (12); ``None`` for a controller without them (the baselines), and then left out of :meth:`series`.
+    """
 
     t: Array
     ia: Array
@@ -41,10 +42,12 @@ class SimResult:
 
     @property
     def theta_error(self) -> Array:
+        """``theta - theta_ref`` [rad]."""
         return self.theta - self.theta_ref
 
     @property
     def rho_error(self) -> Array:
+        """``rho - rho_ref`` [A]."""
         return self.rho - self.rho_ref
 
     def series(self) -> dict[str, Array]:
@@ -70,12 +73,12 @@ class SimResult:
         }
 
     def _window_errors(self) -> dict[str, float]:
-        """max |theta - theta*| during the move [t0, tf] and at rest after it (t > tf), when sampled."""
+        """Max |theta - theta*| during the move [t0, tf] and at rest after it (t > tf), when sampled."""
         plan = self.meta.get("plan")
         if plan is None:
             return {}
         err = np.abs(self.theta_error)
-        out = {}
+        out: dict[str, float] = {}
         for key, mask in (("max_abs_theta_error_move", (self.t >= plan["t0"]) & (self.t <= plan["tf"])),
                           ("max_abs_theta_error_after", self.t > plan["tf"])):
             if np.any(mask):

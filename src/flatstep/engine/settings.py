@@ -1,8 +1,11 @@
-"""How a continuous-time run is solved: :class:`Continuous` (a sampled run is described by
-:class:`~flatstep.loop.reference.DriveLoop`)."""
+"""How a continuous-time run is solved: :class:`Continuous`.
+
+A sampled run is described by :class:`~flatstep.loop.reference.DriveLoop`.
+"""
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 from ..validate import check_positive
 
@@ -38,6 +41,6 @@ class Continuous:
         for name, unit in (("rtol", ""), ("atol", ""), ("dt_out", " s")):
             object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=unit))
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         """The settings, for a result's metadata."""
         return asdict(self)

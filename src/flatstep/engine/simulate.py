@@ -21,31 +21,35 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
 from .. import _core
-from ..control.protocol import Controller, is_static
+from ..control.protocol import Controller, StaticController, is_static
 from ..control.smc import FlatnessSMC
 from ..loop.reference import DriveLoop, run_reference
 from ..model.flat import flat_to_state, polar
-from ..model.motor import MotorParams, load_function, rhs
+from ..model.motor import MotorParams, rhs
 from ..model.plant import Plant
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .result import SimResult
 from .settings import C_METHODS, SCIPY_METHODS, Continuous
 
+Array = NDArray[np.float64]
+
 
 class Run(NamedTuple):
     """What a runner hands the assembler: samples, the plant's states and what else the engine computed."""
 
-    t: NDArray[np.float64]
-    x: NDArray[np.float64]                    # (4, n) plant states
-    meta: dict                                # engine, method and the engine's own statistics
-    v: Optional[NDArray[np.float64]] = None   # (2, n) applied voltages (sampled runs)
-    y: Optional[NDArray[np.float64]] = None   # (5, n) what the controller saw (sampled runs)
-    faults: Optional[NDArray[np.float64]] = None  # times at which the law faulted (0 V applied)
-    columns: Optional[dict] = None            # series the C core computed (continuous FlatnessSMC runs)
+    t: Array
+    x: Array                                  # (4, n) plant states
+    meta: dict[str, Any]                      # engine, method and the engine's own statistics
+    v: Optional[Array] = None                 # (2, n) applied voltages (sampled runs)
+    y: Optional[Array] = None                 # (5, n) what the controller saw (sampled runs)
+    faults: Optional[Array] = None            # times at which the law faulted (0 V applied)
+    columns: Optional[dict[str, Array]] = None  # series the C core computed (continuous FlatnessSMC runs)
 
 
-Runner = Callable[[Plant, RestToRest, Any, Any, float, np.ndarray], Run]
+#: A runner: ``(plant, plan, controller, settings, t_end, x0) -> Run``; ``settings`` is the
+#: :class:`~flatstep.loop.reference.DriveLoop` of a sampled runner or the :class:`Continuous` of a continuous one.
+Runner = Callable[[Plant, RestToRest, Controller, Any, float, Array], Run]
 
 
 def simulate(plant: Union[Plant, MotorParams], plan: RestToRest, controller: Optional[Controller] = None, *,
@@ -102,13 +106,15 @@ def simulate(plant: Union[Plant, MotorParams], plan: RestToRest, controller: Opt
     return assemble(runner(plant, plan, controller, settings, t_end, x0), plant, plan, controller, settings)
 
 
-def _grid(t_end: float, knots: list[float], dt_out: float) -> list[np.ndarray]:
+def _grid(t_end: float, knots: list[float], dt_out: float) -> list[Array]:
     """Output times split at the plan's knots so that no integration step straddles one."""
     edges = [0.0] + sorted(k for k in knots if 0.0 < k < t_end) + [t_end]
-    return [np.linspace(a, b, max(2, int(round((b - a) / dt_out)) + 1)) for a, b in zip(edges[:-1], edges[1:])]
+    return [np.linspace(a, b, max(2, int(round((b - a) / dt_out)) + 1))
+            for a, b in zip(edges[:-1], edges[1:], strict=True)]
 
 
 def _constant_load(plant: Plant, engine: str) -> float:
+    """The plant's load torque [N m] if it is a constant; a ValueError naming ``engine`` if it is a function."""
     load = plant.constant_load
     if load is None:
         raise ValueError(f"load={plant.load!r}: engine={engine!r} takes a constant load torque; a load that is a "
@@ -116,14 +122,16 @@ def _constant_load(plant: Plant, engine: str) -> float:
     return load
 
 
-def _static(controller: Any, engine: str) -> None:
+def _static(controller: Controller, engine: str) -> StaticController:
+    """``controller`` as a static law, or a ValueError if it has state and so cannot run in continuous time."""
     if not is_static(controller):
         raise ValueError(f"{type(controller).__name__} has state updated once per control period: it runs on the "
                          f"sampled loop (give loop=DriveLoop(...)), not in continuous time (engine={engine!r})")
+    return controller
 
 
-def _continuous_c(plant: Plant, plan: RestToRest, controller: Any, solver: Continuous, t_end: float,
-                  x0: np.ndarray) -> Run:
+def _continuous_c(plant: Plant, plan: RestToRest, controller: Controller, solver: Continuous, t_end: float,
+                  x0: Array) -> Run:
     """C ``continuous_run`` (DOP853 on the output grid of :func:`_grid`)."""
     if solver.method not in C_METHODS:
         raise ValueError(f"method={solver.method!r} is not a C integrator; valid: {C_METHODS} "
@@ -133,31 +141,35 @@ def _continuous_c(plant: Plant, plan: RestToRest, controller: Any, solver: Conti
     segs = _grid(t_end, [plan.t0, plan.tf], solver.dt_out)
     t = np.concatenate([segs[0]] + [s[1:] for s in segs[1:]])
     meta = {"engine": "c", "method": solver.method, "rtol": solver.rtol, "atol": solver.atol}
-    opts = dict(rtol=solver.rtol, atol=solver.atol, effects=plant.effects, method=solver.method)
     if isinstance(controller, FlatnessSMC):
         # The run and its series (voltages, references, sliding variables) in two C calls on one controller.
-        X, cols, status, stats = _core.continuous_result(controller, plant.motor, load, x0, t, **opts)
+        X, cols, status, stats = _core.continuous_result(controller, plant.motor, load, x0, t, rtol=solver.rtol,
+                                                         atol=solver.atol, effects=plant.effects,
+                                                         method=solver.method)
         stats = {**stats, "controller_status": _core.status_names(np.bitwise_or.reduce(status))}
         return Run(t, X, {**meta, **stats}, columns=cols)
-    X, stats = _core.run_continuous(controller, plant.motor, load, x0, t, **opts)
+    X, stats = _core.run_continuous(controller, plant.motor, load, x0, t, rtol=solver.rtol, atol=solver.atol,
+                                    effects=plant.effects, method=solver.method)
     return Run(t, X, {**meta, **stats})
 
 
-def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Any, solver: Continuous, t_end: float,
-                      x0: np.ndarray) -> Run:
+def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, solver: Continuous, t_end: float,
+                      x0: Array) -> Run:
     """:func:`scipy.integrate.solve_ivp`, restarted at the plan's knots."""
     if solver.method not in SCIPY_METHODS:
         raise ValueError(f"method={solver.method!r} is not a solve_ivp method; valid: {SCIPY_METHODS}")
-    _static(controller, "scipy")
+    law = _static(controller, "scipy")
 
-    def closed_loop(t: float, x: np.ndarray) -> np.ndarray:
-        v = controller.voltages(t, x, plant.acceleration(x, t))
+    def closed_loop(t: float, x: Array) -> Array:
+        v = law.voltages(t, x, plant.acceleration(x, t))
         dx = rhs(t, x, v, plant.motor, plant.load)
         if plant.effects is not None:
             dx[2] = dx[2] + plant.effects.torque(x[2], x[3], plant.motor) / plant.motor.J
         return dx
 
-    ts, xs, x = [], [], x0
+    ts: list[Array] = []
+    xs: list[Array] = []
+    x = x0
     for seg in _grid(t_end, [plan.t0, plan.tf], solver.dt_out):
         sol = solve_ivp(closed_loop, (seg[0], seg[-1]), x, method=solver.method, t_eval=seg, rtol=solver.rtol,
                         atol=solver.atol)
@@ -170,7 +182,7 @@ def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Any, solver: C
     return Run(np.concatenate(ts), np.concatenate(xs, axis=1), meta)
 
 
-def _check_measurement(controller: Any, loop: DriveLoop) -> None:
+def _check_measurement(controller: Controller, loop: DriveLoop) -> None:
     """Refuse a measurement the loop's sensors cannot provide."""
     if loop.observer is not None and controller.measurement != "observer":
         raise ValueError(f"an observer needs measurement='observer' (got {controller.measurement!r})")
@@ -180,11 +192,12 @@ def _check_measurement(controller: Any, loop: DriveLoop) -> None:
 
 
 def _periods(loop: DriveLoop, t_end: float) -> int:
+    """The number of control periods that cover ``[0, t_end]`` (at least one)."""
     return max(1, math.ceil(t_end / loop.control_period - 1e-9))
 
 
-def _sampled_c(plant: Plant, plan: RestToRest, controller: Any, loop: DriveLoop, t_end: float,
-               x0: np.ndarray) -> Run:
+def _sampled_c(plant: Plant, plan: RestToRest, controller: Controller, loop: DriveLoop, t_end: float,
+               x0: Array) -> Run:
     """C ``sampled_run``: any controller, any plant effect, any loop part but switched PWM."""
     _check_measurement(controller, loop)
     n = _periods(loop, t_end)
@@ -192,13 +205,13 @@ def _sampled_c(plant: Plant, plan: RestToRest, controller: Any, loop: DriveLoop,
         controller, plant.motor, _constant_load(plant, "c"), x0, n, Ts=loop.control_period,
         substeps=loop.substeps, effects=plant.effects, drive=loop.drive, sensors=loop.sensors,
         observer=loop.observer, compute_delay=loop.compute_delay)
-    t = np.arange(n + 1) * loop.control_period
+    t = np.arange(n + 1, dtype=np.float64) * np.float64(loop.control_period)
     return Run(t, X, {"engine": "c", "method": "RK4", **stats}, v=V, y=Y,
                faults=t[(status & _core.FAULT_BITS) != 0])
 
 
-def _sampled_python(plant: Plant, plan: RestToRest, controller: Any, loop: DriveLoop, t_end: float,
-                    x0: np.ndarray) -> Run:
+def _sampled_python(plant: Plant, plan: RestToRest, controller: Controller, loop: DriveLoop, t_end: float,
+                    x0: Array) -> Run:
     """The readable reference of :mod:`flatstep.loop.reference`."""
     _check_measurement(controller, loop)
     n = _periods(loop, t_end)
@@ -215,11 +228,14 @@ RUNNERS: dict[tuple[str, str], Runner] = {
 }
 
 
-def assemble(run: Run, plant: Plant, plan: RestToRest, controller: Any,
+def assemble(run: Run, plant: Plant, plan: RestToRest, controller: Controller,
              settings: Union[DriveLoop, Continuous]) -> SimResult:
-    """The one place a :class:`~flatstep.engine.result.SimResult` is built: the run's samples, the plan's
-    references through the flat maps (vectorized), the voltages (applied, or the law's on the samples), the
-    sliding variables of a controller that has them, and the metadata."""
+    """The one place a :class:`~flatstep.engine.result.SimResult` is built.
+
+    It holds the run's samples, the plan's references through the flat maps (vectorized), the voltages
+    (applied, or the law's on the samples), the sliding variables of a controller that has them, and the
+    metadata.
+    """
     t, X = run.t, run.x
     meta = {**run.meta, **settings.as_dict(), "controller": type(controller).__name__,
             "measurement": controller.measurement, "gains": controller.gains.as_dict(), "plan": plan.as_dict(),
@@ -237,7 +253,8 @@ def assemble(run: Run, plant: Plant, plan: RestToRest, controller: Any,
                          rho_ref=cols["rho_ref"], ia_ref=cols["ia_ref"], ib_ref=cols["ib_ref"],
                          va_ref=cols["va_ref"], vb_ref=cols["vb_ref"], s1=cols["s1"], s2=cols["s2"], meta=meta)
     acc = plant.acceleration(X, t)
-    v = run.v if run.v is not None else controller.voltages(t, X, acc)
+    # a run without applied voltages is a continuous one, whose law is static (_static)
+    v = run.v if run.v is not None else _static(controller, meta["engine"]).voltages(t, X, acc)
     ref = plan.flag(t)
     x_ref, v_ref = flat_to_state(ref, controller.motor)
     rho, phi = polar(X[0], X[1])
