@@ -24,6 +24,7 @@ from .scenario import Scenario
 
 
 def _run_one(index: int, scenario: Scenario, engine: str, keep: Sequence[str]) -> dict[str, Any]:
+    """One scenario's summary row (and the ``keep`` series), or its error row if the run is refused or fails."""
     row: dict[str, Any] = {"index": index, "name": scenario.name}
     try:
         result = scenario.run(engine=engine)
@@ -37,12 +38,16 @@ def _run_one(index: int, scenario: Scenario, engine: str, keep: Sequence[str]) -
 
 
 def _run_chunk(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[str]) -> list[dict[str, Any]]:
+    """The rows of a chunk of ``(index, scenario)`` pairs, one :func:`_run_one` each."""
     return [_run_one(i, s, engine, keep) for i, s in chunk]
 
 
 def summarised_in_c(scenario: Scenario) -> bool:
-    """Whether C ``batch_sampled`` can run the scenario and summarise it: a sampled run (any controller, plant
-    effect, sensors, observer, averaged bridge) with a constant load."""
+    """Whether C ``batch_sampled`` can run the scenario and summarise it.
+
+    It can for a sampled run (any controller, plant effect, sensors, observer, averaged bridge) with a constant
+    load.
+    """
     from .. import _core
 
     loop = scenario.loop
@@ -51,13 +56,16 @@ def summarised_in_c(scenario: Scenario) -> bool:
 
 
 def _run_chunk_c(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[str]) -> list[dict[str, Any]]:
-    """The rows of :func:`_run_chunk` for scenarios that :func:`summarised_in_c`, all simulated and summarised in
-    one C call; an infeasible plan gives the same error row, and a run the C batch could not finish is run
-    again by :func:`_run_one` for its error row."""
+    """The rows of :func:`_run_chunk` for scenarios that :func:`summarised_in_c`, in one C call.
+
+    All are simulated and summarised in C; an infeasible plan gives the same error row, and a run the C batch
+    could not finish is run again by :func:`_run_one` for its error row.
+    """
     from .. import _core
 
     rows: dict[int, dict[str, Any]] = {}
-    todo, runs = [], []
+    todo: list[tuple[int, Scenario]] = []
+    runs: list[dict[str, Any]] = []
     for i, s in chunk:
         try:
             s.feasibility().raise_if_infeasible()
@@ -69,25 +77,29 @@ def _run_chunk_c(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[
         assert loop is not None and plant.constant_load is not None  # summarised_in_c
         todo.append((i, s))
         runs.append(dict(controller=ctrl, motor=plant.motor, load=plant.constant_load, effects=plant.effects,
-                         x0=s.plan.x0(plant.motor.Nr), n_periods=max(1, math.ceil(s.t_end / loop.control_period - 1e-9)),
+                         x0=s.plan.x0(plant.motor.Nr),
+                         n_periods=max(1, math.ceil(s.t_end / loop.control_period - 1e-9)),
                          Ts=loop.control_period, substeps=loop.substeps, drive=loop.drive, sensors=loop.sensors,
                          observer=loop.observer, compute_delay=loop.compute_delay))
-    for (i, s), summary in zip(todo, _core.run_sampled_summaries(runs)):
+    for (i, s), summary in zip(todo, _core.run_sampled_summaries(runs), strict=True):  # one summary per run
         rows[i] = {"index": i, "name": s.name, **summary, "error": None} if summary is not None \
             else _run_one(i, s, engine, keep)
     return [rows[i] for i, _ in chunk]
 
 
 class _Progress:
-    """A one-line progress bar on a stream (stderr), from ``after`` seconds on (short work stays quiet), redrawn
-    at most 10 times a second on a terminal and every 2 s elsewhere (one line each)."""
+    """A one-line progress bar on a stream (stderr), from ``after`` seconds on (short work stays quiet).
 
-    def __init__(self, total: int, stream: TextIO, enabled: bool, after: float = 2.0):
+    It is redrawn at most 10 times a second on a terminal and every 2 s elsewhere (one line each).
+    """
+
+    def __init__(self, total: int, stream: TextIO, enabled: bool, after: float = 2.0) -> None:
         self.total, self.stream, self.enabled, self.after = total, stream, enabled, after
         self.done, self.start, self.last, self.shown = 0, time.perf_counter(), 0.0, False
         self.tty = hasattr(stream, "isatty") and stream.isatty()
 
     def update(self, n: int) -> None:
+        """Count ``n`` more runs done and redraw the bar when it is due."""
         self.done += n
         now = time.perf_counter()
         if not self.enabled or (now - self.start < self.after and not self.shown):
@@ -98,14 +110,15 @@ class _Progress:
             rate = self.done / max(now - self.start, 1e-9)
             eta = (self.total - self.done) / rate if rate > 0 else float("inf")
             bar = "#" * int(30 * self.done / max(self.total, 1))
-            self.stream.write(f"{chr(13) if self.tty else ''}[{bar:<30}] {self.done}/{self.total} runs, {rate:.0f} runs/s, "
-                              f"eta {eta:.1f} s")
+            self.stream.write(f"{chr(13) if self.tty else ''}[{bar:<30}] {self.done}/{self.total} runs, "
+                              f"{rate:.0f} runs/s, eta {eta:.1f} s")
             if self.done == self.total or not self.tty:
                 self.stream.write("\n")
             self.stream.flush()
 
 
 def _done_indices(out: Path) -> set[int]:
+    """The indices of the rows already in the JSON-lines file ``out`` (none if it does not exist)."""
     if not out.exists():
         return set()
     done = set()
@@ -124,21 +137,36 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
 
     Parameters
     ----------
-    scenarios : the runs; build grids with :func:`scenario_grid`.
-    executor : any :class:`concurrent.futures.Executor` (e.g. a Dask ``distributed.Client``'s
-        ``get_executor()``); default: ``workers`` threads on the C engine (its runs release the GIL), a
-        process pool of ``workers`` processes on the reference engines (default: all cores).
-    chunk_size : scenarios per task (default: enough for about 8 tasks per worker).
-    progress : draw a progress bar on stderr; default: when stderr is a terminal and there are >= 100 runs.
-    out : a JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
-    keep : names of time series (see :meth:`~flatstep.engine.result.SimResult.series`) to return in each row as
+    scenarios : sequence of Scenario
+        The runs; build grids with :func:`scenario_grid`.
+    engine : str
+        ``"c"`` (default) or a reference engine, as for :func:`flatstep.simulate`.
+    executor : concurrent.futures.Executor, optional
+        Any executor (e.g. a Dask ``distributed.Client``'s ``get_executor()``); default: ``workers`` threads on
+        the C engine (its runs release the GIL), a process pool of ``workers`` processes on the reference
+        engines.
+    workers : int, optional
+        Threads or processes of the default executor (default: all cores).
+    chunk_size : int, optional
+        Scenarios per task (default: enough for about 8 tasks per worker).
+    progress : bool, optional
+        ``False`` draws no progress bar; otherwise one is drawn on stderr once the work has taken more than 2 s.
+    out : str or Path, optional
+        A JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
+    keep : sequence of str
+        Names of time series (see :meth:`~flatstep.engine.result.SimResult.series`) to return in each row as
         ``series_<name>`` lists, for figures.
-    engine : ``"c"`` (default) or a reference engine, as for :func:`flatstep.simulate`.
 
+    Returns
+    -------
+    list of dict
+        One row per scenario, in input order.
+
+    Notes
+    -----
     Summary rows of sampled runs on the C engine (:func:`summarised_in_c`, no ``keep``) are computed in C, one
     call per chunk (``_core.run_sampled_summaries``: runs and summaries in C, threads instead of processes,
     since the C call releases the GIL); the rows equal those of one ``Scenario.run`` per scenario.
-    Progress is drawn on stderr once the work has taken more than 2 s, unless ``progress=False``.
     """
     scenarios = list(scenarios)
     bad = [i for i, s in enumerate(scenarios) if not isinstance(s, Scenario)]
@@ -167,9 +195,11 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     size = chunk_size or max(1, len(todo) // (8 * n_workers))
     chunks = [todo[k:k + size] for k in range(0, len(todo), size)]
     bar = _Progress(len(todo), sys.stderr, progress is not False)
-    sink = open(out_path, "a") if out_path is not None else None
-    if sink is not None and out_path.stat().st_size and not out_path.read_bytes().endswith(b"\n"):
-        sink.write("\n")  # close a line cut by an interruption
+    sink: Optional[TextIO] = None
+    if out_path is not None:
+        sink = open(out_path, "a")
+        if out_path.stat().st_size and not out_path.read_bytes().endswith(b"\n"):
+            sink.write("\n")  # close a line cut by an interruption
 
     def record(batch: list[dict[str, Any]]) -> None:
         for row in batch:
@@ -189,10 +219,12 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
             own = executor is None
             # C runs release the GIL: threads share the work without a process pool's start-up; the Python
             # reference engines hold it and need processes.
-            pool = executor if not own else (ThreadPoolExecutor(max_workers=n_workers) if engine == "c"
-                                             else ProcessPoolExecutor(max_workers=n_workers))
+            pool: Executor = executor if executor is not None else (
+                ThreadPoolExecutor(max_workers=n_workers) if engine == "c"
+                else ProcessPoolExecutor(max_workers=n_workers))
             try:
-                futures: list[Future] = [pool.submit(run_chunk, chunk, engine, keep) for chunk in chunks]
+                futures: list[Future[list[dict[str, Any]]]] = [pool.submit(run_chunk, chunk, engine, keep)
+                                                              for chunk in chunks]
                 for fut in as_completed(futures):
                     record(fut.result())
             finally:
@@ -205,17 +237,18 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
 
 
 def scenario_grid(base: Scenario, **axes: Iterable[Any]) -> list[Scenario]:
-    """Every combination of the given values of ``Scenario`` fields, e.g.
-    ``scenario_grid(base, load_torque=[0, 1e-5], control_period=[5e-5, 2.5e-5])``.
+    """Every combination of the given values of ``Scenario`` fields.
 
-    Names are ``base.name`` followed by the field values.
+    For example ``scenario_grid(base, measurement=["ideal", "model"], t_end=[0.06, 0.08])``. Names are
+    ``base.name`` followed by the field values.
     """
     unknown = set(axes) - set(Scenario.__dataclass_fields__)
     if unknown:
         raise ValueError(f"unknown scenario field(s) {sorted(unknown)}; valid: {list(Scenario.__dataclass_fields__)}")
     keys = list(axes)
     grid = []
-    for values in product(*(list(axes[k]) for k in keys)):
-        label = ",".join(f"{k}={v!r}" if not hasattr(v, "as_dict") else f"{k}={v.as_dict()}" for k, v in zip(keys, values))
-        grid.append(replace(base, name=f"{base.name}[{label}]", **dict(zip(keys, values))))
+    for values in product(*(list(axes[k]) for k in keys)):  # one value per key
+        label = ",".join(f"{k}={v!r}" if not hasattr(v, "as_dict") else f"{k}={v.as_dict()}"
+                         for k, v in zip(keys, values, strict=True))
+        grid.append(replace(base, name=f"{base.name}[{label}]", **dict(zip(keys, values, strict=True))))
     return grid

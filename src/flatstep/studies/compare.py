@@ -23,11 +23,12 @@ from dataclasses import replace
 from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from .batch import run_batch
 from ..control.tuning import CONTROLLER_TYPES
-from ..plan.rest_to_rest import RestToRest
 from ..engine.result import SimResult
+from ..plan.rest_to_rest import RestToRest
+from .batch import run_batch
 from .robustness import encoder_count, perturbed, plant_errors
 from .scenario import Scenario
 from .scenario_file import Robustness
@@ -38,40 +39,44 @@ METRICS = ("move_max", "move_rms", "final", "settling_time", "peak_voltage", "pe
 KEEP = ("t", "theta_error", "ia", "ib", "va", "vb")
 
 
-def _trapezoid(f: np.ndarray, t: np.ndarray) -> float:
+def _trapezoid(f: NDArray[np.float64], t: NDArray[np.float64]) -> float:
+    """The trapezoid-rule integral of samples ``f`` over times ``t`` (0 for a single sample)."""
     return float(0.5 * np.sum((f[1:] + f[:-1]) * np.diff(t))) if t.size > 1 else 0.0
 
 
-def metrics(t, theta_error, ia, ib, va, vb, plan: RestToRest, *, band: float, R: float) -> dict[str, Optional[float]]:
+def metrics(t: ArrayLike, theta_error: ArrayLike, ia: ArrayLike, ib: ArrayLike, va: ArrayLike, vb: ArrayLike,
+            plan: RestToRest, *, band: float, R: float) -> dict[str, Optional[float]]:
     """The comparison metrics (module docstring) of one run's time series (arrays over the control instants)."""
-    t, e = np.asarray(t, dtype=float), np.abs(np.asarray(theta_error, dtype=float))
-    ia, ib, va, vb = (np.asarray(a, dtype=float) for a in (ia, ib, va, vb))
+    ts, e = np.asarray(t, dtype=float), np.abs(np.asarray(theta_error, dtype=float))
+    i_a, i_b, v_a, v_b = (np.asarray(a, dtype=float) for a in (ia, ib, va, vb))
     if not band > 0:
         raise ValueError(f"band={band!r} rad must be > 0 (the settling band)")
-    move = (t >= plan.t0) & (t <= plan.tf)
+    move = (ts >= plan.t0) & (ts <= plan.tf)
     if not np.any(move):
-        raise ValueError(f"no sample in the move [t0, tf] = [{plan.t0}, {plan.tf}] s: the horizon ends at {t[-1]} s")
-    after = t >= plan.tf
+        raise ValueError(f"no sample in the move [t0, tf] = [{plan.t0}, {plan.tf}] s: "
+                         f"the horizon ends at {ts[-1]} s")
+    after = ts >= plan.tf
     outside = np.flatnonzero(e[after] > band)
-    t_after = t[after]
+    t_after = ts[after]
     if outside.size == 0:
         settling: Optional[float] = 0.0
     elif outside[-1] == t_after.size - 1:
         settling = None
     else:
         settling = float(t_after[outside[-1] + 1] - plan.tf)
-    w = t >= plan.t0
-    i2 = ia[w] ** 2 + ib[w] ** 2
-    duration = t[w][-1] - t[w][0]
+    w = ts >= plan.t0
+    i2 = i_a[w] ** 2 + i_b[w] ** 2
+    duration = ts[w][-1] - ts[w][0]
     return {
         "move_max": float(np.max(e[move])),
         "move_rms": float(np.sqrt(np.mean(e[move] ** 2))),
         "final": float(e[-1]),
         "settling_time": settling,
-        "peak_voltage": float(np.max(np.abs(np.concatenate([va[w], vb[w]])))),
-        "peak_current": float(np.max(np.abs(np.concatenate([ia[w], ib[w]])))),
-        "rms_current": float(np.sqrt(_trapezoid(i2 / 2, t[w]) / duration)) if duration > 0 else float(np.sqrt(np.mean(i2 / 2))),
-        "copper_loss": R * _trapezoid(i2, t[w]),
+        "peak_voltage": float(np.max(np.abs(np.concatenate([v_a[w], v_b[w]])))),
+        "peak_current": float(np.max(np.abs(np.concatenate([i_a[w], i_b[w]])))),
+        "rms_current": (float(np.sqrt(_trapezoid(i2 / 2, ts[w]) / duration)) if duration > 0
+                        else float(np.sqrt(np.mean(i2 / 2)))),
+        "copper_loss": R * _trapezoid(i2, ts[w]),
     }
 
 
@@ -89,18 +94,22 @@ def default_band(scenario: Scenario) -> float:
 
 
 def _check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
+    """``kinds`` as a tuple, or a ValueError if it is empty or names an unknown controller type."""
     bad = [k for k in kinds if k not in CONTROLLER_TYPES]
     if bad or not kinds:
-        raise ValueError(f"controllers {bad or list(kinds)!r} are not controller types; valid: {list(CONTROLLER_TYPES)}")
+        raise ValueError(f"controllers {bad or list(kinds)!r} are not controller types; "
+                         f"valid: {list(CONTROLLER_TYPES)}")
     return tuple(kinds)
 
 
 def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band: Optional[float] = None,
             bandwidth_scale: float = 1.0, engine: str = "c") -> dict[str, dict[str, Any]]:
-    """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects);
-    returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n}}``."""
+    """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects).
+
+    Returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n}}``.
+    """
     band = default_band(scenario) if band is None else band
-    out = {}
+    out: dict[str, dict[str, Any]] = {}
     for kind in _check_kinds(kinds):
         sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
         r = sc.run(engine)
@@ -109,33 +118,41 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
     return out
 
 
-def _worse(a: Optional[float], b: Optional[float], key: str) -> Optional[float]:
-    if key == "settling_time" and (a is None or b is None):
-        return None  # not settled on some plant: the worst case does not settle
+def _worse(a: Optional[float], b: Optional[float]) -> Optional[float]:
+    """The worse of two values of a metric: the larger, or ``None`` if either is ``None``.
+
+    Only ``settling_time`` is ever ``None`` (:func:`metrics`): not settled on some plant, the worst case does not
+    settle.
+    """
+    if a is None or b is None:
+        return None
     return max(a, b)
 
 
 def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = CONTROLLER_TYPES, *,
                   band: Optional[float] = None, bandwidth_scale: float = 1.0,
                   log: Optional[Callable[[str], None]] = None, **batch_options: Any) -> dict[str, dict[str, Any]]:
-    """Each controller on every plant of the study (the controllers keep the nominal model); returns per
-    kind the worst of each metric over the plants (``"worst"``), the failed runs, and the rows with the
-    series of :data:`KEEP` for figures. ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch`
-    (``engine``, ``workers``, ...); ``log`` is told when each controller's batch is done."""
+    """Each controller on every plant of the study (the controllers keep the nominal model).
+
+    Returns per kind the worst of each metric over the plants (``"worst"``), the failed runs, and the rows with
+    the series of :data:`KEEP` for figures. ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch`
+    (``engine``, ``workers``, ...); ``log`` is told when each controller's batch is done.
+    """
     band = default_band(scenario) if band is None else band
     errors = plant_errors(study)
-    out = {}
+    out: dict[str, dict[str, Any]] = {}
     for kind in _check_kinds(kinds):
         sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
         runs = perturbed(sc, errors, f"/{kind}")
         rows = run_batch(runs, keep=KEEP, **batch_options)
         worst: dict[str, Optional[float]] = {}
-        for row, run in zip(rows, runs):
+        for row, run in zip(rows, runs, strict=True):  # run_batch returns one row per run
             if row["error"] is not None:
                 continue
-            m = metrics(*(row[f"series_{k}"] for k in KEEP), scenario.plan, band=band, R=run.simulated_plant.motor.R)
+            t, e, ia, ib, va, vb = (row[f"series_{k}"] for k in KEEP)
+            m = metrics(t, e, ia, ib, va, vb, scenario.plan, band=band, R=run.simulated_plant.motor.R)
             row["metrics"] = m
-            worst = m if not worst else {k: _worse(worst[k], m[k], k) for k in METRICS}
+            worst = m if not worst else {k: _worse(worst[k], m[k]) for k in METRICS}
         failed = [r["error"] for r in rows if r["error"] is not None]
         out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed, "rows": rows}
         if log is not None:
@@ -148,9 +165,12 @@ def bandwidth_sweep(scenario: Scenario, kinds: Sequence[str], scales: Sequence[f
                     study: Optional[Robustness] = None, band: Optional[float] = None,
                     log: Optional[Callable[[str], None]] = None,
                     **batch_options: Any) -> dict[float, dict[str, dict[str, Optional[float]]]]:
-    """The baselines' metrics (worst over the study's plants, or on the scenario's plant) with every bandwidth
-    scaled by each factor: the check that the tuning rule does not cripple them."""
-    out = {}
+    """The baselines' metrics with every bandwidth scaled by each factor.
+
+    The metrics are the worst over the study's plants, or those on the scenario's plant without a study: the
+    check that the tuning rule does not cripple the baselines.
+    """
+    out: dict[float, dict[str, dict[str, Optional[float]]]] = {}
     for scale in scales:
         if study is None:
             res = compare(scenario, kinds, band=band, bandwidth_scale=scale, engine=batch_options.get("engine", "c"))

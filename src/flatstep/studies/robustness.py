@@ -7,8 +7,8 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .batch import run_batch
 from ..control.smc import SMCGains
+from .batch import run_batch
 from .scenario import Scenario
 from .scenario_file import Robustness
 
@@ -26,11 +26,11 @@ def plant_errors(study: Robustness) -> list[dict[str, float]]:
     """Relative plant errors: every sign combination (``samples == 0``) or a seeded uniform sample."""
     names = study.parameters
     if study.samples == 0:
-        return [dict(zip(names, (s * study.relative_error for s in signs)))
+        return [dict(zip(names, (s * study.relative_error for s in signs), strict=True))
                 for signs in product((1.0, -1.0), repeat=len(names))]
     rng = np.random.default_rng(study.seed)
     draws = rng.uniform(-study.relative_error, study.relative_error, (study.samples, len(names)))
-    return [dict(zip(names, row)) for row in draws]
+    return [dict(zip(names, row, strict=True)) for row in draws]
 
 
 def perturbed(scenario: Scenario, errors: list[dict[str, float]], label: str = "") -> list[Scenario]:
@@ -46,8 +46,11 @@ def perturbed(scenario: Scenario, errors: list[dict[str, float]], label: str = "
 
 def run_study(scenario: Scenario, study: Robustness, *, with_paper_gains: bool = True,
               **batch_options: Any) -> dict[str, Any]:
-    """Run the study for the scenario's gains (and the paper's gains on the same drive); return per-set
-    summaries, the worst values in encoder counts, and the traces for :func:`flatstep.cli.plots.plot_robustness`."""
+    """Run the study for the scenario's gains (and the paper's gains on the same drive).
+
+    Returns per-set summaries, the worst values in encoder counts, and the traces for
+    :func:`flatstep.cli.plots.plot_robustness`.
+    """
     errors = plant_errors(study)
     sets = {"scenario": scenario}
     if with_paper_gains:
@@ -60,7 +63,8 @@ def run_study(scenario: Scenario, study: Robustness, *, with_paper_gains: bool =
     return out
 
 
-def _summarise(rows: list[dict], scenario: Scenario, count: Optional[float]) -> dict[str, Any]:
+def _summarise(rows: list[dict[str, Any]], scenario: Scenario, count: Optional[float]) -> dict[str, Any]:
+    """One set's summary: runs, failures, the worst move/rest/final errors [rad] and peak voltage, in counts too."""
     plan = scenario.plan
     failed = [r for r in rows if r["error"] is not None]
     ok = [r for r in rows if r["error"] is None]
@@ -73,7 +77,7 @@ def _summarise(rows: list[dict], scenario: Scenario, count: Optional[float]) -> 
         for key, val in (("move", during), ("rest", float(np.max(rest)) if rest.size else float("nan")),
                          ("final", float(e[-1])), ("peak_voltage", float(v))):
             worst[key] = max(worst.get(key, -np.inf), val)
-    summary = {"runs": len(rows), "failed": len(failed), "failures": [r["error"] for r in failed],
+    summary: dict[str, Any] = {"runs": len(rows), "failed": len(failed), "failures": [r["error"] for r in failed],
                "worst_rad": worst, "rows": rows}
     if count:
         summary["worst_counts"] = {k: worst[k] / count for k in ("move", "rest", "final") if k in worst}

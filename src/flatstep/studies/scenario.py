@@ -4,10 +4,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, Optional
+from typing import Optional
 
 from ..control.smc import SMCGains
-from ..control.tuning import make_controller
+from ..control.tuning import AnyController, make_controller
 from ..engine.result import SimResult
 from ..engine.settings import Continuous
 from ..engine.simulate import simulate
@@ -21,8 +21,9 @@ from ..validate import check_positive
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything one closed-loop run needs, as the objects :func:`~flatstep.engine.simulate.simulate` takes;
-    defaults are the paper's Fig. 1 (Section 3).
+    """Everything one closed-loop run needs, as the objects :func:`~flatstep.engine.simulate.simulate` takes.
+
+    The defaults are the paper's Fig. 1 (Section 3).
 
     Parameters
     ----------
@@ -86,7 +87,7 @@ class Scenario:
         """The loop's control period [s], ``None`` for continuous-time control."""
         return self.loop.control_period if self.loop is not None else None
 
-    def controller(self) -> Any:
+    def controller(self) -> AnyController:
         """The scenario's controller: :class:`~flatstep.control.smc.FlatnessSMC` or a baseline tuned for its loop."""
         loop = self.loop
         v_bus = loop.drive.v_bus if loop is not None and loop.drive is not None else math.inf
@@ -108,6 +109,7 @@ class Scenario:
 
 @lru_cache(maxsize=256)
 def _feasibility(plan: RestToRest, motor: MotorParams) -> FeasibilityReport:
+    """:func:`~flatstep.plan.feasibility.check_feasibility` with no load, cached."""
     return check_feasibility(plan, motor)  # batches share plans: check each once per process
 
 

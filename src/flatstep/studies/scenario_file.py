@@ -7,27 +7,30 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any, Callable, Optional, TypeVar
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
-    import tomli as tomllib
+    # mypy checks for Python 3.10 (pyproject.toml), where this branch is taken, but tomli is only installed
+    # there; unused-ignore keeps the ignore quiet where tomli is installed.
+    import tomli as tomllib  # type: ignore[import-not-found, unused-ignore]
 
+from ..control.design import design_gains
 from ..control.smc import SMCGains
 from ..control.tuning import CONTROLLER_TYPES
-from ..control.design import design_gains
 from ..loop.drive import Drive
-from ..model.motor import MotorParams, PRESETS
 from ..loop.observers import Observer
-from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
-from ..model.plant import Plant, PlantEffects
 from ..loop.reference import DriveLoop
-from .scenario import Scenario
 from ..loop.sensors import Sensors
+from ..model.motor import PRESETS, MotorParams
+from ..model.plant import Plant, PlantEffects
+from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
+from .scenario import Scenario
 
 MOTOR_KEYS = ("preset", "R", "L", "Km", "J", "B", "Nr")
 EFFECT_KEYS = ("detent_torque", "coulomb_torque", "coulomb_speed", "magnetizing_resistance")
+T = TypeVar("T")
 SECTIONS: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "t_end", "motor", "plant", "plan", "controller", "drive", "sensors", "observer",
          "load", "robustness"),
@@ -47,8 +50,11 @@ SECTIONS: dict[str, tuple[str, ...]] = {
 
 @dataclass(frozen=True)
 class Robustness:
-    """A parameter-error study: every sign combination of +-``relative_error`` on ``parameters`` of the
-    plant (``samples = 0``) or a seeded uniform random sample of ``samples`` plants in the same box."""
+    """A parameter-error study on the plant's ``parameters``.
+
+    It runs every sign combination of +-``relative_error`` (``samples = 0``) or a seeded uniform random sample
+    of ``samples`` plants in the same box.
+    """
 
     relative_error: float = 0.1
     parameters: tuple[str, ...] = ("R", "L", "Km", "J", "B")
@@ -56,7 +62,8 @@ class Robustness:
     seed: int = 0
 
 
-def _check_keys(where: str, table: Any, section: str) -> dict:
+def _check_keys(where: str, table: Any, section: str) -> dict[str, Any]:
+    """``table`` if it is a table of known keys of ``section``, else a ValueError naming the file and key."""
     if not isinstance(table, dict):
         raise ValueError(f"{where}: [{section}] must be a table, got {table!r}")
     unknown = sorted(set(table) - set(SECTIONS[section]))
@@ -66,19 +73,21 @@ def _check_keys(where: str, table: Any, section: str) -> dict:
     return table
 
 
-def _wrap(where: str, section: str, build, **kwargs):
+def _wrap(where: str, section: str, build: Callable[..., T], **kwargs: Any) -> T:
+    """``build(**kwargs)``, its TypeError or ValueError raised again as a ValueError naming the file and section."""
     try:
         return build(**kwargs)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}: [{section}] {exc}") from None
 
 
-def _motor(where: str, table: dict, section: str, base: MotorParams) -> MotorParams:
-    values = dict(base.as_dict())
+def _motor(where: str, table: dict[str, Any], section: str, base: MotorParams) -> MotorParams:
+    """The motor of a ``[motor]`` or ``[plant]`` table: ``base`` or a preset, with the given values and scales."""
+    values: dict[str, Any] = dict(base.as_dict())
     if "preset" in table:
         if table["preset"] not in PRESETS:
             raise ValueError(f"{where}: [{section}] preset={table['preset']!r} is unknown; valid: {sorted(PRESETS)}")
-        values = dict(PRESETS[table["preset"]])
+        values = {**PRESETS[table["preset"]]}
     values.update({k: v for k, v in table.items() if k in MOTOR_KEYS[1:]})
     motor = _wrap(where, section, MotorParams, **values)
     scale = table.get("scale", {})
@@ -132,10 +141,11 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     measurement = ctrl.pop("measurement", None)
     observer = None
     if design:
-        if period is None:
+        if period is None or drive is None:  # no control_rate: neither a period nor a drive
             raise ValueError(f"{where}: [controller] design = true needs [drive] control_rate")
         d = _wrap(where, "controller", design_gains, motor=motor, plan=plan, control_period=period,
-                  v_bus=drive.v_bus, load_torque=load + (effects.detent_torque + effects.coulomb_torque if effects else 0.0),
+                  v_bus=drive.v_bus,
+                  load_torque=load + (effects.detent_torque + effects.coulomb_torque if effects else 0.0),
                   uncertainty=uncertainty, compute_delay=compute_delay,
                   encoder_counts=sensors.encoder_counts if sensors else None,
                   current_step=sensors.current_step if sensors else 0.0)
