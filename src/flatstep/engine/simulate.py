@@ -253,8 +253,12 @@ def assemble(run: Run, plant: Plant, plan: RestToRest, controller: Controller,
                          rho_ref=cols["rho_ref"], ia_ref=cols["ia_ref"], ib_ref=cols["ib_ref"],
                          va_ref=cols["va_ref"], vb_ref=cols["vb_ref"], s1=cols["s1"], s2=cols["s2"], meta=meta)
     acc = plant.acceleration(X, t)
-    # a run without applied voltages is a continuous one, whose law is static (_static)
-    v = run.v if run.v is not None else _static(controller, meta["engine"]).voltages(t, X, acc)
+    if run.v is not None:
+        v = run.v
+    elif is_static(controller):  # a run without applied voltages is a continuous one: the runners take static laws
+        v = controller.voltages(t, X, acc)
+    else:
+        raise ValueError(f"{type(controller).__name__} has state: a run without applied voltages needs a static law")
     ref = plan.flag(t)
     x_ref, v_ref = flat_to_state(ref, controller.motor)
     rho, phi = polar(X[0], X[1])
