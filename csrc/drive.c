@@ -1,10 +1,15 @@
-// The drive's averaged bridge: bus saturation and computation delay, in the operation order of flatstep.drive.
+// The drive's bridge: bus saturation, computation delay and PWM segments, in the arithmetic of flatstep.loop.drive.
 #include "drive.h"
 
-// Returns 0, or -1 when v_bus is not > 0 (d is then left unusable); the bridge starts by applying v_start.
+// Returns 0, or -1 when v_bus is not > 0, pwm is not a drive_pwm, or (switched) v_bus, f_pwm or dead_time is
+// out of range (d is then left unusable); the bridge starts by applying v_start.
 int drive_init(struct drive *d, const struct drive_params *p, const fs_real v_start[2])
 {
-    if (!(p->v_bus > 0))
+    if (!(p->v_bus > 0) || (p->pwm != DRIVE_AVERAGED && p->pwm != DRIVE_SWITCHED))
+        return -1;
+    if (p->pwm == DRIVE_SWITCHED
+        && (!fs_isfinite(p->v_bus) || !(p->f_pwm > 0) || !fs_isfinite(p->f_pwm)
+            || !(p->dead_time >= 0 && p->dead_time < FS_C(0.25) / p->f_pwm)))
         return -1;
     d->p = *p;
     drive_reset(d, v_start);
@@ -44,4 +49,52 @@ void drive_step(struct drive *d, const fs_real v_cmd[2], fs_real v_apply[2])
     }
     d->v_hold[0] = v_new[0];
     d->v_hold[1] = v_new[1];
+}
+
+// Returns the number n of PWM periods in a control period Ts, max(1, round(Ts / (1 / f_pwm))) with ties to
+// even (each Ts / n long), or 0 when n would exceed 1e9.
+uint32_t drive_pwm_periods(const struct drive_params *p, fs_real Ts)
+{
+    fs_real n = fs_rint(Ts / (1 / p->f_pwm));  // rint rounds ties to even, as Python's round
+    if (!(n <= FS_C(1e9)))
+        return 0;
+    return n < 1 ? 1 : (uint32_t)n;
+}
+
+// Returns the number of segments of one PWM period Tp; writes their durations and phase voltages (drive.h).
+size_t drive_pwm_period(const struct drive_params *p, const fs_real v[2], const fs_real i[2], fs_real Tp,
+                        fs_real dur[DRIVE_PWM_SEGMENTS], fs_real lv[DRIVE_PWM_SEGMENTS][2])
+{
+    fs_real vs[2], at[2][5], level[2][5], d, on, off, td, free, t = 0, next;
+    size_t m = 0;
+    int ph, j;
+    drive_saturate(p, v, vs);
+    for (ph = 0; ph < 2; ph++) {
+        d = FS_C(0.5) * (1 + vs[ph] / p->v_bus);  // fraction of the period at +v_bus
+        on = FS_C(0.5) * (1 - d) * Tp;
+        off = FS_C(0.5) * (1 + d) * Tp;
+        free = i[ph] > 0 ? -p->v_bus : (i[ph] < 0 ? p->v_bus : 0);
+        td = p->dead_time > 0 ? fs_min(fs_min(p->dead_time, on), Tp - off) : 0;
+        at[ph][0] = 0, at[ph][1] = on, at[ph][2] = on + td, at[ph][3] = off, at[ph][4] = off + td;
+        level[ph][0] = level[ph][4] = -p->v_bus;
+        level[ph][1] = level[ph][3] = free;
+        level[ph][2] = p->v_bus;
+    }
+    // merge: each segment runs from t to the nearest offset after it; offsets are not sorted when a high pulse
+    // is shorter than the dead time (on + td > off), hence the scan
+    while (t < Tp && m < DRIVE_PWM_SEGMENTS) {
+        next = Tp;
+        for (ph = 0; ph < 2; ph++)
+            for (j = 1; j < 5; j++)
+                if (at[ph][j] > t && at[ph][j] < next)
+                    next = at[ph][j];
+        for (ph = 0; ph < 2; ph++) {
+            for (j = 4; j > 0 && !(at[ph][j] <= t); j--)
+                ;
+            lv[m][ph] = level[ph][j];
+        }
+        dur[m++] = next - t;
+        t = next;
+    }
+    return m;
 }

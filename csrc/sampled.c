@@ -35,6 +35,9 @@ int sampled_init(struct sampled *s, const struct sampled_params *p)
         return SIM_EARGS;
     if (drive_init(&s->drive, &p->drive, zero) != 0)
         return SIM_EARGS;
+    s->pwm_periods = p->drive.pwm == DRIVE_SWITCHED ? drive_pwm_periods(&p->drive, p->Ts) : 0;
+    if (p->drive.pwm == DRIVE_SWITCHED && s->pwm_periods == 0)
+        return SIM_EARGS;
     s->Ts = p->Ts;
     s->substeps = p->substeps;
     s->sensed = p->sensed;
@@ -75,6 +78,33 @@ static void measure(struct sampled *s, const struct plant *plant, const fs_real 
     s->have_prev = true;
 }
 
+// Returns nothing; integrates the plant state x over one period from t under the applied voltage v: RK4
+// substeps, or with switched PWM one RK4 step per segment of each PWM period (currents at t, as the reference).
+static void integrate(struct sampled *s, struct held *c, const fs_real v[2], fs_real t, fs_real x[4],
+                      struct sim_stats *st)
+{
+    fs_real dur[DRIVE_PWM_SEGMENTS], lv[DRIVE_PWM_SEGMENTS][2], h = s->Ts / (fs_real)s->substeps;
+    size_t m, j;
+    uint32_t k;
+    if (s->drive.p.pwm != DRIVE_SWITCHED) {
+        c->v[0] = v[0], c->v[1] = v[1];
+        for (k = 0; k < s->substeps; k++)
+            ode_rk4_step(held_rhs, c, 4, t + (fs_real)k * h, h, x);
+        st->steps += s->substeps;
+        st->rhs_evals += 4 * s->substeps;
+        return;
+    }
+    m = drive_pwm_period(&s->drive.p, v, x, s->Ts / (fs_real)s->pwm_periods, dur, lv);
+    for (k = 0; k < s->pwm_periods; k++)
+        for (j = 0; j < m; j++) {
+            c->v[0] = lv[j][0], c->v[1] = lv[j][1];
+            ode_rk4_step(held_rhs, c, 4, t, dur[j], x);
+            t += dur[j];
+        }
+    st->steps += s->pwm_periods * (uint32_t)m;
+    st->rhs_evals += 4 * s->pwm_periods * (uint32_t)m;
+}
+
 // Returns SIM_OK or an error sim_status; resets the parts and the controller and runs n_periods periods from
 // x0 at t_k = k Ts (sampled.h).
 int sampled_run(struct sampled *s, const struct controller *ctrl, const struct plant *plant, const fs_real *x0,
@@ -83,9 +113,9 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
 {
     const fs_real quiet[2] = {0, 0};
     struct held c;
-    fs_real x[4], y[CTRL_Y_LEN], v[2], t, h = s->Ts / (fs_real)s->substeps, torque = 0;
+    fs_real x[4], y[CTRL_Y_LEN], v[2], v_apply[2], t, torque = 0;
     fs_real v_start[2] = {s->model.R * x0[0], s->model.R * x0[1]};  // the start equilibrium, until a command
-    uint32_t status, j;
+    uint32_t status;
     size_t k;
     int m;
     st->steps = st->rejected = st->rhs_evals = 0;
@@ -110,9 +140,9 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
         measure(s, plant, x, noise ? &noise[2 * k] : quiet, y, &torque);
         status = ctrl->step(ctrl->self, t, y, v);  // 0 V on a fault: the drive de-energises for this period
         st->controller_status |= status;
-        drive_step(&s->drive, v, c.v);
-        v_out[2 * k] = c.v[0];
-        v_out[2 * k + 1] = c.v[1];
+        drive_step(&s->drive, v, v_apply);
+        v_out[2 * k] = v_apply[0];  // the averaged command, also under switched PWM
+        v_out[2 * k + 1] = v_apply[1];
         if (y_out)
             for (m = 0; m < CTRL_Y_LEN; m++)
                 y_out[CTRL_Y_LEN * k + m] = y[m];
@@ -120,10 +150,7 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
             status_out[k] = status;
         if (k == n_periods)
             break;
-        for (j = 0; j < s->substeps; j++)
-            ode_rk4_step(held_rhs, &c, 4, t + (fs_real)j * h, h, x);
-        st->steps += s->substeps;
-        st->rhs_evals += 4 * s->substeps;
+        integrate(s, &c, v_apply, t, x, st);
         if (!finite4(x)) {
             st->t_fail = t + s->Ts;
             return SIM_ENONFINITE;

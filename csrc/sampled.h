@@ -25,7 +25,7 @@ struct sampled_params {
     bool observed;                    // estimate angle, speed and load with `observer`
     struct sensors_params sensors;    // used when sensed
     struct observer_params observer;  // used when observed
-    struct drive_params drive;        // bus saturation (v_bus = infinity: none) and computation delay
+    struct drive_params drive;        // bus saturation (v_bus = infinity: none), computation delay, PWM
     struct motor_params model;        // the controller's nominal model: the observer's torque, the bridge's
                                       // start voltage R x0 (the start equilibrium)
 };
@@ -34,6 +34,7 @@ struct sampled_params {
 struct sampled {
     fs_real Ts;
     uint32_t substeps;
+    uint32_t pwm_periods;  // switched PWM: PWM periods per control period
     bool sensed, observed;
     struct sensors sensors;
     struct observer observer;
@@ -49,8 +50,9 @@ int sampled_init(struct sampled *s, const struct sampled_params *p);
 // Returns SIM_OK or an error sim_status; resets the parts and the controller and runs n_periods periods from
 // x0 at t_k = k Ts. Period k: read the sensors with noise sample k (noise: (n_periods + 1) x 2, or NULL for
 // none), correct the observer, step the controller (0 V on a fault), saturate and delay in the drive,
-// integrate the plant (plant_rhs: eq. (1), load and effects) by RK4 substeps under the applied voltage,
-// predict the observer. Writes, at every t_k, k = 0..n_periods, the plant state into x_out
+// integrate the plant (plant_rhs: eq. (1), load and effects) by RK4 substeps under the applied voltage (switched
+// PWM: one RK4 step per PWM segment, drive_pwm_period of the applied voltage and the currents at t_k, repeated
+// for each PWM period), predict the observer. Writes, at every t_k, k = 0..n_periods, the plant state into x_out
 // ((n_periods + 1) x 4), the voltage applied from t_k into v_out ((n_periods + 1) x 2), and, unless NULL, what
 // the controller saw into y_out ((n_periods + 1) x 5) and its status into status_out.
 int sampled_run(struct sampled *s, const struct controller *ctrl, const struct plant *plant, const fs_real *x0,

@@ -1,5 +1,6 @@
-// The drive's parts: encoder and ADC readings, the delay ring, the observer, bus saturation and computation
-// delay, and the sampled loop with ideal parts, a detent, and on a realistic 20 kHz drive.
+// The drive's parts: encoder and ADC readings, the delay ring, the observer, bus saturation, computation
+// delay and PWM segments, and the sampled loop with ideal parts, a detent, switched PWM, and on a realistic
+// 20 kHz drive.
 #include "check.h"
 #include "sampled.h"
 #include "smc.h"
@@ -126,7 +127,7 @@ static int observer_checks(void)
 // Returns 0 after the bus-saturation and computation-delay checks.
 static int drive_checks(void)
 {
-    struct drive_params p = {24.0, false};
+    struct drive_params p = {24.0, false, DRIVE_AVERAGED, 0, 0};
     struct drive d;
     double start[2] = {3.36, 0}, v[2] = {30, -12}, inside[2] = {-23.9, 1e-3}, out[2];
     CHECK(drive_init(&d, &p, start) == 0, "drive accepted");
@@ -151,6 +152,97 @@ static int drive_checks(void)
     CHECK(out[0] == inside[0], "no delay: the command now");
     p.v_bus = 0;
     CHECK(drive_init(&d, &p, start) == -1, "zero bus refused");
+    return 0;
+}
+
+// Returns the mean phase voltages over one PWM period's m segments (into avg) and checks their durations sum
+// to Tp and every level is -v_bus, +v_bus or the freewheeling level of the current i.
+static int pwm_mean(const struct drive_params *p, const double v[2], const double i[2], double Tp, double avg[2])
+{
+    double dur[DRIVE_PWM_SEGMENTS], lv[DRIVE_PWM_SEGMENTS][2], sum = 0, free;
+    size_t m = drive_pwm_period(p, v, i, Tp, dur, lv), j;
+    int ph, ok = m >= 1 && m <= DRIVE_PWM_SEGMENTS;
+    avg[0] = avg[1] = 0;
+    for (j = 0; j < m; j++) {
+        ok &= dur[j] > 0;
+        sum += dur[j];
+        for (ph = 0; ph < 2; ph++) {
+            free = i[ph] > 0 ? -p->v_bus : (i[ph] < 0 ? p->v_bus : 0);
+            ok &= lv[j][ph] == -p->v_bus || lv[j][ph] == p->v_bus || (p->dead_time > 0 && lv[j][ph] == free);
+            avg[ph] += dur[j] * lv[j][ph];
+        }
+    }
+    avg[0] /= sum, avg[1] /= sum;
+    CHECK(ok && fabs(sum - Tp) <= 1e-20,
+          "v (%g, %g), i (%g, %g): %zu segments summing to Tp %+.3g s, levels in {-v_bus, +v_bus, free}", v[0], v[1],
+          i[0], i[1], m, sum - Tp);
+    return 0;
+}
+
+// Returns 0 after the PWM checks: periods per control period, segments, duty and dead time, validation.
+static int pwm_checks(void)
+{
+    struct drive_params p = {24.0, false, DRIVE_SWITCHED, 40e3, 0};
+    struct drive d;
+    const double v[][2] = {{3, -2}, {20, 23.9}, {-24, 0}, {24, -24}, {0, 0}, {30, -12}, {-0.01, 11.5}};
+    const double vd[][2] = {{3, -2}, {0, 0}, {-12, 15}, {10, -20}};
+    const double i[][2] = {{0.3, -0.2}, {-0.1, 0}, {0, 0.4}, {1, 1}};
+    double Tp = 2.5e-5, td = 0.5e-6, avg[2], sat[2], shift, dur[DRIVE_PWM_SEGMENTS], lv[DRIVE_PWM_SEGMENTS][2];
+    double q = 1.0 / 16384;  // a period of 2^-14 s: Ts / (1 / f_pwm) is exact
+    size_t a, b, m, j;
+    int ph, ok;
+    p.f_pwm = 16384;
+    CHECK(drive_pwm_periods(&p, 2 * q) == 2 && drive_pwm_periods(&p, 2.5 * q) == 2
+              && drive_pwm_periods(&p, 3.5 * q) == 4 && drive_pwm_periods(&p, 0.2 * q) == 1
+              && drive_pwm_periods(&p, 2e9 * q) == 0,
+          "PWM periods: round half to even, at least 1, at most 1e9");
+    p.f_pwm = 40e3;
+    CHECK(drive_pwm_periods(&p, 5e-5) == 2, "20 kHz control, 40 kHz PWM: 2 periods");
+    // without dead time each phase's mean is its saturated command, whatever the current
+    for (a = 0; a < sizeof v / sizeof v[0]; a++)
+        for (b = 0; b < sizeof i / sizeof i[0]; b++) {
+            pwm_mean(&p, v[a], i[b], Tp, avg);
+            drive_saturate(&p, v[a], sat);
+            CHECK(fabs(avg[0] - sat[0]) < 1e-12 && fabs(avg[1] - sat[1]) < 1e-12,
+                  "duty: mean (%.15g, %.15g), command (%.15g, %.15g)", avg[0], avg[1], sat[0], sat[1]);
+        }
+    // dead time: 2 td / Tp of the period freewheels at -sign(i) v_bus, shifting the mean against the current
+    // (commands whose high and low pulses outlast the dead time)
+    p.dead_time = td;
+    for (a = 0; a < sizeof vd / sizeof vd[0]; a++)
+        for (b = 0; b < sizeof i / sizeof i[0]; b++) {
+            pwm_mean(&p, vd[a], i[b], Tp, avg);
+            for (ph = 0; ph < 2; ph++) {
+                shift = -2 * td / Tp * 24 * (i[b][ph] > 0 ? 1 : (i[b][ph] < 0 ? -1 : 0));
+                CHECK(fabs(avg[ph] - (vd[a][ph] + shift)) < 1e-12, "dead time: v %g, i %g: mean %.15g, expected %.15g",
+                      vd[a][ph], i[b][ph], avg[ph], vd[a][ph] + shift);
+            }
+        }
+    CHECK(fabs(2 * td / Tp * 24 - 0.96) < 1e-12, "0.5 us at 40 kHz on 24 V: 0.96 V");
+    // a high pulse shorter than the dead time vanishes: the phase freewheels from on to off + td
+    {
+        const double vs[2] = {-23.9, 0}, cur[2] = {0.5, -0.5};  // high for Tp / 480 = 52 ns < td
+        m = drive_pwm_period(&p, vs, cur, Tp, dur, lv);
+        for (j = 0, ok = 1; j < m; j++)
+            ok &= lv[j][0] != 24;
+        CHECK(ok && m <= DRIVE_PWM_SEGMENTS, "short pulse: no +v_bus on phase a in %zu segments", m);
+    }
+    // validation, as flatstep.loop.drive.Drive
+    CHECK(drive_init(&d, &p, v[4]) == 0, "switched drive accepted");
+    p.dead_time = 0.25 / p.f_pwm;
+    CHECK(drive_init(&d, &p, v[4]) == -1, "dead time of a quarter period refused");
+    p.dead_time = -1e-9;
+    CHECK(drive_init(&d, &p, v[4]) == -1, "negative dead time refused");
+    p.dead_time = 0, p.f_pwm = 0;
+    CHECK(drive_init(&d, &p, v[4]) == -1, "zero PWM frequency refused");
+    p.f_pwm = INFINITY;
+    CHECK(drive_init(&d, &p, v[4]) == -1, "infinite PWM frequency refused");
+    p.f_pwm = 40e3, p.v_bus = INFINITY;
+    CHECK(drive_init(&d, &p, v[4]) == -1, "switched PWM on an unlimited bus refused");
+    p.v_bus = 24, p.pwm = 2;
+    CHECK(drive_init(&d, &p, v[4]) == -1, "unknown PWM mode refused");
+    p.pwm = DRIVE_AVERAGED, p.f_pwm = 0, p.dead_time = -1;
+    CHECK(drive_init(&d, &p, v[4]) == 0, "averaged: f_pwm and dead_time unread");
     return 0;
 }
 
@@ -184,7 +276,8 @@ static double max_error(const struct smc *s, const double *x, int k0, int k1)
 // Returns 0 after the sampled-loop checks.
 static int loop_checks(void)
 {
-    struct sampled_params p = {5e-5, 4, false, false, drive_sensors(), {0}, {INFINITY, false}, {0, 0, 0, 0, 0, 0}};
+    struct sampled_params p = {
+        5e-5, 4, false, false, drive_sensors(), {0}, {INFINITY, false, DRIVE_AVERAGED, 0, 0}, {0, 0, 0, 0, 0, 0}};
     struct plant plant;
     struct sim_stats st;
     struct sampled s;
@@ -223,6 +316,26 @@ static int loop_checks(void)
     CHECK(same, "20 kHz drive: every voltage within the bus, no fault");
     printf("  20 kHz drive, 14-bit encoder, speed observer: max |theta - theta*| during the move %.3f counts\n",
            err / count);
+    // switched PWM on the same drive: 40 kHz tracks as well; at 4 MHz (200 PWM periods a control period) the
+    // plant nears the averaged run (ripple ~ 1 / f_pwm), while the recorded voltages stay the averaged commands
+    p.drive.pwm = DRIVE_SWITCHED, p.drive.f_pwm = 40e3, p.drive.dead_time = 0;
+    CHECK(sampled_init(&s, &p) == SIM_OK, "switched PWM loop accepted");
+    rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xb, vb, NULL, NULL, &st);
+    err = max_error(&c, xb, 400, 800);
+    for (k = 0, same = 1; k <= N_PERIODS; k++)
+        same &= fabs(vb[2 * k]) <= 24 && fabs(vb[2 * k + 1]) <= 24;
+    CHECK(rc == SIM_OK && err < count && same && st.steps >= 2 * 3 * N_PERIODS && st.rhs_evals == 4 * st.steps,
+          "40 kHz PWM: move error %.3g counts, %u RK4 steps", err / count, st.steps);
+    printf("  the same with 40 kHz switched PWM: %.3f counts, %u RK4 steps (one per PWM segment)\n", err / count,
+           st.steps);
+    p.drive.f_pwm = 4e6;
+    sampled_init(&s, &p);
+    rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xb, vb, NULL, NULL, &st);
+    for (k = 0, err = 0; k <= N_PERIODS; k++)
+        err = fmax(err, fabs(xb[4 * k + 3] - xa[4 * k + 3]));
+    CHECK(rc == SIM_OK && err < 1e-2 * count, "4 MHz PWM against the averaged bridge: %.3g counts", err / count);
+    printf("  4 MHz switched PWM against the averaged bridge: max |theta difference| %.2e counts\n", err / count);
+    p.drive.pwm = DRIVE_AVERAGED;
     // encoder-difference speed and the controller's model acceleration, with a delay and a compute delay
     designed(&c, &plant, SMC_MODEL, x0);
     smc_controller(&c, &cc);
@@ -258,6 +371,7 @@ int test_drive(void)
     sensors_checks();
     observer_checks();
     drive_checks();
+    pwm_checks();
     loop_checks();
     return 0;
 }

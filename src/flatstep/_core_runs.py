@@ -108,10 +108,7 @@ def continuous_result(controller: FlatnessSMC, motor: MotorParams, load: float, 
 
 
 def drive_unsupported(drive: Any = None, sensors: Any = None) -> Optional[str]:
-    """Why C ``sampled_run`` cannot run this drive (``None`` when it can): switched PWM, or a measurement
-    delay beyond its ring."""
-    if drive is not None and drive.pwm != "averaged":
-        return f"pwm={drive.pwm!r} (switched PWM runs on the Python reference loop only)"
+    """Why C ``sampled_run`` cannot run this drive (``None`` when it can): a measurement delay beyond its ring."""
     if sensors is not None and sensors.delay > lib.SENSORS_MAX_DELAY:
         return f"sensors.delay={sensors.delay} periods (the C loop holds at most {lib.SENSORS_MAX_DELAY})"
     return None
@@ -127,6 +124,8 @@ def _loop_fields(model: MotorParams, Ts: float, substeps: int, drive: Any, senso
                              model=_motor(model),
                              drive=dict(v_bus=drive.v_bus if drive is not None else np.inf,
                                         compute_delay=bool(compute_delay)))
+    if drive is not None and drive.pwm == "switched":
+        p["drive"].update(pwm=lib.DRIVE_SWITCHED, f_pwm=drive.f_pwm, dead_time=drive.dead_time)
     if sensors is not None:
         p["sensors"] = dict(angle_step=sensors.angle_step, encoder_offset=sensors.encoder_offset,
                             current_step=sensors.current_step, current_range=sensors.current_range,
@@ -153,7 +152,7 @@ def run_sampled(controller: Any, motor: MotorParams, load: float, x0: ArrayLike,
                 substeps: int, effects: Optional[PlantEffects] = None, drive: Any = None, sensors: Any = None,
                 observer: Any = None, compute_delay: bool = False,
                 noise: Optional[ArrayLike] = None) -> tuple[Array, Array, Array, NDArray[np.uint32], dict]:
-    """C ``sampled_run``: the drive loop of :func:`flatstep.loop.reference.run_reference` (averaged bridge) for
+    """C ``sampled_run``: the drive loop of :func:`flatstep.loop.reference.run_reference` (averaged or switched) for
     any controller with a C twin, on the plant ``(motor, load, effects)``, with the
     :class:`~flatstep.loop.drive.Drive`, :class:`~flatstep.loop.sensors.Sensors` and
     :class:`~flatstep.loop.observers.Observer` parts (``None``: ideal) and the (n_periods + 1, 2) current noise

@@ -43,38 +43,87 @@ class Drive:
         peak = np.max(np.abs(v), axis=0)
         return v / np.maximum(1.0, peak / self.v_bus)
 
-    def pwm_segments(self, v: ArrayLike, i: ArrayLike, Ts: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Piecewise-constant phase voltages over one control period ``Ts`` for commanded ``v`` (2,) and
-        phase currents ``i`` (2,) at its start: returns (durations (m,), voltages (m, 2)).
+    def pwm_periods(self, Ts: float) -> int:
+        """The number ``n = max(1, round(Ts f_pwm))`` of PWM periods in a control period ``Ts``, each ``Ts / n``."""
+        return max(1, int(round(Ts / (1.0 / self.f_pwm))))
 
-        Averaged mode returns the single segment ``(Ts, v)``.
+    def pwm_period(self, v: ArrayLike, i: ArrayLike, Tp: float) -> tuple[list[float], list[tuple[float, float]]]:
+        """The segments of one PWM period, in the arithmetic of C ``drive_pwm_period``.
+
+        Each phase has five breakpoints within the period, at offsets ``0, on, on + td, off, off + td`` with
+        levels ``-v_bus, free, +v_bus, free, -v_bus`` (centre-aligned: ``on = (1 - d) Tp / 2``,
+        ``off = (1 + d) Tp / 2`` for the duty ``d = (1 + v / v_bus) / 2``; ``free = -sign(i) v_bus`` during the
+        dead time ``td = min(dead_time, on, Tp - off)``). The segments start at every distinct breakpoint below
+        ``Tp`` in increasing order; on each, a phase has the level of its last breakpoint (in the order above) at
+        or before the segment's start, so a high pulse shorter than the dead time vanishes into freewheeling.
+
+        Parameters
+        ----------
+        v : array_like
+            The commanded phase voltages (va, vb) [V], saturated here.
+        i : array_like
+            The phase currents (ia, ib) [A] that choose the freewheeling level.
+        Tp : float
+            The PWM period [s].
+
+        Returns
+        -------
+        durations : list of float
+            At most 9 segment durations [s], summing to ``Tp`` up to rounding.
+        levels : list of (float, float)
+            The phase voltages (va, vb) [V] on each segment.
         """
-        v = self.saturate(v)
-        if self.pwm == "averaged":
-            return np.array([Ts]), v[None, :]
-        Tp = 1.0 / self.f_pwm
-        n = max(1, int(round(Ts / Tp)))
-        Tp = Ts / n
-        edges = []
+        vs = [float(u) for u in self.saturate(v)]
+        cur = [float(c) for c in np.asarray(i, dtype=float)]
+        starts: list[list[float]] = []
+        levels: list[list[float]] = []
         for ph in range(2):
-            d = 0.5 * (1.0 + v[ph] / self.v_bus)  # fraction of the period at +v_bus
+            d = 0.5 * (1.0 + vs[ph] / self.v_bus)  # fraction of the period at +v_bus
             on, off = 0.5 * (1.0 - d) * Tp, 0.5 * (1.0 + d) * Tp
-            free = -np.sign(i[ph]) * self.v_bus if i[ph] != 0 else 0.0
+            free = -self.v_bus if cur[ph] > 0 else (self.v_bus if cur[ph] < 0 else 0.0)  # freewheeling diodes
             td = min(self.dead_time, on, Tp - off) if self.dead_time > 0 else 0.0
-            # (start, level) breakpoints within one PWM period for this phase
-            pts = [(0.0, -self.v_bus), (on, free), (on + td, self.v_bus), (off, free), (off + td, -self.v_bus)]
-            edges.append(pts)
-        cuts = sorted({round(k * Tp + s, 15) for k in range(n) for pts in edges for s, _ in pts} | {Ts})
-        cuts = np.array([c for c in cuts if c <= Ts])
-        mid = 0.5 * (cuts[:-1] + cuts[1:])
-        out = np.empty((mid.size, 2))
-        for ph, pts in enumerate(edges):
-            starts = np.array([s for s, _ in pts])
-            vals = np.array([lv for _, lv in pts])
-            out[:, ph] = vals[np.searchsorted(starts, np.mod(mid, Tp), side="right") - 1]
-        dur = np.diff(cuts)
-        keep = dur > 0
-        return dur[keep], out[keep]
+            starts.append([0.0, on, on + td, off, off + td])
+            levels.append([-self.v_bus, free, self.v_bus, free, -self.v_bus])
+        durations: list[float] = []
+        out: list[tuple[float, float]] = []
+        t = 0.0
+        while t < Tp:
+            nxt = min([Tp] + [s for ph in range(2) for s in starts[ph] if s > t])  # the next breakpoint
+            va, vb = (next(levels[ph][j] for j in range(4, -1, -1) if starts[ph][j] <= t) for ph in range(2))
+            durations.append(nxt - t)
+            out.append((va, vb))
+            t = nxt
+        return durations, out
+
+    def pwm_segments(self, v: ArrayLike, i: ArrayLike, Ts: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Piecewise-constant phase voltages over one control period.
+
+        Averaged mode returns the single segment ``(Ts, saturated v)``. Switched mode returns the segments of
+        :meth:`pwm_period` for ``Tp = Ts / n``, repeated for the :meth:`pwm_periods` ``n`` PWM periods (the
+        command and the currents are those of the control period's start).
+
+        Parameters
+        ----------
+        v : array_like
+            The commanded phase voltages (va, vb) [V].
+        i : array_like
+            The phase currents (ia, ib) [A] at the start of the control period.
+        Ts : float
+            The control period [s].
+
+        Returns
+        -------
+        durations : ndarray
+            The (m,) segment durations [s].
+        levels : ndarray
+            The (m, 2) phase voltages on each segment [V].
+        """
+        if self.pwm == "averaged":
+            return np.array([Ts]), self.saturate(v)[None, :]
+        n = self.pwm_periods(Ts)
+        dur, lv = self.pwm_period(v, i, Ts / n)
+        return np.tile(np.array(dur), n), np.tile(np.array(lv), (n, 1))
 
     def as_dict(self) -> dict:
+        """The parameters as a dict, for a result's metadata."""
         return asdict(self)
