@@ -21,7 +21,7 @@ print(f"{'bridge':<34}{'move':>8}{'rest':>8}  [counts]{'ripple ia':>12}  [mA pea
 for label, drive in (("averaged", Drive()), ("switched 40 kHz", Drive(pwm="switched", f_pwm=40e3)),
                      ("switched 40 kHz, 0.5 us dead time", Drive(pwm="switched", f_pwm=40e3, dead_time=0.5e-6))):
     fine = replace(scenario, loop=replace(scenario.loop, drive=drive))
-    r = fine.run(engine="python" if drive.pwm == "switched" else "c")  # switched PWM: the reference loop
+    r = fine.run()  # the C engine, switched PWM included
     t, e = r.t, np.abs(r.theta_error) / count
     # ripple: integrate one control period at rest finely under the applied PWM pattern
     k = int(np.searchsorted(t, 0.05))

@@ -198,7 +198,7 @@ def _periods(loop: DriveLoop, t_end: float) -> int:
 
 def _sampled_c(plant: Plant, plan: RestToRest, controller: Controller, loop: DriveLoop, t_end: float,
                x0: Array) -> Run:
-    """C ``sampled_run``: any controller, any plant effect, any loop part but switched PWM."""
+    """C ``sampled_run``: any controller, any plant effect, any loop part (switched PWM included)."""
     _check_measurement(controller, loop)
     n = _periods(loop, t_end)
     X, V, Y, status, stats = _core.run_sampled(
