@@ -27,7 +27,7 @@ size_t arrays_flat_voltages(const struct motor_params *m, const fs_real *args, s
 // Returns the number of samples outside the maps' domain; flat_to_state on the n flags (n x 6) into
 // x (n x 4) and v (n x 2).
 size_t arrays_flat_to_state(const struct motor_params *m, const fs_real *flag, size_t n, fs_real load, fs_real *x,
-                           fs_real *v)
+                            fs_real *v)
 {
     size_t i, bad = 0;
     for (i = 0; i < n; i++)
@@ -36,8 +36,8 @@ size_t arrays_flat_to_state(const struct motor_params *m, const fs_real *flag, s
 }
 
 // Returns the number of samples with ia = ib = 0; state_to_flat on x (n x 4), v (n x 2) into flag (n x 6).
-size_t arrays_state_to_flat(const struct motor_params *m, const fs_real *x, const fs_real *v, size_t n,
-                           fs_real load, fs_real *flag)
+size_t arrays_state_to_flat(const struct motor_params *m, const fs_real *x, const fs_real *v, size_t n, fs_real load,
+                            fs_real *flag)
 {
     size_t i, bad = 0;
     for (i = 0; i < n; i++)
@@ -47,8 +47,7 @@ size_t arrays_state_to_flat(const struct motor_params *m, const fs_real *x, cons
 
 // Returns the OR of the status bits; smc_step at the n times t with measurements y (n x 5) into v (n x 2)
 // and each step's status into status (may be NULL).
-uint32_t arrays_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_t n, fs_real *v,
-                        uint32_t *status)
+uint32_t arrays_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size_t n, fs_real *v, uint32_t *status)
 {
     uint32_t all = SMC_OK, one;
     size_t i;
@@ -63,8 +62,8 @@ uint32_t arrays_smc_step(struct smc *s, const fs_real *t, const fs_real *y, size
 
 // Returns the number of samples outside the flat maps' domain; plan_eval and flat_to_state in one pass: the
 // flag (n x 6), state (n x 4) and voltages (n x 2) of the plan at the n times t for a known load.
-size_t arrays_plan_flat(const struct plan *p, const struct motor_params *m, const fs_real *t, size_t n,
-                       fs_real load, fs_real *flag, fs_real *x, fs_real *v)
+size_t arrays_plan_flat(const struct plan *p, const struct motor_params *m, const fs_real *t, size_t n, fs_real load,
+                        fs_real *flag, fs_real *x, fs_real *v)
 {
     struct plan_coef c;
     size_t i, bad = 0;
@@ -84,7 +83,7 @@ static void result_fallback(struct smc *s, fs_real t, const fs_real y[5], struct
         plan_flag(&s->plan, t, w->flag);
     w->acc = s->p.measurement == SMC_IDEAL ? y[4] : motor_acceleration(&s->p.motor, y, 0);
     w->s2 = w->acc - w->flag[PLAN_DDTHETA] + s->alpha2 * (y[2] - w->flag[PLAN_DTHETA])
-          + s->alpha1 * (y[3] - w->flag[PLAN_THETA]);
+            + s->alpha1 * (y[3] - w->flag[PLAN_THETA]);
 }
 
 // Returns the number of samples where the plan leaves the flat maps' domain (their reference currents and
@@ -144,8 +143,8 @@ size_t arrays_result(struct smc *s, const struct plant *plant, const fs_real *t,
 
 // Returns the OR of the status bits; any bound controller at the n times t with measurements y (n x 5) into
 // v (n x 2) and each step's status into status (may be NULL).
-uint32_t arrays_controller_step(const struct controller *c, const fs_real *t, const fs_real *y, size_t n,
-                                fs_real *v, uint32_t *status)
+uint32_t arrays_controller_step(const struct controller *c, const fs_real *t, const fs_real *y, size_t n, fs_real *v,
+                                uint32_t *status)
 {
     uint32_t all = CTRL_OK, one;
     size_t i;

@@ -18,20 +18,20 @@ struct batch_run {
     struct controller ctrl;
     struct plant plant;
     struct sampled_params loop;
-    struct plan reference;   // the planned move (theta*, rho*) the errors are measured against
-    size_t n_periods;        // periods from t = 0 (states at k Ts, k = 0..n_periods)
-    fs_real x0[4];           // start state (ia, ib, omega, theta)
-    const fs_real *noise;    // (n_periods + 1) x 2 current-noise samples, or NULL for none
+    struct plan reference;  // the planned move (theta*, rho*) the errors are measured against
+    size_t n_periods;       // periods from t = 0 (states at k Ts, k = 0..n_periods)
+    fs_real x0[4];          // start state (ia, ib, omega, theta)
+    const fs_real *noise;   // (n_periods + 1) x 2 current-noise samples, or NULL for none
 };
 
 // Summary of one run over the control instants t_k = k Ts, the values of SimResult.summary.
 struct batch_summary {
-    int status;                              // SIM_OK or a sim_status (SIM_EARGS: the loop refused the run)
-    uint32_t controller_status;              // OR of the controller's status bits
+    int status;                  // SIM_OK or a sim_status (SIM_EARGS: the loop refused the run)
+    uint32_t controller_status;  // OR of the controller's status bits
     fs_real theta_final, ia_final, ib_final, omega_final, final_theta_error;
     fs_real max_abs_theta_error, max_abs_rho_error, max_abs_va, max_abs_vb;
-    fs_real max_abs_theta_error_move;        // over t0 <= t_k <= tf (n_move samples)
-    fs_real max_abs_theta_error_after;       // over t_k > tf (n_after samples)
+    fs_real max_abs_theta_error_move;   // over t0 <= t_k <= tf (n_move samples)
+    fs_real max_abs_theta_error_after;  // over t_k > tf (n_after samples)
     size_t n_move, n_after;
 };
 

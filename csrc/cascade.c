@@ -23,8 +23,8 @@ int cascade_init(struct cascade *s, const struct cascade_params *p)
     s->k_omega = FS_C(2.25) * w;
     s->kp = m->L * wc;
     s->L_Nr = m->L * m->Nr;
-    if (!(fs_isfinite(s->k_omega) && fs_isfinite(FS_C(0.75) * (w * w)) && fs_isfinite(s->kp)
-          && fs_isfinite(m->R * wc) && fs_isfinite(s->L_Nr)))
+    if (!(fs_isfinite(s->k_omega) && fs_isfinite(FS_C(0.75) * (w * w)) && fs_isfinite(s->kp) && fs_isfinite(m->R * wc)
+          && fs_isfinite(s->L_Nr)))
         return CASCADE_EGAINS;
     if (!positive(p->Ts))
         return CASCADE_EPERIOD;

@@ -38,12 +38,12 @@ struct cascade_params {
 // Caller-owned state of the cascade.
 struct cascade {
     struct cascade_params p;
-    struct plan_coef plan;             // p.plan ready to evaluate
-    fs_real k_theta, k_omega;          // w / 3, 2.25 w
-    fs_real ki_omega_Ts;               // 0.75 w^2 Ts
-    fs_real kp, ki_Ts;                 // L wc and R wc Ts of the current loops
-    fs_real L_Nr;                      // L Nr, the decoupling's factor
-    fs_real integral[3];               // velocity loop [rad/s^2], d and q current loops [V] (Python's state)
+    struct plan_coef plan;     // p.plan ready to evaluate
+    fs_real k_theta, k_omega;  // w / 3, 2.25 w
+    fs_real ki_omega_Ts;       // 0.75 w^2 Ts
+    fs_real kp, ki_Ts;         // L wc and R wc Ts of the current loops
+    fs_real L_Nr;              // L Nr, the decoupling's factor
+    fs_real integral[3];       // velocity loop [rad/s^2], d and q current loops [V] (Python's state)
 };
 
 // Returns CASCADE_PARAMS_OK, or the cascade_param_error naming the invalid group (s is then unusable).

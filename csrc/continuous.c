@@ -111,9 +111,8 @@ static fs_real segment_end(const struct continuous_params *p, fs_real t, fs_real
 // and the plant's true acceleration), the controller evaluated at every stage (a fault rejects the stage),
 // integration restarted at each knot inside the run, and writes the state at each of the n_out
 // nondecreasing times t_out into x_out (n_out x 4, row-major). SIM_EARGS for a controller with state.
-int continuous_run(const struct controller *ctrl, const struct plant *plant, const fs_real *x0,
-                   const fs_real *t_out, size_t n_out, const struct continuous_params *p, fs_real *x_out,
-                   struct sim_stats *st)
+int continuous_run(const struct controller *ctrl, const struct plant *plant, const fs_real *x0, const fs_real *t_out,
+                   size_t n_out, const struct continuous_params *p, fs_real *x_out, struct sim_stats *st)
 {
     struct loop c = {ctrl, plant, CTRL_OK};
     struct ode_params op;
@@ -126,8 +125,8 @@ int continuous_run(const struct controller *ctrl, const struct plant *plant, con
     st->steps = st->rejected = st->rhs_evals = 0;
     st->controller_status = CTRL_OK;
     st->t_fail = 0;
-    if (!ctrl->stateless || !times_valid(t_out, n_out, 1) || !times_valid(p->knots, p->n_knots, 0)
-        || !state_finite(x0) || !plant_valid(plant) || !(p->rtol > 0) || !(p->atol > 0) || !(p->h_max > 0)
+    if (!ctrl->stateless || !times_valid(t_out, n_out, 1) || !times_valid(p->knots, p->n_knots, 0) || !state_finite(x0)
+        || !plant_valid(plant) || !(p->rtol > 0) || !(p->atol > 0) || !(p->h_max > 0)
         || p->method > CONTINUOUS_DOP853_DENSE)
         return SIM_EARGS;
     op.rtol = p->rtol;

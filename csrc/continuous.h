@@ -27,21 +27,20 @@
 enum continuous_method { CONTINUOUS_DOP853 = 0, CONTINUOUS_DOPRI5, CONTINUOUS_DOP853_DENSE };
 
 struct continuous_params {
-    fs_real rtol, atol;     // error control, > 0
-    fs_real h_max;          // largest step [s], > 0
-    uint32_t max_steps;     // bound on accepted steps over the whole run
-    uint32_t method;        // enum continuous_method
-    const fs_real *knots;   // times where the reference's derivatives jump (the plan's t0, tf), nondecreasing
-    size_t n_knots;         // how many (knots may be NULL when 0)
+    fs_real rtol, atol;    // error control, > 0
+    fs_real h_max;         // largest step [s], > 0
+    uint32_t max_steps;    // bound on accepted steps over the whole run
+    uint32_t method;       // enum continuous_method
+    const fs_real *knots;  // times where the reference's derivatives jump (the plan's t0, tf), nondecreasing
+    size_t n_knots;        // how many (knots may be NULL when 0)
 };
 
 // Returns SIM_OK or an error sim_status; runs the closed loop from x0 at t_out[0] with ideal sensors (the state
 // and the plant's true acceleration), the controller evaluated at every stage (a fault rejects the stage),
 // integration restarted at each knot inside the run, and writes the state at each of the n_out
 // nondecreasing times t_out into x_out (n_out x 4, row-major). SIM_EARGS for a controller with state.
-int continuous_run(const struct controller *ctrl, const struct plant *plant, const fs_real *x0,
-                   const fs_real *t_out, size_t n_out, const struct continuous_params *p, fs_real *x_out,
-                   struct sim_stats *st);
+int continuous_run(const struct controller *ctrl, const struct plant *plant, const fs_real *x0, const fs_real *t_out,
+                   size_t n_out, const struct continuous_params *p, fs_real *x_out, struct sim_stats *st);
 // cffi:end
 
 #endif

@@ -24,9 +24,9 @@ enum ctrl_status {
 
 // A bound controller: its state and its two entry points. The run loops call nothing else.
 struct controller {
-    void *self;                                                          // the law's state (struct smc, ...)
+    void *self;                                                             // the law's state (struct smc, ...)
     uint32_t (*step)(void *self, fs_real t, const fs_real *y, fs_real *v);  // ctrl_status bits; finite v
-    void (*reset)(void *self);                                           // back to the state after _init
+    void (*reset)(void *self);                                              // back to the state after _init
     bool stateless;  // v depends on (t, y) alone: the continuous loop may evaluate it at trial stages
 };
 // cffi:end

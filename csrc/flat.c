@@ -87,7 +87,7 @@ int state_to_flat(const struct motor_params *m, const fs_real x[4], const fs_rea
     flag[PLAN_THETA] = theta;
     flag[PLAN_DTHETA] = omega;
     flag[PLAN_DDTHETA] = ddtheta;
-    flag[PLAN_DDDTHETA] = (m->Km * drho * fs_cos(delta) - m->Km * rho * fs_sin(delta) * (m->Nr * omega + dphi)
-                           - m->B * ddtheta) / m->J;
+    flag[PLAN_DDDTHETA] =
+        (m->Km * drho * fs_cos(delta) - m->Km * rho * fs_sin(delta) * (m->Nr * omega + dphi) - m->B * ddtheta) / m->J;
     return FLAT_OK;
 }

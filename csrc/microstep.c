@@ -70,8 +70,7 @@ uint32_t microstep_step(struct microstep *s, fs_real t, const fs_real *y, fs_rea
     int k;
     v[0] = v[1] = 0;
     // x - x is 0 for a finite x and NaN otherwise: one test covers every input and the state.
-    z = (t - t) + (y[0] - y[0]) + (y[1] - y[1]) + (s->integral[0] - s->integral[0])
-        + (s->integral[1] - s->integral[1]);
+    z = (t - t) + (y[0] - y[0]) + (y[1] - y[1]) + (s->integral[0] - s->integral[0]) + (s->integral[1] - s->integral[1]);
     if (z != 0)
         return CTRL_NONFINITE;
     microstep_reference(s, t, i, di);

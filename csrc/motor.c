@@ -4,8 +4,8 @@
 // Returns true when every parameter is finite and in range (R, L, Km, J > 0, B >= 0, Nr >= 1).
 bool motor_params_valid(const struct motor_params *m)
 {
-    return fs_isfinite(m->R) && m->R > 0 && fs_isfinite(m->L) && m->L > 0 && fs_isfinite(m->Km)
-        && m->Km > 0 && fs_isfinite(m->J) && m->J > 0 && fs_isfinite(m->B) && m->B >= 0 && m->Nr >= 1;
+    return fs_isfinite(m->R) && m->R > 0 && fs_isfinite(m->L) && m->L > 0 && fs_isfinite(m->Km) && m->Km > 0
+           && fs_isfinite(m->J) && m->J > 0 && fs_isfinite(m->B) && m->B >= 0 && m->Nr >= 1;
 }
 
 // Returns the electromagnetic torque Km (ib cos Nr theta - ia sin Nr theta) [N m] at state x.
@@ -23,8 +23,7 @@ fs_real motor_acceleration(const struct motor_params *m, const fs_real x[4], fs_
 }
 
 // Returns nothing; writes dx = f(x, v) of eq. (1) with a load torque on the shaft.
-void motor_rhs(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load,
-               fs_real dx[4])
+void motor_rhs(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load, fs_real dx[4])
 {
     fs_real s, c;
     fs_sincos(m->Nr * x[3], &s, &c);

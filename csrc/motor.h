@@ -27,8 +27,7 @@ fs_real motor_torque(const struct motor_params *m, const fs_real x[4]);
 fs_real motor_acceleration(const struct motor_params *m, const fs_real x[4], fs_real load);
 
 // Returns nothing; writes dx = f(x, v) of eq. (1) with a load torque on the shaft.
-void motor_rhs(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load,
-               fs_real dx[4]);
+void motor_rhs(const struct motor_params *m, const fs_real x[4], const fs_real v[2], fs_real load, fs_real dx[4]);
 
 // cffi:end
 #endif

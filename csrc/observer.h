@@ -13,10 +13,10 @@
 
 // The discretized model and gain of flatstep.observers.Observer.matrices (order 2, 3 or 4), row-major.
 struct observer_params {
-    uint32_t order;                                           // 2 + load states, in 2..4
-    fs_real Ad[OBSERVER_MAX_ORDER][OBSERVER_MAX_ORDER];       // x_{k+1} = Ad x_k + Bd Te_k
+    uint32_t order;                                      // 2 + load states, in 2..4
+    fs_real Ad[OBSERVER_MAX_ORDER][OBSERVER_MAX_ORDER];  // x_{k+1} = Ad x_k + Bd Te_k
     fs_real Bd[OBSERVER_MAX_ORDER];
-    fs_real Lc[OBSERVER_MAX_ORDER];                           // correction gain, current-estimator form
+    fs_real Lc[OBSERVER_MAX_ORDER];  // correction gain, current-estimator form
 };
 
 // Caller-owned state: the parameters and the estimate (theta, omega[, tau_load[, tau_load']]).

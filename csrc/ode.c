@@ -13,11 +13,13 @@ static const fs_real a_[7][6] = {
     {FS_C(9017.0) / 3168, FS_C(-355.0) / 33, FS_C(46732.0) / 5247, FS_C(49.0) / 176, FS_C(-5103.0) / 18656},
     {FS_C(35.0) / 384, 0, FS_C(500.0) / 1113, FS_C(125.0) / 192, FS_C(-2187.0) / 6784, FS_C(11.0) / 84},
 };
-static const fs_real e_[7] = {FS_C(71.0) / 57600, 0, FS_C(-71.0) / 16695, FS_C(71.0) / 1920,
-                              FS_C(-17253.0) / 339200, FS_C(22.0) / 525, FS_C(-1.0) / 40};
-static const fs_real d_[7] = {FS_C(-12715105075.0) / FS_C(11282082432.0), 0, FS_C(87487479700.0) / FS_C(32700410799.0),
-                              FS_C(-10690763975.0) / FS_C(1880347072.0), FS_C(701980252875.0) / FS_C(199316789632.0),
-                              FS_C(-1453857185.0) / FS_C(822651844.0), FS_C(69997945.0) / FS_C(29380423.0)};
+static const fs_real e_[7] = {
+    FS_C(71.0) / 57600, 0, FS_C(-71.0) / 16695, FS_C(71.0) / 1920, FS_C(-17253.0) / 339200, FS_C(22.0) / 525,
+    FS_C(-1.0) / 40};
+static const fs_real d_[7] = {FS_C(-12715105075.0) / FS_C(11282082432.0),  0,
+                              FS_C(87487479700.0) / FS_C(32700410799.0),   FS_C(-10690763975.0) / FS_C(1880347072.0),
+                              FS_C(701980252875.0) / FS_C(199316789632.0), FS_C(-1453857185.0) / FS_C(822651844.0),
+                              FS_C(69997945.0) / FS_C(29380423.0)};
 
 // Step-size control constants of Hairer's code: safety factor, PI exponent beta, step ratio bounds.
 #define SAFE FS_C(0.9)
@@ -69,8 +71,8 @@ fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void 
 
 // Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts an
 // integration at (t, x) and picks the first step size (Hairer's heuristic).
-int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx,
-                    fs_real t, const fs_real *x)
+int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
+                    const fs_real *x)
 {
     size_t i;
     if (ode_check_args(p, n, t) != ODE_OK)
@@ -185,7 +187,7 @@ void ode_dopri5_dense(const struct ode_dopri5 *s, fs_real t, fs_real *x)
     size_t i;
     for (i = 0; i < s->n; i++)
         x[i] = s->rcont[0][i]
-             + th * (s->rcont[1][i] + th1 * (s->rcont[2][i] + th * (s->rcont[3][i] + th1 * s->rcont[4][i])));
+               + th * (s->rcont[1][i] + th1 * (s->rcont[2][i] + th * (s->rcont[3][i] + th1 * s->rcont[4][i])));
 }
 
 // Returns 0, or the first nonzero value of f; advances x (dimension n <= ODE_MAX_DIM) by one classical

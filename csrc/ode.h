@@ -44,8 +44,8 @@ fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void 
 
 // Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts an
 // integration at (t, x) and picks the first step size (Hairer's heuristic).
-int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx,
-                    fs_real t, const fs_real *x);
+int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
+                    const fs_real *x);
 
 // Returns ODE_OK after one accepted step that ends at t_end at the latest (exactly at t_end when it reaches
 // it), ODE_EHMIN when the step size falls below rounding level, ODE_ERHS when f keeps failing.
@@ -71,8 +71,8 @@ struct ode_dop853 {
 
 // Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts a
 // DOP853 integration at (t, x) and picks the first step size.
-int ode_dop853_init(struct ode_dop853 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx,
-                    fs_real t, const fs_real *x);
+int ode_dop853_init(struct ode_dop853 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
+                    const fs_real *x);
 
 // Returns ODE_OK after one accepted step that ends at t_end at the latest (exactly at t_end when it reaches
 // it), ODE_EHMIN when the step size falls below rounding level, ODE_ERHS when f keeps failing.

@@ -5,6 +5,7 @@
 // The method's published data (Hairer, Norsett & Wanner, Solving ODEs I, II.10): nodes c, matrix a (row 12:
 // the 8th-order weights b; rows 13..15: the dense-output stages), error weights e5 (5th order) and bhat (3rd
 // order: err3 = b - bhat), dense-output weights d.
+// clang-format off: the published tables keep their packed rows
 static const fs_real c_[16] = {
     0, FS_C(0.526001519587677318785587544488e-01), FS_C(0.789002279381515978178381316732e-01),
     FS_C(0.118350341907227396726757197510), FS_C(0.281649658092772603273242802490),
@@ -95,6 +96,7 @@ static const fs_real d_[4][16] = {
      FS_C(-0.43533456590011143754432175058e+2), FS_C(0.96324553959188282948394950600e+2),
      FS_C(-0.39177261675615439165231486172e+2), FS_C(-0.14972683625798562581422125276e+3)},
 };
+// clang-format on
 
 // Step-size control of the DOP853 code: safety factor, step ratio bounds (beta = 0: no PI term).
 #define SAFE FS_C(0.9)
@@ -110,8 +112,7 @@ static int eval(struct ode_dop853 *s, fs_real t, const fs_real *x, fs_real *dx)
 }
 
 // Returns nothing; writes x_old + h sum_j a[row][j] k[j] over j < n_stages into xs.
-static void stage_state(const struct ode_dop853 *s, const fs_real *x_old, fs_real h, int row, int n_stages,
-                        fs_real *xs)
+static void stage_state(const struct ode_dop853 *s, const fs_real *x_old, fs_real h, int row, int n_stages, fs_real *xs)
 {
     size_t i;
     int j;
@@ -125,8 +126,8 @@ static void stage_state(const struct ode_dop853 *s, const fs_real *x_old, fs_rea
 
 // Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts a
 // DOP853 integration at (t, x) and picks the first step size.
-int ode_dop853_init(struct ode_dop853 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx,
-                    fs_real t, const fs_real *x)
+int ode_dop853_init(struct ode_dop853 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
+                    const fs_real *x)
 {
     size_t i;
     int j;
@@ -277,8 +278,7 @@ int ode_dop853_dense(struct ode_dop853 *s, fs_real t, fs_real *x)
         return ODE_ERHS;
     for (i = 0; i < s->n; i++) {
         par = s->rcont[4][i] + th * (s->rcont[5][i] + th1 * (s->rcont[6][i] + th * s->rcont[7][i]));
-        x[i] = s->rcont[0][i]
-             + th * (s->rcont[1][i] + th1 * (s->rcont[2][i] + th * (s->rcont[3][i] + th1 * par)));
+        x[i] = s->rcont[0][i] + th * (s->rcont[1][i] + th1 * (s->rcont[2][i] + th * (s->rcont[3][i] + th1 * par)));
     }
     return ODE_OK;
 }

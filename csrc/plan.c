@@ -25,8 +25,8 @@ bool plan_valid(const struct plan *p)
 {
     // (tf - t0)^3 > 0 as well: a span whose cube underflows would make psi's third derivative divide by 0.
     return fs_isfinite(p->theta1) && fs_isfinite(p->theta2) && fs_isfinite(p->rho1) && fs_isfinite(p->rho2)
-        && fs_isfinite(p->t0) && fs_isfinite(p->tf) && p->rho1 > 0 && p->rho2 > 0 && p->tf > p->t0
-        && fs_pow(p->tf - p->t0, 3) > 0;
+           && fs_isfinite(p->t0) && fs_isfinite(p->tf) && p->rho1 > 0 && p->rho2 > 0 && p->tf > p->t0
+           && fs_pow(p->tf - p->t0, 3) > 0;
 }
 
 // Returns nothing; writes (tf - t0)^k, k = 0..3, as the reference's T**k (pow), or 0 when tf <= t0.

@@ -20,8 +20,8 @@ struct plan {
 // A plan ready to evaluate: the plan and the constants plan_flag needs, filled once by plan_init (caller-owned).
 struct plan_coef {
     struct plan p;
-    fs_real Tk[4];         // (tf - t0)^k, k = 0..3, by pow once here so that plan_flag calls no pow
-    fs_real dtheta, drho;  // theta2 - theta1, rho2 - rho1
+    fs_real Tk[4];                   // (tf - t0)^k, k = 0..3, by pow once here so that plan_flag calls no pow
+    fs_real dtheta, drho;            // theta2 - theta1, rho2 - rho1
     fs_real rest[2][PLAN_FLAG_LEN];  // the flag held up to t0 and from tf on
 };
 

@@ -12,9 +12,9 @@ bool plant_valid(const struct plant *p)
 {
     const struct plant_effects *e = &p->effects;
     return motor_params_valid(&p->motor) && fs_isfinite(p->load) && nonnegative(e->detent_torque)
-        && (e->detent_torque == 0 || e->detent_harmonic >= 1) && nonnegative(e->coulomb_torque)
-        && (e->coulomb_torque == 0 || (fs_isfinite(e->coulomb_speed) && e->coulomb_speed > 0))
-        && nonnegative(e->magnetizing_resistance);
+           && (e->detent_torque == 0 || e->detent_harmonic >= 1) && nonnegative(e->coulomb_torque)
+           && (e->coulomb_torque == 0 || (fs_isfinite(e->coulomb_speed) && e->coulomb_speed > 0))
+           && nonnegative(e->magnetizing_resistance);
 }
 
 // Returns the torque the effects add to the rotor [N m] at speed omega and angle theta.

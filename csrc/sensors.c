@@ -5,10 +5,9 @@
 bool sensors_params_valid(const struct sensors_params *p)
 {
     return fs_isfinite(p->angle_step) && p->angle_step >= 0 && fs_isfinite(p->encoder_offset)
-        && p->encoder_offset >= FS_C(-0.5) && p->encoder_offset < FS_C(0.5) && fs_isfinite(p->current_step)
-        && p->current_step >= 0 && fs_isfinite(p->current_range) && p->current_range > 0
-        && fs_isfinite(p->current_offset[0]) && fs_isfinite(p->current_offset[1])
-        && p->delay <= SENSORS_MAX_DELAY;
+           && p->encoder_offset >= FS_C(-0.5) && p->encoder_offset < FS_C(0.5) && fs_isfinite(p->current_step)
+           && p->current_step >= 0 && fs_isfinite(p->current_range) && p->current_range > 0
+           && fs_isfinite(p->current_offset[0]) && fs_isfinite(p->current_offset[1]) && p->delay <= SENSORS_MAX_DELAY;
 }
 
 // Returns 0, or -1 when p is invalid (s is then left unusable); copies p and resets s.

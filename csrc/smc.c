@@ -67,8 +67,8 @@ int smc_init(struct smc *s, const struct smc_params *p)
             return SMC_EGAINS;
     }
     // v_limit^2 less a margin of 16 rounding units (v0^2 + v1^2 is within 2 of |v|^2), capped below overflow.
-    s->v_limit2_below = p->v_limit < fs_sqrt(FS_REAL_MAX) ? p->v_limit * p->v_limit * (1 - 16 * FS_REAL_EPSILON)
-                                                             : FS_REAL_MAX;
+    s->v_limit2_below =
+        p->v_limit < fs_sqrt(FS_REAL_MAX) ? p->v_limit * p->v_limit * (1 - 16 * FS_REAL_EPSILON) : FS_REAL_MAX;
     smc_reset(s);
     return SMC_PARAMS_OK;
 }
@@ -96,8 +96,8 @@ SMC_INLINE void smc_hold(const struct smc *s, const fs_real y[5], fs_real sN, fs
 
 // Returns the status bits of the unguarded law; writes its voltages (0 V on a fault) and, when w is not NULL,
 // its intermediate values (nr_trig: NULL, or the caller's sin and cos of Nr theta).
-SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig,
-                            fs_real v[2], struct smc_terms *w)
+SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig, fs_real v[2],
+                            struct smc_terms *w)
 {
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
@@ -157,8 +157,8 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
 }
 
 // Returns the status bits of one guarded step (smc_step's contract); w and nr_trig as in smc_law.
-SMC_INLINE uint32_t smc_guarded(struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig,
-                                fs_real v[2], struct smc_terms *w)
+SMC_INLINE uint32_t smc_guarded(struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig, fs_real v[2],
+                                struct smc_terms *w)
 {
     // Law (12)-(14): s1 = rho - rho*, s2 = e'' + a2 e' + a1 e; Gamma1 = rho*' - W1 s1/(|s1| + eps1),
     // Gamma2 = theta*''' - a2 e'' - a1 e' - W2 s2/(|s2| + eps2); v = flat inverse (13) with rho' -> Gamma1,

@@ -31,9 +31,9 @@ enum smc_param_error { SMC_PARAMS_OK = 0, SMC_EMOTOR, SMC_EPLAN, SMC_EGAINS, SMC
 
 // Design constants; the paper's are W1 = W2 = 100, eps1 = eps2 = 0.005, xi = 0.8, wn = 10.
 struct smc_gains {
-    fs_real W1, W2;      // reaching gains [A/s], [rad/s^3], > 0
-    fs_real eps1, eps2;  // boundary-layer widths of s/(|s| + eps), > 0
-    fs_real xi, wn;      // alpha1 = wn^2, alpha2 = 2 xi wn, > 0
+    fs_real W1, W2;        // reaching gains [A/s], [rad/s^3], > 0
+    fs_real eps1, eps2;    // boundary-layer widths of s/(|s| + eps), > 0
+    fs_real xi, wn;        // alpha1 = wn^2, alpha2 = 2 xi wn, > 0
     fs_real hold_damping;  // 0: track the plan to the end; > 0: from tf on, hold the detent of theta2 with this
                            // damping ratio (smc_step)
 };
@@ -42,20 +42,20 @@ struct smc_params {
     struct motor_params motor;  // the controller's model of the motor
     struct plan plan;           // the planned flat outputs
     struct smc_gains gains;
-    int measurement;            // enum smc_measurement
-    fs_real v_limit;            // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
-    fs_real rho_min;            // smallest current magnitude the law acts on [A], > 0
+    int measurement;  // enum smc_measurement
+    fs_real v_limit;  // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
+    fs_real rho_min;  // smallest current magnitude the law acts on [A], > 0
 };
 
 struct smc {
     struct smc_params p;
-    struct plan_coef plan;   // p.plan ready to evaluate (plan_init)
-    fs_real alpha1, alpha2;  // wn^2, 2 xi wn
-    fs_real v_limit2_below;  // just below v_limit^2: va^2 + vb^2 under it needs no hypot
-    fs_real hold_gain;       // 2 hold_damping sqrt(J Nr / (Km rho2)): sin of the hold's torque angle per rad/s
+    struct plan_coef plan;     // p.plan ready to evaluate (plan_init)
+    fs_real alpha1, alpha2;    // wn^2, 2 xi wn
+    fs_real v_limit2_below;    // just below v_limit^2: va^2 + vb^2 under it needs no hypot
+    fs_real hold_gain;         // 2 hold_damping sqrt(J Nr / (Km rho2)): sin of the hold's torque angle per rad/s
     fs_real hold_s2, hold_c2;  // sin and cos of Nr theta2
     fs_real hold_lambda;       // W1 / eps1: the rate of the hold's current loop [1/s]
-    uint32_t status_seen;    // OR of every status since the last reset
+    uint32_t status_seen;      // OR of every status since the last reset
 };
 
 // Which fields of struct smc_terms a step wrote (bits of smc_terms.have).

@@ -7,15 +7,15 @@
 
 extern int check_count, check_failures;
 
-#define CHECK(cond, ...)                                          \
-    do {                                                          \
-        check_count++;                                            \
-        if (!(cond)) {                                            \
-            check_failures++;                                     \
+#define CHECK(cond, ...)                                            \
+    do {                                                            \
+        check_count++;                                              \
+        if (!(cond)) {                                              \
+            check_failures++;                                       \
             printf("FAIL %s:%d: (%s) ", __FILE__, __LINE__, #cond); \
-            printf(__VA_ARGS__);                                  \
-            printf("\n");                                         \
-        }                                                         \
+            printf(__VA_ARGS__);                                    \
+            printf("\n");                                           \
+        }                                                           \
     } while (0)
 
 // Returns |a - b| / |b| (0 when both are 0, infinite when only b is 0).

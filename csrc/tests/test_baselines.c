@@ -10,7 +10,7 @@
 #define TS 1e-4  // control period of the sampled tests [s]; the current bandwidth is 0.3 / TS
 
 static const struct motor_params MOTOR = {8.4, 0.010, 0.05, 3.6e-6, 1e-4, 50};  // the paper's
-static const struct plan PLAN = {0, 0.02, 0.4, 0.4, 0.02, 0.04};              // the paper's move
+static const struct plan PLAN = {0, 0.02, 0.4, 0.4, 0.02, 0.04};                // the paper's move
 
 // Returns nothing; fills p with the paper's motor and move, wc = 0.3 / TS, feedforward, no voltage limit.
 static void microstep_defaults(struct microstep_params *p)
@@ -76,7 +76,8 @@ static int init_checks(void)
     CHECK(microstep_init(&ms, &mq) == MICROSTEP_ELIMITS, "v_limit = NaN");
 
     CHECK(cascade_init(&cs, &cp) == CASCADE_PARAMS_OK, "cascade defaults");
-    CHECK(rel_diff(cs.k_theta, 250) < 1e-14 && rel_diff(cs.k_omega, 1687.5) < 1e-14 && rel_diff(cs.ki_omega_Ts, 42.1875) < 1e-14,
+    CHECK(rel_diff(cs.k_theta, 250) < 1e-14 && rel_diff(cs.k_omega, 1687.5) < 1e-14
+              && rel_diff(cs.ki_omega_Ts, 42.1875) < 1e-14,
           "k_theta %g k_omega %g ki_omega Ts %g", cs.k_theta, cs.k_omega, cs.ki_omega_Ts);
     cq = cp, cq.motor.Nr = 0;
     CHECK(cascade_init(&cs, &cq) == CASCADE_EMOTOR, "Nr = 0");

@@ -132,8 +132,8 @@ static int drive_checks(void)
     double start[2] = {3.36, 0}, v[2] = {30, -12}, inside[2] = {-23.9, 1e-3}, out[2];
     CHECK(drive_init(&d, &p, start) == 0, "drive accepted");
     drive_saturate(&p, v, out);
-    CHECK(out[0] == 24 && fabs(out[1] + 9.6) < 1e-15 && out[0] * v[1] == out[1] * v[0], "direction kept: %g %g",
-          out[0], out[1]);
+    CHECK(out[0] == 24 && fabs(out[1] + 9.6) < 1e-15 && out[0] * v[1] == out[1] * v[0], "direction kept: %g %g", out[0],
+          out[1]);
     drive_saturate(&p, inside, out);
     CHECK(out[0] == inside[0] && out[1] == inside[1], "inside the bus: unchanged");
     p.v_bus = INFINITY;
@@ -295,7 +295,7 @@ static int loop_checks(void)
     acc = plant_acceleration(&plant, &xa[4 * 7]);
     CHECK(rc == SIM_OK && st.rhs_evals == 4 * 4 * N_PERIODS, "ideal parts: rc %d", rc);
     CHECK(ya[5 * 7 + 3] == xa[4 * 7 + 3] && ya[5 * 7 + 2] == xa[4 * 7 + 2] && ya[5 * 7 + 4] == acc
-          && acc != motor_acceleration(&plant.motor, &xa[4 * 7], plant.load),
+              && acc != motor_acceleration(&plant.motor, &xa[4 * 7], plant.load),
           "ideal parts: the controller sees x and the acceleration with the detent");
     plant.effects.detent_torque = 0;
     rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xb, vb, NULL, NULL, &st);
@@ -309,8 +309,8 @@ static int loop_checks(void)
     CHECK(sampled_init(&s, &p) == SIM_OK, "drive loop accepted");
     rc = sampled_run(&s, &cc, &plant, x0, N_PERIODS, NULL, xa, va, ya, status, &st);
     err = max_error(&c, xa, 400, 800);
-    CHECK(rc == SIM_OK && err < count && st.controller_status == SMC_OK, "20 kHz drive: move error %.3g counts, status %u",
-          err / count, st.controller_status);
+    CHECK(rc == SIM_OK && err < count && st.controller_status == SMC_OK,
+          "20 kHz drive: move error %.3g counts, status %u", err / count, st.controller_status);
     for (k = 0, same = 1; k <= N_PERIODS; k++)
         same &= fabs(va[2 * k]) <= 24 && fabs(va[2 * k + 1]) <= 24 && status[k] == SMC_OK;
     CHECK(same, "20 kHz drive: every voltage within the bus, no fault");

@@ -103,8 +103,8 @@ static int flat_checks(void)
         CHECK(flat_to_state(&PAPER, f, load, x, v) == FLAT_OK, "f2s at sample %d", i);
         CHECK(state_to_flat(&PAPER, x, v, load, g) == FLAT_OK, "s2f at sample %d", i);
         for (k = 0; k < PLAN_FLAG_LEN; k++)
-            CHECK(fabs(g[k] - f[k]) <= 1e-9 * (1 + fabs(f[k])), "round trip sample %d component %d: %.17g vs %.17g",
-                  i, k, g[k], f[k]);
+            CHECK(fabs(g[k] - f[k]) <= 1e-9 * (1 + fabs(f[k])), "round trip sample %d component %d: %.17g vs %.17g", i,
+                  k, g[k], f[k]);
         // The model under the flat voltages moves exactly as planned: omega' = theta'', theta' = omega.
         motor_rhs(&PAPER, x, v, load, dx);
         CHECK(fabs(dx[2] - f[PLAN_DDTHETA]) <= 1e-9 * (1 + fabs(f[PLAN_DDTHETA])), "omega' %.17g vs %.17g", dx[2],

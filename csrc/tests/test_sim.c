@@ -130,7 +130,8 @@ static int sampled_checks(void)
         diff[j] = 0;
         for (k = 0; k <= n; k++)
             diff[j] = fmax(diff[j], fabs(xs_out[4 * k + 3] - x_out[4 * k + 3]));
-        printf("  sampled Ts = %g s, 4 RK4 substeps: max |theta_sampled - theta_continuous| %.3g rad\n", periods[j], diff[j]);
+        printf("  sampled Ts = %g s, 4 RK4 substeps: max |theta_sampled - theta_continuous| %.3g rad\n", periods[j],
+               diff[j]);
     }
     // The ZOH error of the paper's law is large (8.4e-3 rad at Ts = 10 us; docs/c-core.md) but shrinks with Ts.
     CHECK(diff[2] < diff[1] && diff[1] < diff[0] && diff[2] < 1e-2, "ZOH error shrinks with Ts: %g %g %g", diff[0],

@@ -71,7 +71,8 @@ static int law_checks(void)
     y[0] = 0.5, y[1] = 0, y[2] = 0, y[3] = 0, y[4] = 0;
     smc_step(&s, 0.0, y, v);
     // s1 = 0.1, s2 = 0: va = R rho + L Gamma1 = 8.4 * 0.5 - 0.01 * 100 * 0.1 / (0.1 + 0.005), vb = 0.
-    CHECK(fabs(v[0] - (4.2 - 0.1 / 0.105)) < 1e-12 && fabs(v[1]) < 1e-12, "rho above plan: v (%.17g, %.17g)", v[0], v[1]);
+    CHECK(fabs(v[0] - (4.2 - 0.1 / 0.105)) < 1e-12 && fabs(v[1]) < 1e-12, "rho above plan: v (%.17g, %.17g)", v[0],
+          v[1]);
     return 0;
 }
 
@@ -84,8 +85,8 @@ static int guard_checks(void)
     double y[5], v[2], v2[2];
     const double cases[][6] = {
         // t, ia, ib, omega, theta, ddtheta -> expected status
-        {nan, 0.4, 0, 0, 0, 0},  {0, nan, 0, 0, 0, 0},  {0, 0.4, inf, 0, 0, 0}, {0, 0.4, 0, -inf, 0, 0},
-        {0, 0.4, 0, 0, nan, 0},  {0, 0.4, 0, 0, 0, inf}, {inf, 0.4, 0, 0, 0, 0},
+        {nan, 0.4, 0, 0, 0, 0}, {0, nan, 0, 0, 0, 0},   {0, 0.4, inf, 0, 0, 0}, {0, 0.4, 0, -inf, 0, 0},
+        {0, 0.4, 0, 0, nan, 0}, {0, 0.4, 0, 0, 0, inf}, {inf, 0.4, 0, 0, 0, 0},
     };
     uint32_t st;
     size_t i;
@@ -108,12 +109,13 @@ static int guard_checks(void)
     CHECK(smc_step(&s, 0.03, y, v) == SMC_SQRT && v[0] == 0 && v[1] == 0, "out-of-reach torque -> SMC_SQRT, 0 V");
     y[0] = 200, y[4] = 0;  // 200 A: R rho alone is 1680 V
     st = smc_step(&s, 0.03, y, v);
-    CHECK(st == SMC_SATURATED && bounded(v, 1e3) && fabs(hypot(v[0], v[1]) - 1e3) < 1e-9, "saturated: %u |v| %.17g",
-          st, hypot(v[0], v[1]));
+    CHECK(st == SMC_SATURATED && bounded(v, 1e3) && fabs(hypot(v[0], v[1]) - 1e3) < 1e-9, "saturated: %u |v| %.17g", st,
+          hypot(v[0], v[1]));
     p.v_limit = 1e300;  // the same step unsaturated keeps the direction of the saturated one
     smc_init(&s, &p);
     CHECK(smc_step(&s, 0.03, y, v2) == SMC_OK, "unsaturated with a huge limit");
-    CHECK(fabs(v[0] / 1e3 - v2[0] / hypot(v2[0], v2[1])) < 1e-12 && fabs(v[1] / 1e3 - v2[1] / hypot(v2[0], v2[1])) < 1e-12,
+    CHECK(fabs(v[0] / 1e3 - v2[0] / hypot(v2[0], v2[1])) < 1e-12
+              && fabs(v[1] / 1e3 - v2[1] / hypot(v2[0], v2[1])) < 1e-12,
           "saturation keeps the direction");
     // Huge finite inputs: overflow inside the law is caught, never passed on.
     smc_params_default(&p);
@@ -123,7 +125,8 @@ static int guard_checks(void)
         y[3] = (i & 8) ? big : 0.01, y[4] = (i & 16) ? -big : 3;
         st = smc_step(&s, (i & 1) ? -big : 0.03, y, v);
         CHECK(bounded(v, 1e3), "huge case %zu: v (%g, %g)", i, v[0], v[1]);
-        CHECK((st & ~(uint32_t)SMC_SATURATED) == 0 || (v[0] == 0 && v[1] == 0), "huge case %zu: fault %u gives 0 V", i, st);
+        CHECK((st & ~(uint32_t)SMC_SATURATED) == 0 || (v[0] == 0 && v[1] == 0), "huge case %zu: fault %u gives 0 V", i,
+              st);
     }
     return 0;
 }
@@ -160,7 +163,8 @@ static int terms_checks(void)
                       && fabs(w.sphi - y[0] / rho) <= 1e-15 && fabs(w.cphi - y[1] / rho) <= 1e-15
                       && fabs(w.snr - trig[0]) <= 1e-15 && fabs(w.cnr - trig[1]) <= 1e-15
                       && fabs(w.acc - acc) <= 1e-12 * fabs(acc) && fabs(w.s2 - s2) <= 1e-12 * fabs(s2),
-                  "mode %d trig %d: terms rho %.17g s1 %.17g acc %.17g s2 %.17g", mode, given, w.rho, w.s1, w.acc, w.s2);
+                  "mode %d trig %d: terms rho %.17g s1 %.17g acc %.17g s2 %.17g", mode, given, w.rho, w.s1, w.acc,
+                  w.s2);
         }
     }
     // Faults before the law: no flag for a non-finite input, the flag only when rho < rho_min.

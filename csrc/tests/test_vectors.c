@@ -44,8 +44,8 @@ static double compare(const char *kind, int line, const double *c, const double 
     for (k = 0; k < n; k++) {
         r = rel_diff(c[k], p[k]);
         worst = r > worst ? r : worst;
-        CHECK(fabs(c[k] - p[k]) <= TOL * fabs(p[k]), "%s line %d component %d: C %.17g vs Python %.17g", kind, line,
-              k, c[k], p[k]);
+        CHECK(fabs(c[k] - p[k]) <= TOL * fabs(p[k]), "%s line %d component %d: C %.17g vs Python %.17g", kind, line, k,
+              c[k], p[k]);
     }
     return worst;
 }
@@ -166,7 +166,8 @@ int test_vectors(const char *path)
         } else if (strcmp(kind, "fv") == 0 && n == 16) {
             struct motor_params m;
             motor_from(a, &m);
-            CHECK(flat_voltages(&m, a[6], a[7], a[8], a[9], a[10], a[11], a[12], a[13], out) == FLAT_OK, "line %d", lineno);
+            CHECK(flat_voltages(&m, a[6], a[7], a[8], a[9], a[10], a[11], a[12], a[13], out) == FLAT_OK, "line %d",
+                  lineno);
             r = compare(kind, lineno, out, a + 14, 2), k = 1;
         } else if (strcmp(kind, "f2s") == 0 && n == 19) {
             struct motor_params m;
