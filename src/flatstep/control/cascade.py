@@ -28,14 +28,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_positive
 from ..model.motor import MotorParams
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, pi_integrate, pi_output
 
 
@@ -67,39 +67,51 @@ class CascadeGains:
         return 0.75 * self.position_bandwidth**2
 
     def as_dict(self) -> dict[str, float]:
+        """The bandwidths, the decoupling switch and the loop gains they give, for JSON."""
         return {**asdict(self), "k_theta": self.k_theta, "k_omega": self.k_omega, "ki_omega": self.ki_omega}
 
 
-class CascadeFOC(BaselineController):
+class CascadeFOC(BaselineController[CascadeGains]):
     """Cascaded P-PI position-velocity loop over d-q PI current loops, with feedforward from the plan.
 
     Parameters
     ----------
-    motor : the controller's nominal model.
-    plan : the move.
-    gains : :class:`CascadeGains`.
-    control_period : Ts [s].
-    measurement : where speed and angle come from (``"observer"``, ``"model"``: encoder and its difference,
+    motor : MotorParams
+        The controller's nominal model.
+    plan : RestToRest
+        The move.
+    gains : CascadeGains
+        The bandwidths of the loops.
+    control_period : float
+        Ts [s].
+    measurement : str
+        Where speed and angle come from (``"observer"``, ``"model"``: encoder and its difference,
         ``"ideal"``), as for :class:`~flatstep.control.smc.FlatnessSMC`; the acceleration is not used.
-    v_limit : the bus voltage its anti-windup knows [V].
+    v_limit : float
+        The bus voltage its anti-windup knows [V].
     """
 
     #: The C twin: csrc/cascade.h.
     c_name = "cascade"
+    #: Ts [s]: the cascade is a sampled law, never continuous (the base class allows ``None``).
+    control_period: float
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: CascadeGains, *, control_period: float,
-                 measurement: str = "observer", v_limit: float = math.inf):
+                 measurement: str = "observer", v_limit: float = math.inf) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
                          v_limit=v_limit)
         self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
         self.pi_omega = PIGains(gains.k_omega, gains.ki_omega)
 
     def initial_state(self) -> NDArray[np.float64]:
-        """Integrals (velocity loop [rad/s^2], d and q current loops [V]), all zero: the loops start from
-        the plan's start equilibrium and bring its d current to 0."""
+        """Integrals (velocity loop [rad/s^2], d and q current loops [V]), all zero.
+
+        The loops start from the plan's start equilibrium and bring its d current to 0.
+        """
         return np.zeros(3)
 
-    def step(self, state: Optional[ArrayLike], measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def step(self, state: Optional[ArrayLike], measurement: ArrayLike,
+             t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """One period of the cascade; ``measurement = (ia, ib, omega, theta, ddtheta)``."""
         m, g, Ts = self.motor, self.gains, self.control_period
         integral = self.initial_state() if state is None else np.asarray(state, dtype=float)
@@ -120,7 +132,7 @@ class CascadeFOC(BaselineController):
                               pi_integrate(self.pi, e_i, integral[1:], Ts, hold)])
         return v, new
 
-    def c_params(self) -> dict:
+    def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct cascade_params`` (csrc/cascade.h)."""
         g = self.gains
         return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),

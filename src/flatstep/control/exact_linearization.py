@@ -27,21 +27,23 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_finite, check_positive
 from ..model.motor import MotorParams
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_finite, check_positive
 from .loops import BaselineController, inverse_park, park
 
 
 @dataclass(frozen=True)
 class LinearizationGains:
-    r"""Poles of the linearized loops [rad/s]: the angle error's
-    :math:`(s + p_3)(s^2 + 2\xi\omega_n s + \omega_n^2)` and the d current's :math:`s + p_d`."""
+    r"""Poles of the linearized loops [rad/s].
+
+    The angle error's :math:`(s + p_3)(s^2 + 2\xi\omega_n s + \omega_n^2)` and the d current's :math:`s + p_d`.
+    """
 
     wn: float
     xi: float
@@ -63,27 +65,36 @@ class LinearizationGains:
         return self.p3 * a1, a1 + self.p3 * a2, a2 + self.p3
 
     def as_dict(self) -> dict[str, float]:
+        """The poles and the gains ``k0, k1, k2`` they give, for JSON."""
         k0, k1, k2 = self.k
         return {**asdict(self), "k0": k0, "k1": k1, "k2": k2}
 
 
-class ExactLinearization(BaselineController):
+class ExactLinearization(BaselineController[LinearizationGains]):
     """Zribi-Chiasson exact linearization in d-q with pole placement on theta and i_d.
 
     Parameters
     ----------
-    motor : the controller's nominal model.
-    plan : the move (its theta*, theta*', theta*'', theta*''').
-    gains : :class:`LinearizationGains`.
-    measurement : where theta'' comes from, as for :class:`~flatstep.control.smc.FlatnessSMC`.
-    control_period : accepted for a uniform interface; the law is static.
+    motor : MotorParams
+        The controller's nominal model.
+    plan : RestToRest
+        The move (its theta*, theta*', theta*'', theta*''').
+    gains : LinearizationGains
+        The poles of the linearized loops.
+    measurement : str
+        Where theta'' comes from, as for :class:`~flatstep.control.smc.FlatnessSMC`.
+    control_period : float, optional
+        Accepted for a uniform interface; the law is static.
+    v_limit : float
+        The bus voltage [V]; the C twin only flags saturation against it (the law is static, no windup).
     """
 
     #: The C twin: csrc/exact_linearization.h.
     c_name = "exact_linearization"
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: LinearizationGains, *,
-                 measurement: str = "observer", control_period: Optional[float] = None, v_limit: float = math.inf):
+                 measurement: str = "observer", control_period: Optional[float] = None,
+                 v_limit: float = math.inf) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
                          v_limit=v_limit)
 
@@ -105,7 +116,7 @@ class ExactLinearization(BaselineController):
         y = np.asarray(measurement, dtype=float)
         return self.voltages(t, y[:4], None if self.measurement == "model" else y[4]), state
 
-    def c_params(self) -> dict:
+    def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct exact_linearization_params`` (csrc/exact_linearization.h)."""
         g = self.gains
         return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),

@@ -31,14 +31,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_positive
 from ..model.motor import MotorParams
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, pi_integrate, pi_output
 
 
@@ -54,35 +54,46 @@ class MicrostepGains:
                            check_positive("current_bandwidth", self.current_bandwidth, unit=" rad/s"))
 
     def as_dict(self) -> dict[str, float]:
+        """The bandwidth and the feedforward switch, for JSON."""
         return {"current_bandwidth": self.current_bandwidth, "feedforward": self.feedforward}
 
 
-class Microstepping(BaselineController):
-    """Open-loop microstepping driver following a :class:`~flatstep.plan.rest_to_rest.RestToRest` plan.
+class Microstepping(BaselineController[MicrostepGains]):
+    r"""Open-loop microstepping driver following a :class:`~flatstep.plan.rest_to_rest.RestToRest` plan.
 
     Parameters
     ----------
-    motor : the driver's nominal model (only ``R``, ``L`` and ``Nr`` are used).
-    plan : the move; its :math:`\\theta^*(t)` is the commanded angle, its :math:`\\rho^*(t)` the run current.
-    gains : :class:`MicrostepGains`.
-    control_period : Ts [s] of the current loops.
-    measurement : accepted for the drive's bookkeeping (which speed/acceleration the loop computes); the
-        driver reads only the currents.
-    v_limit : the bus voltage its anti-windup knows [V].
+    motor : MotorParams
+        The driver's nominal model (only ``R``, ``L`` and ``Nr`` are used).
+    plan : RestToRest
+        The move; its :math:`\theta^*(t)` is the commanded angle, its :math:`\rho^*(t)` the run current.
+    gains : MicrostepGains
+        The current-loop bandwidth and the feedforward switch.
+    control_period : float
+        Ts [s] of the current loops.
+    measurement : str
+        Accepted for the drive's bookkeeping (which speed/acceleration the loop computes); the driver reads
+        only the currents.
+    v_limit : float
+        The bus voltage its anti-windup knows [V].
     """
 
     #: The C twin: csrc/microstep.h.
     c_name = "microstep"
+    #: Ts [s] of the current loops: the driver is a sampled law, never continuous (the base class allows ``None``).
+    control_period: float
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: MicrostepGains, *, control_period: float,
-                 measurement: str = "model", v_limit: float = math.inf):
+                 measurement: str = "model", v_limit: float = math.inf) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
                          v_limit=v_limit)
         self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
 
     def current_reference(self, t: ArrayLike, order: int = 0) -> NDArray[np.float64]:
-        r"""``(ia*, ib*) = rho* (cos N_r theta*, sin N_r theta*)`` at times ``t`` (vectorized), or with
-        ``order=1`` its time derivative."""
+        """The current reference ``(ia*, ib*) = rho* (cos N_r theta*, sin N_r theta*)`` at times ``t``.
+
+        Vectorized; with ``order=1``, its time derivative.
+        """
         ref = self.plan.flag(t)
         p = self.motor.Nr * ref.theta
         c, s = np.cos(p), np.sin(p)
@@ -92,13 +103,16 @@ class Microstepping(BaselineController):
         return np.array([ref.drho * c - w * s, ref.drho * s + w * c])
 
     def initial_state(self) -> NDArray[np.float64]:
-        """The two PI integrals: zero with the feedforward, else the resistive voltage of the start current
-        (a driver at rest)."""
+        """The two PI integrals at the start of a run.
+
+        Zero with the feedforward, else the resistive voltage of the start current (a driver at rest).
+        """
         if self.gains.feedforward:
             return np.zeros(2)
         return self.motor.R * self.current_reference(self.plan.t0 - 1.0)
 
-    def step(self, state: Optional[ArrayLike], measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def step(self, state: Optional[ArrayLike], measurement: ArrayLike,
+             t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(ia*, ib*) - (ia, ib)`` through the PI loops; ``measurement = (ia, ib, omega, theta, ddtheta)``."""
         integral = self.initial_state() if state is None else np.asarray(state, dtype=float)
         y = np.asarray(measurement, dtype=float)
@@ -111,7 +125,7 @@ class Microstepping(BaselineController):
         hold = bus_scale(v, self.v_limit) < 1.0
         return v, pi_integrate(self.pi, error, integral, self.control_period, hold)
 
-    def c_params(self) -> dict:
+    def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct microstep_params`` (csrc/microstep.h)."""
         return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
                     gains=dict(current_bandwidth=self.gains.current_bandwidth, feedforward=self.gains.feedforward),

@@ -28,7 +28,7 @@ error then no longer feeds an integrator, so the quantization cannot drive a lim
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -67,15 +67,16 @@ class SMCGains:
 
     @property
     def alpha1(self) -> float:
-        """:math:`\\alpha_1 = \\omega_n^2`."""
+        r""":math:`\alpha_1 = \omega_n^2`."""
         return self.wn**2
 
     @property
     def alpha2(self) -> float:
-        """:math:`\\alpha_2 = 2\\xi\\omega_n`."""
+        r""":math:`\alpha_2 = 2\xi\omega_n`."""
         return 2 * self.xi * self.wn
 
     def as_dict(self) -> dict[str, float]:
+        """The design constants by name, for JSON."""
         return asdict(self)
 
 
@@ -84,11 +85,15 @@ class FlatnessSMC:
 
     Parameters
     ----------
-    motor : the controller's model of the motor (may differ from the plant's).
-    plan : the planned flat-output trajectory.
-    gains : :class:`SMCGains`.
-    measurement : where theta'' comes from. ``"ideal"``: the true acceleration, passed by the simulator
-        (the paper's assumption); ``"model"``: computed from the measured state by the zero-load model,
+    motor : MotorParams
+        The controller's model of the motor (may differ from the plant's).
+    plan : RestToRest
+        The planned flat-output trajectory.
+    gains : SMCGains
+        The design constants (default: the paper's).
+    measurement : str
+        Where theta'' comes from. ``"ideal"``: the true acceleration, passed by the simulator (the paper's
+        assumption); ``"model"``: computed from the measured state by the zero-load model,
         ``J theta'' = Km (ib cos Nr theta - ia sin Nr theta) - B omega``; ``"observer"``: the estimate of a
         :class:`~flatstep.loop.observers.Observer`, passed by the simulator like the ideal one.
     """
@@ -99,7 +104,7 @@ class FlatnessSMC:
     c_v_limit, c_rho_min = 1e3, 1e-6
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = SMCGains(),
-                 measurement: str = "ideal"):
+                 measurement: str = "ideal") -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
@@ -117,7 +122,8 @@ class FlatnessSMC:
             return np.asarray(ddtheta, dtype=float)
         return motor_acceleration(x, self.motor)
 
-    def sliding_variables(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None):
+    def sliding_variables(self, t: ArrayLike, x: ArrayLike,
+                          ddtheta: Optional[ArrayLike] = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Return ``(s1, s2)`` of eq. (12) at times ``t`` for states ``x`` (vectorized)."""
         ia, ib, omega, theta = np.asarray(x, dtype=float)
         ref = self.plan.flag(t)
@@ -145,9 +151,10 @@ class FlatnessSMC:
 
     def hold_currents(self, omega: ArrayLike) -> NDArray[np.float64]:
         """The detent hold's current vector ``(ia*, ib*)`` at the measured speed (module docstring; vectorized)."""
-        m, rho2, Nr = self.motor, self.plan.rho2, self.motor.Nr
+        m, rho2, Nr, zeta = self.motor, self.plan.rho2, self.motor.Nr, self.gains.hold_damping
+        assert zeta is not None, "hold_currents needs gains.hold_damping (the hold is off without it)"
         # sin p = s, cos p by the angle addition on N_r theta2, as csrc/smc.c computes it
-        s = np.clip(-2.0 * self.gains.hold_damping * np.sqrt(m.J * Nr / (m.Km * rho2)) * np.asarray(omega), -1.0, 1.0)
+        s = np.clip(-2.0 * zeta * np.sqrt(m.J * Nr / (m.Km * rho2)) * np.asarray(omega), -1.0, 1.0)
         c = np.sqrt(1.0 - s * s)
         s2, c2 = np.sin(Nr * self.plan.theta2), np.cos(Nr * self.plan.theta2)
         return rho2 * np.array([c2 * c - s2 * s, s2 * c + c2 * s])
@@ -161,7 +168,7 @@ class FlatnessSMC:
                          m.R * ib_ref + m.L * lam * (ib_ref - ib) + emf * np.cos(Nr_theta)])
 
     def initial_state(self) -> None:
-        """This law is static: no state between steps."""
+        """Return ``None``: the law is static, no state between steps."""
         return None
 
     def step(self, state: None, measurement: ArrayLike, t: float) -> tuple[NDArray[np.float64], None]:
@@ -172,7 +179,7 @@ class FlatnessSMC:
         y = np.asarray(measurement, dtype=float)
         return self.voltages(t, y[:4], None if self.measurement == "model" else y[4]), state
 
-    def c_params(self) -> dict:
+    def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct smc_params`` (csrc/smc.h) for this controller."""
         g = self.gains
         return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),

@@ -12,9 +12,7 @@ from typing import Any, Callable, Optional, TypeVar
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
-    # mypy checks for Python 3.10 (pyproject.toml), where this branch is taken, but tomli is only installed
-    # there; unused-ignore keeps the ignore quiet where tomli is installed.
-    import tomli as tomllib  # type: ignore[import-not-found, unused-ignore]
+    import tomli as tomllib
 
 from ..control.design import design_gains
 from ..control.smc import SMCGains
