@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -124,6 +125,6 @@ class Drive:
         dur, lv = self.pwm_period(v, i, Ts / n)
         return np.tile(np.array(dur), n), np.tile(np.array(lv), (n, 1))
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
         """The parameters as a dict, for a result's metadata."""
         return asdict(self)

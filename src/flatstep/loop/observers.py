@@ -3,14 +3,15 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 from scipy.signal import place_poles
 
-from ..validate import check_positive
 from ..model.motor import MotorParams
+from ..validate import check_positive
 
 
 @dataclass(frozen=True)
@@ -35,22 +36,28 @@ class Observer:
     def __post_init__(self) -> None:
         check_positive("bandwidth", self.bandwidth, unit=" rad/s")
         if self.load_states not in (0, 1, 2):
-            raise ValueError(f"load_states={self.load_states!r} must be 0 (speed only), 1 (constant load) or 2 (load ramp)")
+            raise ValueError(f"load_states={self.load_states!r} must be 0 (speed only), 1 (constant load) "
+                             "or 2 (load ramp)")
 
     @property
     def order(self) -> int:
+        """The estimate's length: angle and speed, and the ``load_states``."""
         return 2 + self.load_states
 
-    def matrices(self, motor: MotorParams, Ts: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def matrices(self, motor: MotorParams,
+                 Ts: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(Ad, Bd, L)``: the discretized model and the correction gain (current-estimator form)."""
         return _matrices(self, motor.J, motor.B, float(Ts))
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
+        """The bandwidth and the load states, for a result's metadata."""
         return asdict(self)
 
 
 @lru_cache(maxsize=64)
-def _matrices(obs: Observer, J: float, B: float, Ts: float):
+def _matrices(obs: Observer, J: float, B: float,
+              Ts: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The matrices of :meth:`Observer.matrices` for the motor's ``J`` and ``B`` (cached: hashable arguments)."""
     check_positive("control_period", Ts, unit=" s")
     n = obs.order
     A = np.zeros((n, n))

@@ -22,19 +22,22 @@ from dataclasses import dataclass
 from typing import Any, Optional
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
-from .drive import Drive
+from ..control.protocol import Controller
 from ..model.motor import MotorParams, acceleration, torque
-from .observers import Observer
 from ..model.plant import PlantEffects, plant_acceleration, plant_rhs
-from .sensors import Sensors
 from ..validate import check_integer, check_positive
+from .drive import Drive
+from .observers import Observer
+from .sensors import Sensors
 
 
 @dataclass(frozen=True)
 class DriveLoop:
-    """Sampled control: the control period, the plant's integration, and the parts of the drive around the
-    controller (``None`` parts are ideal).
+    """Sampled control: the control period, the plant's integration, and the parts of the drive.
+
+    The parts around the controller are the drive, the sensors and the observer; ``None`` parts are ideal.
 
     Parameters
     ----------
@@ -62,7 +65,8 @@ class DriveLoop:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "control_period", check_positive("control_period", self.control_period, unit=" s"))
-        object.__setattr__(self, "substeps", check_integer("substeps", self.substeps, why="RK4 steps per control period"))
+        object.__setattr__(self, "substeps",
+                           check_integer("substeps", self.substeps, why="RK4 steps per control period"))
         if not isinstance(self.compute_delay, (bool, np.bool_)):
             raise ValueError(f"compute_delay={self.compute_delay!r} must be True or False")
         for name, kind in (("drive", Drive), ("sensors", Sensors), ("observer", Observer)):
@@ -83,7 +87,9 @@ class DriveLoop:
         return out
 
 
-def _rk4(x, v, h, motor, load, effects=None):
+def _rk4(x: NDArray[np.float64], v: ArrayLike, h: float, motor: MotorParams, load: float,
+         effects: Optional[PlantEffects] = None) -> NDArray[np.float64]:
+    """The plant's state after one classical RK4 step of length ``h`` under the constant voltages ``v``."""
     f = lambda y: plant_rhs(y, v, motor, load, effects)  # noqa: E731  (load constant over the period)
     k1 = f(x)
     k2 = f(x + 0.5 * h * k1)
@@ -92,16 +98,35 @@ def _rk4(x, v, h, motor, load, effects=None):
     return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
-def run_reference(plant: MotorParams, controller, loop: DriveLoop, x0: np.ndarray, load: float,
-                  n_periods: int, effects: Optional[PlantEffects] = None) -> dict[str, np.ndarray]:
-    """Run ``n_periods`` control periods; returns the time series at the control instants: ``t``, the plant
-    state ``x`` (4, n+1), the applied voltages ``v`` (2, n+1, as averaged over the following period) and
-    what the controller saw, ``y`` (5, n+1), and the times at which the law faulted (``faults``; the
-    drive then applied 0 V for that period).
+def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x0: ArrayLike, load: float,
+                  n_periods: int, effects: Optional[PlantEffects] = None) -> dict[str, NDArray[np.float64]]:
+    """Run ``n_periods`` control periods of the drive loop, one period at a time.
 
-    ``controller`` is any object with ``motor`` (its nominal model, also the observer's) and
-    ``step(state, y, t) -> (v, new_state)``, and optionally ``initial_state()``; ``effects`` act on the
-    plant only."""
+    Parameters
+    ----------
+    plant : MotorParams
+        The motor being driven.
+    controller : Controller
+        Any object with ``motor`` (its nominal model, also the observer's) and
+        ``step(state, y, t) -> (v, new_state)``, and optionally ``initial_state()``.
+    loop : DriveLoop
+        The control period, the plant's integration and the parts of the drive.
+    x0 : array_like
+        The plant's start state (ia, ib, omega, theta).
+    load : float
+        The constant load torque [N m].
+    n_periods : int
+        How many control periods to run.
+    effects : PlantEffects, optional
+        Effects acting on the plant only.
+
+    Returns
+    -------
+    dict of str to ndarray
+        The time series at the control instants: ``t``, the plant state ``x`` (4, n+1), the applied voltages
+        ``v`` (2, n+1, as averaged over the following period), what the controller saw, ``y`` (5, n+1), and the
+        times at which the law faulted (``faults``; the drive then applied 0 V for that period).
+    """
     Ts, model = loop.control_period, controller.motor
     sensors, drive, observer = loop.sensors, loop.drive, loop.observer
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
@@ -109,10 +134,11 @@ def run_reference(plant: MotorParams, controller, loop: DriveLoop, x0: np.ndarra
         Ad, Bd, Lc = observer.matrices(model, Ts)
     X, V, Y = np.empty((4, n_periods + 1)), np.zeros((2, n_periods + 1)), np.empty((5, n_periods + 1))
     x = np.array(x0, dtype=float)
-    history = []  # past readings (theta_m, ia_m, ib_m) for the measurement delay
-    xh = None
+    history: list[tuple[float, float, float]] = []  # past readings (theta_m, ia_m, ib_m) for the measurement delay
+    xh: Optional[NDArray[np.float64]] = None
     v_hold = model.R * x[:2]  # what the bridge applies before the first command (the start equilibrium)
-    theta_prev = None
+    theta_prev: Optional[float] = None
+    y: tuple[float | NDArray[np.float64], ...]
     faults: list[float] = []
     ctrl_state = controller.initial_state() if hasattr(controller, "initial_state") else None
     for k in range(n_periods + 1):
@@ -151,7 +177,7 @@ def run_reference(plant: MotorParams, controller, loop: DriveLoop, x0: np.ndarra
             break
         if drive is not None and drive.pwm == "switched":
             durations, levels = drive.pwm_segments(v_apply, x[:2], Ts)
-            for h, lv in zip(durations, levels):
+            for h, lv in zip(durations, levels, strict=True):  # one level per segment
                 x = _rk4(x, lv, h, plant, load, effects)
         else:
             for _ in range(loop.substeps):
@@ -159,5 +185,6 @@ def run_reference(plant: MotorParams, controller, loop: DriveLoop, x0: np.ndarra
         if not np.all(np.isfinite(x)):
             raise RuntimeError(f"the plant state became non-finite at t={t + Ts:.6g} s")
         if observer is not None:
+            assert xh is not None, "the observer corrects its estimate every period"
             xh = Ad @ xh + Bd * Te
     return {"t": np.arange(n_periods + 1) * Ts, "x": X, "v": V, "y": Y, "faults": np.array(faults)}

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -17,14 +17,23 @@ class Sensors:
 
     Parameters
     ----------
-    encoder_counts : counts per revolution; the angle is read as the centre of its count,
+    encoder_counts : int, optional
+        Counts per revolution; the angle is read as the centre of its count,
         ``q round(theta/q - offset) + q offset`` with ``q = 2 pi / counts``; ``None``: exact angle.
-    encoder_offset : where the count edges sit, as a fraction of a count in [-0.5, 0.5).
-    current_bits, current_range : ADC resolution over ``[-current_range, current_range]`` A; ``None``: exact.
-    current_offset : constant offsets (ia, ib) added before conversion [A].
-    current_noise : standard deviation of the white noise added to each phase current [A].
-    delay : measurement delay in control periods (the controller sees the samples of ``delay`` periods ago).
-    seed : seed of the noise sequence (reproducible runs).
+    encoder_offset : float
+        Where the count edges sit, as a fraction of a count in [-0.5, 0.5).
+    current_bits : int, optional
+        ADC resolution over ``[-current_range, current_range]`` A; ``None``: exact currents.
+    current_range : float
+        The ADC's full scale [A].
+    current_offset : tuple of float
+        Constant offsets (ia, ib) added before conversion [A].
+    current_noise : float
+        Standard deviation of the white noise added to each phase current [A].
+    delay : int
+        Measurement delay in control periods (the controller sees the samples of ``delay`` periods ago).
+    seed : int
+        Seed of the noise sequence (reproducible runs).
     """
 
     encoder_counts: Optional[int] = 16384
@@ -46,7 +55,8 @@ class Sensors:
         check_positive("current_range", self.current_range, unit=" A")
         if len(self.current_offset) != 2:
             raise ValueError(f"current_offset={self.current_offset!r} must be two offsets (ia, ib) in A")
-        object.__setattr__(self, "current_offset", tuple(check_finite("current_offset", o) for o in self.current_offset))
+        object.__setattr__(self, "current_offset",
+                           tuple(check_finite("current_offset", o) for o in self.current_offset))
         check_nonnegative("current_noise", self.current_noise, unit=" A")
 
     @property
@@ -69,11 +79,12 @@ class Sensors:
 
     def read_currents(self, i: ArrayLike, noise: ArrayLike = 0.0) -> NDArray[np.float64]:
         """ADC reading of the phase currents ``i`` (2, ...) with the given noise sample(s) added."""
-        i = np.asarray(i, dtype=float) + np.asarray(self.current_offset).reshape((2,) + (1,) * (np.ndim(i) - 1)) + noise
+        offset = np.asarray(self.current_offset).reshape((2,) + (1,) * (np.ndim(i) - 1))
+        i_in = np.asarray(i, dtype=float) + offset + noise
         q = self.current_step
         if q == 0.0:
-            return i
-        return np.clip(q * np.round(i / q), -self.current_range, self.current_range)
+            return i_in
+        return np.clip(q * np.round(i_in / q), -self.current_range, self.current_range)
 
     def noise(self, n: int) -> NDArray[np.float64]:
         """The (n, 2) current-noise sequence of a run, from ``seed``."""
@@ -81,5 +92,6 @@ class Sensors:
             return np.zeros((n, 2))
         return self.current_noise * np.random.default_rng(self.seed).standard_normal((n, 2))
 
-    def as_dict(self) -> dict:
+    def as_dict(self) -> dict[str, Any]:
+        """The parameters as a dict, for a result's metadata."""
         return asdict(self)
