@@ -87,6 +87,7 @@ def test_bad_arguments(kwargs, match):
     (dict(loop=fs.DriveLoop(5e-5, drive=Drive(v_bus=24.0))), True),
     (dict(controller_type="microstep"), True),
     (dict(plant=fs.Plant(MOTOR, fs.PlantEffects(coulomb_torque=1e-4), load=1e-5)), True),
+    (dict(loop=fs.DriveLoop(5e-5, drive=Drive(pwm="switched"))), True),
     (dict(loop=fs.DriveLoop(5e-5, sensors=Sensors(delay=9))), False),
     (dict(plant=fs.Plant(MOTOR, load=lambda t: 1e-5 * t)), False),
 ])
