@@ -1,12 +1,14 @@
-"""(d) Batch throughput: sampled 60 ms closed-loop runs per second, one worker against all cores, through
-``run_batch`` (summaries in C), one ``Scenario.run`` per run, and the binding."""
+"""(d) Batch throughput: sampled 60 ms closed-loop runs per second, one worker against all cores.
+
+The runs go through ``run_batch`` (summaries in C), one ``Scenario.run`` per run, and the binding.
+"""
 from __future__ import annotations
 
 import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 
@@ -18,8 +20,10 @@ from .common import Report, Target, core_module, race
 
 def bench_batch(repeat: int = 3, runs: int = 200, control_period: float = 5e-5, substeps: int = 10,
                 workers: Optional[int] = None, min_time: float = 0.0) -> Report:
-    """(d) Sampled closed-loop runs of 60 ms (controller every ``control_period``, voltage held, plant by RK4
-    substeps) per second, each run under its own load torque in [0, 1e-5] N m: the public batch API
+    """(d) Sampled closed-loop runs of 60 ms per second, each under its own load torque in [0, 1e-5] N m.
+
+    The controller fires every ``control_period``, its voltage is held, the plant integrated by RK4 substeps. The
+    cases are the public batch API
     :func:`flatstep.run_batch` (one C call per chunk, runs and summaries in C, threads), one
     :meth:`~flatstep.studies.scenario.Scenario.run` + ``SimResult.summary`` per run (the C run, the result
     assembled in Python), each on one and on ``workers`` threads (default: every core), beside the binding's
@@ -39,7 +43,7 @@ def bench_batch(repeat: int = 3, runs: int = 200, control_period: float = 5e-5, 
     scenarios = scenario_grid(sc, plant=[Plant(motor, load=load) for load in loads])
     x0 = plan.x0(motor.Nr)
 
-    def one(load: float):
+    def one(load: float) -> Any:  # run_sampled's (x, v, y, status, stats)
         return core.run_sampled(ctrl, motor, load, x0, periods, Ts=control_period, substeps=substeps)
 
     fast1, fast_n = "run_batch, 1 worker", f"run_batch, {workers} threads"
@@ -58,9 +62,9 @@ def bench_batch(repeat: int = 3, runs: int = 200, control_period: float = 5e-5, 
     summaries = [{k: v for k, v in row.items() if k not in ("index", "name", "error")} for row in rows]
     checks = [("runs that failed", float(len(errors)), ""),
               ("rows of run_batch that differ from Scenario.run's summaries",
-               float(sum(a != b for a, b in zip(summaries, slow_rows))), ""),
+               float(sum(a != b for a, b in zip(summaries, slow_rows, strict=True))), ""),
               ("max |theta_final(run_batch) - theta_final(binding)| over the runs",
-               float(max(abs(row["theta_final"] - res[0][3, -1]) for row, res in zip(rows, raw))), " rad"),
+               float(max(abs(row["theta_final"] - res[0][3, -1]) for row, res in zip(rows, raw, strict=True))), " rad"),
               ("no-load run: |theta(60 ms) - theta2| (sampled at this period)", abs(raw[0][0][3, -1] - plan.theta2),
                " rad"),
               (f"speed-up of {workers} threads over 1 (run_batch)", times[fast1] / times[fast_n], "x"),

@@ -1,24 +1,37 @@
-"""(b) The paper's 60 ms closed loop (Fig. 1) at equal accuracy: the C engine against scipy's LSODA and
-python-control's ``input_output_response``, each at the loosest tolerance that meets the accuracy bound."""
+"""(b) The paper's 60 ms closed loop (Fig. 1) at equal accuracy.
+
+The C engine against scipy's LSODA and python-control's ``input_output_response``, each at the loosest tolerance
+that meets the accuracy bound.
+"""
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, Optional
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
+from ..control.protocol import StaticController
+from ..control.smc import FlatnessSMC
 from ..engine.settings import Continuous
 from ..engine.simulate import simulate
 from ..model.motor import MotorParams, acceleration, rhs
 from ..studies.scenario import PAPER_SCENARIOS
 from .common import Report, Target, core_module, race
 
+if TYPE_CHECKING:  # python-control is optional (the bench extra) and untyped: this is Any to mypy
+    from control import NonlinearIOSystem
 
-def closed_loop_system(motor: MotorParams, controller, load_torque: float = 0.0):
-    """The continuous closed loop (plant + the Python reference law, ideal measurement) as a python-control
-    ``NonlinearIOSystem`` with no inputs and the state as output."""
+
+def closed_loop_system(motor: MotorParams, controller: StaticController,
+                       load_torque: float = 0.0) -> NonlinearIOSystem:
+    """The continuous closed loop as a python-control ``NonlinearIOSystem``.
+
+    The plant and the Python reference law with ideal measurement, no inputs and the state as output.
+    """
     import control
 
-    def updfcn(t, x, u, params=None):
+    def updfcn(t: float, x: ArrayLike, u: ArrayLike, params: Optional[dict[str, Any]] = None) -> NDArray[np.float64]:
+        """The closed loop's state derivative."""
         acc = acceleration(x, motor, load_torque)
         return rhs(t, x, controller.voltages(t, x, acc), motor, load_torque)
 
@@ -31,8 +44,10 @@ RTOL_LADDER = (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
 
 def loosest_tolerance(run: Callable[[float], Any], error: Callable[[Any], float], bound: float,
                       ladder: tuple[float, ...] = RTOL_LADDER) -> tuple[float, float, Any]:
-    """The loosest rtol of ``ladder`` (loosest first) whose run has ``error(run(rtol)) <= bound``: returns
-    ``(rtol, error, result)``; raises ValueError when no rung is accurate enough."""
+    """The loosest rtol of ``ladder`` (loosest first) whose run has ``error(run(rtol)) <= bound``.
+
+    Returns ``(rtol, error, result)``; raises ValueError when no rung is accurate enough.
+    """
     for rtol in ladder:
         result = run(rtol)
         err = error(result)
@@ -43,8 +58,10 @@ def loosest_tolerance(run: Callable[[float], Any], error: Callable[[Any], float]
 
 def bench_closed_loop(repeat: int = 5, dt_out: float = 1e-5, rtol: float = 1e-10, bound: float = 1e-8,
                       min_time: float = 0.02, ladder: tuple[float, ...] = RTOL_LADDER) -> Report:
-    """(b) Fig. 1's 60 ms closed loop at equal accuracy. Starting on the plan, the ideal-measurement loop keeps
-    s1 = s2 = 0, so the exact solution is the plan itself and every engine's error is its distance to theta*(t).
+    """(b) Fig. 1's 60 ms closed loop at equal accuracy.
+
+    Starting on the plan, the ideal-measurement loop keeps s1 = s2 = 0, so the exact solution is the plan itself
+    and every engine's error is its distance to theta*(t).
 
     Each engine runs at the loosest rtol of ``ladder`` (atol = rtol / 100) that keeps max |theta - theta*|
     within ``bound``; the baseline is scipy's LSODA at ``rtol`` (the issue's 1e-10), and LSODA at its own
@@ -53,13 +70,15 @@ def bench_closed_loop(repeat: int = 5, dt_out: float = 1e-5, rtol: float = 1e-10
     import control
 
     sc = PAPER_SCENARIOS["fig1"]
-    motor, plan, ctrl = sc.motor, sc.plan, sc.controller()
+    motor, plan = sc.motor, sc.plan
+    ctrl = FlatnessSMC(motor, plan, sc.gains, sc.measurement)  # sc.controller(), the paper's law
     T = np.linspace(0.0, sc.t_end, round(sc.t_end / dt_out) + 1)
     theta_exact = plan.flag(T).theta
     x0 = plan.x0(motor.Nr)
     system = closed_loop_system(motor, ctrl)
 
-    def theta_error(res) -> float:
+    def theta_error(res: Any) -> float:  # a SimResult or python-control's TimeResponseData
+        """The largest |theta - theta*| over the samples of a run."""
         t, theta = (res.t, res.theta) if hasattr(res, "theta") else (res.time, res.states[3])
         return float(np.abs(theta - plan.flag(t).theta).max())
 
@@ -75,9 +94,12 @@ def bench_closed_loop(repeat: int = 5, dt_out: float = 1e-5, rtol: float = 1e-10
             motor, plan, ctrl, engine="c", t_end=sc.t_end, solver=Continuous(rtol=r, atol=r / 100, dt_out=dt_out))
     baseline = f"scipy LSODA, rtol {rtol:g} (baseline)"
     cases: dict[str, Callable[[], Any]] = {baseline: engines["scipy LSODA"](rtol)}
-    checks, targets, chosen = [], [], {}
+    checks: list[tuple[str, float, str]] = []
+    targets: list[Target] = []
+    chosen: dict[str, float] = {}
     for name, make in engines.items():
-        r, err, _ = loosest_tolerance(lambda r: make(r)(), theta_error, bound, ladder)
+        # the lambda is called within this iteration, by loosest_tolerance
+        r, err, _ = loosest_tolerance(lambda r: make(r)(), theta_error, bound, ladder)  # noqa: B023
         chosen[name] = r
         cases[f"{name}, rtol {r:g}"] = make(r)
         checks.append((f"{name}: loosest rtol with max |theta - theta*| <= {bound:g}: rtol {r:g}, error", err, " rad"))

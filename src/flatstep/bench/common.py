@@ -10,6 +10,7 @@ import statistics
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import ModuleType
 from typing import Any, Callable, Optional
 
 #: The source checkout (benchmarks/, csrc/) when flatstep runs from one.
@@ -28,9 +29,11 @@ class Target:
 
     @property
     def met(self) -> bool:
+        """Whether the value is on the right side of the limit."""
         return self.value >= self.limit if self.at_least else self.value <= self.limit
 
     def describe(self) -> str:
+        """The target on one line: the value, the limit, and met or by how much it is missed."""
         sign = ">=" if self.at_least else "<="
         head = f"{self.what} = {self.value:.4g}{self.unit} (target {sign} {self.limit:g}{self.unit})"
         if self.met:
@@ -57,6 +60,7 @@ class Report:
         return self.times[self.baseline] / self.times[case]
 
     def format(self) -> str:
+        """The report as printed: one line per case (median, speed-up), then checks, targets and notes."""
         width = max(len(name) for name in self.times) + 2
         lines = [f"({self.key}) {self.title}",
                  f"  {'case':<{width}}{'median per ' + self.unit:>18}{'speed-up vs baseline':>24}"]
@@ -70,6 +74,7 @@ class Report:
 
 
 def _duration(seconds: float) -> str:
+    """A duration with 4 significant digits in the largest unit (s, ms, us, ns) it is at least one of."""
     for unit, scale in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)):
         if seconds >= scale:
             return f"{seconds / scale:.4g} {unit}"
@@ -77,6 +82,7 @@ def _duration(seconds: float) -> str:
 
 
 def _clock(fn: Callable[[], Any], loops: int) -> float:
+    """The wall time [s] of ``loops`` calls of ``fn``."""
     start = time.perf_counter()
     for _ in range(loops):
         fn()
@@ -103,7 +109,7 @@ def race(cases: dict[str, Callable[[], Any]], repeat: int, min_time: float = 0.0
     return {name: statistics.median(s) / per.get(name, 1) for name, s in samples.items()}, results
 
 
-def core_module():
+def core_module() -> Optional[ModuleType]:
     """The C binding, or None when it is not built."""
     try:
         from .. import _core

@@ -1,5 +1,8 @@
-"""(e) One engine for every run: the comparison on the C engine against the Python reference loop, the
-``flatstep compare`` command end to end, and every controller's batch throughput with detent and friction."""
+"""(e) One engine for every run: the comparison on the C engine against the Python reference loop.
+
+Beside it, the ``flatstep compare`` command end to end, and every controller's batch throughput with detent and
+friction.
+"""
 from __future__ import annotations
 
 import os
@@ -22,8 +25,10 @@ SCENARIO = ROOT / "examples" / "compare-nema17-fast.toml"
 
 
 def _cli_seconds(repeat: int) -> list[float]:
-    """Wall times of ``flatstep compare examples/compare-nema17-fast.toml --scales 0.5,2`` (a new process each,
-    interpreter start-up and figures included)."""
+    """Wall times of ``flatstep compare examples/compare-nema17-fast.toml --scales 0.5,2``.
+
+    A new process each, interpreter start-up and figures included.
+    """
     out = []
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(repeat):
@@ -35,11 +40,14 @@ def _cli_seconds(repeat: int) -> list[float]:
 
 
 def bench_engine(repeat: int = 3, plants: int = 4, runs: int = 400) -> Report:
-    """(e) The NEMA 17 comparison (every controller, realistic 20 kHz drive, detent, Coulomb friction, load) on
-    ``plants`` random plants of its +-10 % box, on the C engine and on the Python reference loop, side by side
-    (both through ``compare_worst`` on every core); the whole ``flatstep compare`` command (4 controllers x 32
-    plants and the 0.5x and 2x bandwidth sweeps) on the C engine; and ``runs`` 60 ms runs per controller through
-    ``run_batch`` (summaries in C on every core), each under its own load."""
+    """(e) The NEMA 17 comparison on the C engine and on the Python reference loop, side by side.
+
+    The comparison (every controller, realistic 20 kHz drive, detent, Coulomb friction, load) runs on
+    ``plants`` random plants of its +-10 % box, both engines through ``compare_worst`` on every core; beside it,
+    the whole ``flatstep compare`` command (4 controllers x 32 plants and the 0.5x and 2x bandwidth sweeps) on the
+    C engine, and ``runs`` 60 ms runs per controller through ``run_batch`` (summaries in C on every core), each
+    under its own load.
+    """
     if not SCENARIO.exists():
         raise RuntimeError(f"benchmark (e) reads {SCENARIO}: run it from a source checkout")
     scenario, _ = load_scenario(SCENARIO)
@@ -65,7 +73,8 @@ def bench_engine(repeat: int = 3, plants: int = 4, runs: int = 400) -> Report:
             rows = run_batch(grid, progress=False)
             samples.append(time.perf_counter() - start)
             if any(row["error"] for row in rows):
-                raise RuntimeError(f"benchmark (e): a {kind} run failed: {next(r['error'] for r in rows if r['error'])}")
+                first = next(r["error"] for r in rows if r["error"])
+                raise RuntimeError(f"benchmark (e): a {kind} run failed: {first}")
         rates[kind] = runs / statistics.median(samples)
 
     checks = [("largest difference of a worst-case metric (move_max [rad], peak_voltage [V], copper_loss [J]) "

@@ -7,8 +7,8 @@ from typing import Callable, Optional
 
 from .batch import bench_batch
 from .closed_loop import bench_closed_loop
-from .engine import bench_engine
 from .common import ROOT, Report
+from .engine import bench_engine
 from .plan import bench_plan
 from .step import bench_step
 
@@ -29,7 +29,7 @@ def main(which: str = "a,b,c,d,e", repeat: Optional[int] = None) -> int:
         import control  # noqa: F401
     except ImportError:
         if {"a", "b"} & set(keys):
-            raise ValueError("benchmarks a and b compare with python-control: pip install 'flatstep[bench]'")
+            raise ValueError("benchmarks a and b compare with python-control: pip install 'flatstep[bench]'") from None
     print(f"flatstep bench: source {_revision()}, {os.cpu_count()} cores, load average {_load()} at start; "
           f"medians of {repeat or 'the default number of'} rounds; the ratios are the figures to quote\n")
     for key in keys:
@@ -41,6 +41,7 @@ def main(which: str = "a,b,c,d,e", repeat: Optional[int] = None) -> int:
 
 
 def _load() -> str:
+    """The 1-minute load average, or 'unknown' where the platform has none."""
     return f"{os.getloadavg()[0]:.2f}" if hasattr(os, "getloadavg") else "unknown"
 
 

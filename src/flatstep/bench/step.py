@@ -1,5 +1,7 @@
-"""(c) One controller step: a C driver (ns per call; instructions per call by callgrind) against the binding
-and the Python reference."""
+"""(c) One controller step: a C driver against the binding and the Python reference.
+
+The C driver gives ns per call, and instructions per call by callgrind.
+"""
 from __future__ import annotations
 
 import os
@@ -11,7 +13,9 @@ from pathlib import Path
 from typing import Any, Callable, Optional
 
 import numpy as np
+from numpy.typing import NDArray
 
+from ..control.smc import FlatnessSMC
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
 from ..plan.rest_to_rest import PAPER_PLAN
@@ -19,9 +23,11 @@ from ..studies.scenario import PAPER_SCENARIOS
 from .common import ROOT, Report, Target, core_module, race
 
 
-def step_inputs(n: int = 1024, seed: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Times over the 60 ms horizon and measurements off the paper's plan by a few percent (as in
-    benchmarks/smc_step_bench.c): ``t (n,)``, states ``x (4, n)``, accelerations ``(n,)``."""
+def step_inputs(n: int = 1024, seed: int = 1) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Times over the 60 ms horizon and measurements off the paper's plan by a few percent.
+
+    As in benchmarks/smc_step_bench.c: ``t (n,)``, states ``x (4, n)``, accelerations ``(n,)``.
+    """
     motor, plan = MotorParams.preset("paper"), PAPER_PLAN
     rng = np.random.default_rng(seed)
     t = 0.06 * (np.arange(n) + 0.5) / n
@@ -32,8 +38,10 @@ def step_inputs(n: int = 1024, seed: int = 1) -> tuple[np.ndarray, np.ndarray, n
 
 
 def build_step_driver(directory: Path) -> Optional[Path]:
-    """Compile benchmarks/smc_step_bench.c with csrc/*.c as the binding is compiled (-std=c99 -O2); None
-    without a C compiler or outside a source checkout."""
+    """Compile benchmarks/smc_step_bench.c with csrc/*.c as the binding is compiled (-std=c99 -O2).
+
+    Returns the executable, or None without a C compiler or outside a source checkout.
+    """
     cc = shutil.which(os.environ.get("CC", "cc"))
     source = ROOT / "benchmarks" / "smc_step_bench.c"
     if cc is None or not source.exists():
@@ -46,7 +54,9 @@ def build_step_driver(directory: Path) -> Optional[Path]:
 
 def callgrind_instructions(exe: Path, calls: int, directory: Path, *args: str) -> Optional[float]:
     """Instructions per smc_step call (callees included) counted by valgrind's callgrind; None without valgrind.
-    ``args`` go to the driver after CALLS and REPEAT (``"move"``: inputs inside the move only)."""
+
+    ``args`` go to the driver after CALLS and REPEAT (``"move"``: inputs inside the move only).
+    """
     valgrind = shutil.which("valgrind")
     if valgrind is None:
         return None
@@ -59,10 +69,13 @@ def callgrind_instructions(exe: Path, calls: int, directory: Path, *args: str) -
 
 def bench_step(repeat: int = 9, calls: int = 200_000, callgrind_calls: int = 10_000, n: int = 1024,
                min_time: float = 0.02) -> Report:
-    """(c) One smc_step: the C driver's ns per call and callgrind's instructions per call, beside the same
-    law through the binding (per sample of an array) and the Python reference (per call, and vectorized)."""
+    """(c) One smc_step: the C driver's ns per call and callgrind's instructions per call.
+
+    Beside them, the same law through the binding (per sample of an array) and the Python reference (per call,
+    and vectorized).
+    """
     sc = PAPER_SCENARIOS["fig1"]
-    ctrl = sc.controller()
+    ctrl = FlatnessSMC(sc.motor, sc.plan, sc.gains, sc.measurement)  # sc.controller(), the paper's law
     t, x, acc = step_inputs(n)
     y = np.vstack([x, acc])
     reference = "Python FlatnessSMC.step (one call)"
@@ -74,7 +87,9 @@ def bench_step(repeat: int = 9, calls: int = 200_000, callgrind_calls: int = 10_
         name = f"C smc_step through the binding ({n} samples)"
         cases[name], per[name] = (lambda: core.smc_voltages(ctrl, t, x, acc)), n
     times, results = race(cases, repeat, min_time, per)
-    checks, targets, notes = [], [], []
+    checks: list[tuple[str, float, str]] = []
+    targets: list[Target] = []
+    notes: list[str] = []
     if core is not None:
         v_c, status = results[f"C smc_step through the binding ({n} samples)"]
         checks.append(("max |v_C - v_NumPy| on the inputs", float(np.abs(v_c - results[
@@ -103,7 +118,7 @@ def bench_step(repeat: int = 9, calls: int = 200_000, callgrind_calls: int = 10_
                         notes.append("valgrind not found: no instruction count")
                     else:
                         targets.append(Target("callgrind: instructions per smc_step", ir, 400, False, ""))
-            notes.append("the target's inputs are spread over the 60 ms horizon (two thirds at rest, where the plan is "
-                         "constant); 'inside the move' is the worst case, every input in (t0, tf)")
+            notes.append("the target's inputs are spread over the 60 ms horizon (two thirds at rest, where the plan "
+                         "is constant); 'inside the move' is the worst case, every input in (t0, tf)")
     return Report("c", "one controller step (smc_step), perturbed inputs over the 60 ms move", "step", times,
                   reference, checks, targets, notes)
