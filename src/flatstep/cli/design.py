@@ -35,9 +35,11 @@ def _design_scenario(args: argparse.Namespace) -> Scenario:
 
 
 def cmd_design(args: argparse.Namespace) -> int:
+    """``flatstep design``: sliding gains and observer for a sampled drive, and optionally runs of both gain sets."""
     base = _design_scenario(args)
-    loop, load = base.loop, base.simulated_plant.load
+    loop, load = base.loop, base.simulated_plant.constant_load
     assert loop is not None  # _design_scenario
+    assert load is not None, "scenario files and the flags give a constant load torque"
     s = loop.sensors
     d = design_gains(base.motor, base.plan, control_period=loop.control_period,
                      v_bus=loop.drive.v_bus if loop.drive else float("inf"),
@@ -66,13 +68,15 @@ def cmd_design(args: argparse.Namespace) -> int:
     for w in d.warnings:
         print(f"warning: {w}")
     for label, summ in report.get("runs", {}).items():
-        print(f"{label:>15}: max |theta - theta*| during the move {summ.get('max_abs_theta_error_move', float('nan')):.3e} "
+        move = summ.get("max_abs_theta_error_move", float("nan"))
+        print(f"{label:>15}: max |theta - theta*| during the move {move:.3e} "
               f"rad, after it {summ.get('max_abs_theta_error_after', float('nan')):.3e} rad, peak |v| "
               f"{max(summ['max_abs_va'], summ['max_abs_vb']):.3g} V, controller faults {summ['controller_faults']}")
     return 0
 
 
-def add_design_command(sub) -> None:
+def add_design_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``flatstep design`` to the subcommands ``sub``."""
     des = sub.add_parser("design", help="design sliding gains and observer for a sampled drive")
     des.add_argument("scenario", nargs="?", default=None, help="a scenario file with a [drive] (default: "
                      "the paper's motor and move on the flags' drive)")

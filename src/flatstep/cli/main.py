@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Sequence
 
 from ..control.smc import MEASUREMENTS, SMCGains
+from ..engine.result import SimResult
 from ..engine.simulate import simulate
 from ..model.motor import MotorParams
 from ..model.plant import Plant
@@ -23,12 +24,14 @@ TABLE_KEYS = ("theta_final", "max_abs_theta_error", "max_abs_rho_error", "max_ab
 
 
 def _table(summaries: dict[str, dict[str, float]]) -> str:
+    """The runs' summaries as a fixed-width table, one row per run (the columns of :data:`TABLE_KEYS`)."""
     head = f"{'run':<6}" + "".join(f"{k:>21}" for k in TABLE_KEYS)
     rows = [f"{name:<6}" + "".join(f"{s[k]:>21.6e}" for k in TABLE_KEYS) for name, s in summaries.items()]
     return "\n".join([head, *rows])
 
 
-def _write(out: Path, name: str, scenario: Scenario, result, title: str) -> None:
+def _write(out: Path, name: str, scenario: Scenario, result: SimResult, title: str) -> None:
+    """Write a run's figure (``<name>.png``) and series (``<name>.csv``) to ``out``."""
     from .plots import plot_run
 
     out.mkdir(parents=True, exist_ok=True)
@@ -37,10 +40,11 @@ def _write(out: Path, name: str, scenario: Scenario, result, title: str) -> None
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
+    """``flatstep reproduce``: the paper's Fig. 1 and Fig. 2 runs, their figures, series and summaries."""
     out = Path(args.out)
     titles = {"fig1": "Fig. 1: ideal closed loop, no load (W1 = W2 = 100)",
               "fig2": "Fig. 2: constant load torque 1e-5 N m (W1 = W2 = 300)"}
-    summaries = {}
+    summaries: dict[str, dict[str, float]] = {}
     for name, scenario in PAPER_SCENARIOS.items():
         result = scenario.run()
         _write(out, name, scenario, result, titles[name])
@@ -56,6 +60,7 @@ SIM_FLAGS = ("theta1", "theta2", "rho1", "rho2", "t0", "tf", "t_end", "load_torq
 
 
 def _scenario_from_flags(args: argparse.Namespace) -> Scenario:
+    """The scenario of ``flatstep simulate``'s flags: the paper's motor, move and gains where a flag is not given."""
     p, g = PAPER_PLAN.as_dict(), SMCGains().as_dict()
     val = {k: getattr(args, k) for k in SIM_FLAGS}
     val = {k: v if v is not None else p.get(k, g.get(k)) for k, v in val.items()}
@@ -67,6 +72,7 @@ def _scenario_from_flags(args: argparse.Namespace) -> Scenario:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    """``flatstep simulate``: one closed-loop move from a scenario file or the flags; prints its summary."""
     if args.scenario:
         given = [f"--{k.replace('_', '-')}" for k in SIM_FLAGS if getattr(args, k) is not None]
         if given:
@@ -92,12 +98,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
+    """``flatstep bench``: the chosen benchmarks (:func:`flatstep.bench.main`)."""
     from ..bench import main as bench_main
 
     return bench_main(args.which, args.repeat)
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``flatstep`` argument parser, one subcommand per ``cmd_*``."""
     parser = argparse.ArgumentParser(prog="flatstep", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -142,6 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status (2 for a refused plan or a bad value)."""
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)

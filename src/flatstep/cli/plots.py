@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import matplotlib
 import numpy as np
@@ -10,6 +11,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from ..engine.result import SimResult  # noqa: E402
+from ..plan.rest_to_rest import RestToRest  # noqa: E402
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 #: (series, reference or None, label) for each panel, in the paper's order.
 PANELS = (
@@ -24,7 +30,7 @@ PANELS = (
 )
 
 
-def _finish(fig, title: str, path: str | Path | None):
+def _finish(fig: Figure, title: str, path: str | Path | None) -> Figure:
     """Title the figure and, when a path is given, write it (PNG, 150 dpi) and close it."""
     if title:
         fig.suptitle(title)
@@ -34,14 +40,14 @@ def _finish(fig, title: str, path: str | Path | None):
     return fig
 
 
-def plot_run(result: SimResult, title: str = "", path: str | Path | None = None):
+def plot_run(result: SimResult, title: str = "", path: str | Path | None = None) -> Figure:
     """Plot a run in the paper's panels (solid: closed loop, dashed: plan / feedforward).
 
     Returns the figure; writes it to ``path`` (PNG, 150 dpi) when given.
     """
     series = result.series()
     fig, axes = plt.subplots(4, 2, figsize=(10, 10), sharex=True, constrained_layout=True)
-    for ax, (name, ref, label) in zip(axes.flat, PANELS):
+    for ax, (name, ref, label) in zip(axes.flat, PANELS, strict=True):  # one panel each
         ax.plot(result.t, series[name], lw=1.4, label="closed loop")
         if ref is not None:
             ax.plot(result.t, series[ref], "--", lw=1.0, color="k", label="plan / feedforward")
@@ -54,22 +60,27 @@ def plot_run(result: SimResult, title: str = "", path: str | Path | None = None)
     return _finish(fig, title, path)
 
 
-def plot_traces(ax, rows: list[dict], scale: float, plan, lw: float = 0.7) -> None:
-    """Draw the tracking-error trace of every successful batch row (``series_t``, ``series_theta_error``)
-    divided by ``scale`` on ``ax``, with the move shaded."""
+def plot_traces(ax: Axes, rows: list[dict[str, Any]], scale: float, plan: RestToRest, lw: float = 0.7) -> None:
+    """Draw the tracking-error trace of every successful batch row on ``ax``, with the move shaded.
+
+    The rows' ``series_theta_error`` against ``series_t``, divided by ``scale``.
+    """
     for row in rows:
         if row["error"] is None:
             ax.plot(row["series_t"], np.asarray(row["series_theta_error"]) / scale, lw=lw, alpha=0.7)
     ax.axvspan(plan.t0, plan.tf, color="0.92", zorder=0)
 
 
-def plot_robustness(study: dict, count: float | None, plan, title: str = "", path: str | Path | None = None):
-    """Tracking-error traces of every plant of a robustness study, one panel per gain set; dotted lines at
-    +-1 count (the move target) and +-0.5 count (the at-rest target)."""
+def plot_robustness(study: dict[str, Any], count: float | None, plan: RestToRest, title: str = "",
+                    path: str | Path | None = None) -> Figure:
+    """Tracking-error traces of every plant of a robustness study, one panel per gain set.
+
+    Dotted lines at +-1 count (the move target), dashed at +-0.5 count (the at-rest target).
+    """
     sets = study["sets"]
     fig, axes = plt.subplots(len(sets), 1, figsize=(9, 3.6 * len(sets)), constrained_layout=True, squeeze=False)
     scale, unit = (count, "counts") if count else (1.0, "rad")
-    for ax, (label, s) in zip(axes[:, 0], sets.items()):
+    for ax, (label, s) in zip(axes[:, 0], sets.items(), strict=True):  # one panel per gain set
         plot_traces(ax, s["rows"], scale, plan)
         if count:
             for y, ls in ((1, ":"), (-1, ":"), (0.5, "--"), (-0.5, "--")):

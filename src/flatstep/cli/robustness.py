@@ -5,21 +5,24 @@ import argparse
 import json
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 from ..studies.robustness import REST_AFTER, encoder_count, run_study
 from ..studies.scenario_file import Robustness, load_scenario
 
 
 def cmd_robustness(args: argparse.Namespace) -> int:
+    """``flatstep robustness``: the scenario on every plant of its study, worst errors per gain set."""
     scenario, study = load_scenario(args.scenario)
     study = study or Robustness()
     if args.samples is not None:
         study = replace(study, samples=args.samples)
     result = run_study(scenario, study, with_paper_gains=not args.no_paper_gains, progress=args.progress)
     count = encoder_count(scenario)
-    report = {label: {k: v for k, v in s.items() if k != "rows"} for label, s in result["sets"].items()}
-    report = {"scenario": scenario.name, "relative_error": study.relative_error, "parameters": list(study.parameters),
-              "runs_per_set": len(result["errors"]), "rest_starts_after_tf_s": REST_AFTER, "sets": report}
+    sets = {label: {k: v for k, v in s.items() if k != "rows"} for label, s in result["sets"].items()}
+    report: dict[str, Any] = {"scenario": scenario.name, "relative_error": study.relative_error,
+                              "parameters": list(study.parameters), "runs_per_set": len(result["errors"]),
+                              "rest_starts_after_tf_s": REST_AFTER, "sets": sets}
     if args.out:
         from .plots import plot_robustness
 
@@ -42,7 +45,8 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_robustness_command(sub) -> None:
+def add_robustness_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``flatstep robustness`` to the subcommands ``sub``."""
     rob = sub.add_parser("robustness", help="a scenario under plant parameter errors ([robustness] of the file)")
     rob.add_argument("scenario", help="a scenario file (TOML)")
     rob.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
