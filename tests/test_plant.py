@@ -113,8 +113,8 @@ def test_a_plant_is_a_motor_its_effects_and_its_load(motor):
 @pytest.mark.parametrize("kwargs, match", [
     (dict(motor="paper"), r"Plant.motor='paper' is not a MotorParams"),
     (dict(effects=1e-3), r"Plant.effects=0.001 is not a PlantEffects"),
-    (dict(load=float("nan")), r"load_torque=nan"),
-    (dict(load=float("inf")), r"load_torque=inf"),
+    (dict(load=float("nan")), r"load=nan"),
+    (dict(load=float("inf")), r"load=inf"),
 ])
 def test_bad_plants_are_refused(motor, kwargs, match):
     with pytest.raises(ValueError, match=match):

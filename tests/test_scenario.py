@@ -28,7 +28,7 @@ def test_the_loop_and_solver_reach_the_run(motor):
 def test_the_loop_tunes_the_baselines(motor):
     s = fs.Scenario("m", controller_type="microstep", loop=fs.DriveLoop(5e-5, drive=fs.Drive(v_bus=12.0)))
     assert s.controller().v_limit == 12.0 and s.controller().control_period == 5e-5
-    with pytest.raises(ValueError, match="sampled controller"):
+    with pytest.raises(ValueError, match="tuned from the control period"):
         replace(s, loop=None)
 
 

@@ -8,7 +8,7 @@ from flatstep.engine.settings import C_METHODS, SCIPY_METHODS
 
 def test_defaults_and_as_dict():
     s = fs.Continuous()
-    assert s.as_dict() == {"method": "DOP853", "rtol": 1e-10, "atol": 1e-12, "dt_out": 1e-5}
+    assert s.as_dict() == {"method": None, "rtol": 1e-10, "atol": 1e-12, "dt_out": 1e-5}
     assert isinstance(fs.Continuous(rtol=1, atol=1, dt_out=1).rtol, float)  # numbers are stored as floats
 
 
@@ -38,3 +38,9 @@ def test_each_method_runs_on_its_engine_and_is_refused_by_the_other(motor, plan,
     if other is not None:
         with pytest.raises(ValueError, match=f"method={method!r} is not a"):
             fs.simulate(motor, plan, solver=solver, engine=other, t_end=0.025)
+
+
+@pytest.mark.parametrize("engine, method", [("c", "DOP853"), ("scipy", "LSODA")])
+def test_each_engine_has_its_default_method(motor, plan, engine, method):
+    r = fs.simulate(motor, plan, solver=fs.Continuous(dt_out=1e-3), engine=engine, t_end=0.025)
+    assert r.meta["method"] == method and r.meta["engine"] == engine

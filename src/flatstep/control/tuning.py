@@ -60,8 +60,8 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     if kind == "smc":
         return FlatnessSMC(motor, plan, smc_gains, measurement)
     if control_period is None:
-        raise ValueError(f"controller type {kind!r} is a sampled controller: give a control period "
-                         "([drive] control_rate); only 'smc' runs in continuous time")
+        raise ValueError(f"controller type {kind!r} is tuned from the control period (lambda = 0.3/Ts): give one "
+                         "([drive] control_rate); only 'smc' has gains of its own for continuous time")
     scale = check_positive("bandwidth_scale", bandwidth_scale)
     lam, wn = (scale * w for w in bandwidths(control_period, compute_delay))
     if kind == "microstep":

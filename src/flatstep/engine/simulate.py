@@ -132,32 +132,34 @@ def _static(controller: Controller, engine: str) -> StaticController:
 
 def _continuous_c(plant: Plant, plan: RestToRest, controller: Controller, solver: Continuous, t_end: float,
                   x0: Array) -> Run:
-    """C ``continuous_run`` (DOP853 on the output grid of :func:`_grid`)."""
-    if solver.method not in C_METHODS:
-        raise ValueError(f"method={solver.method!r} is not a C integrator; valid: {C_METHODS} "
+    """C ``continuous_run`` (DOP853 by default) on the output grid of :func:`_grid`."""
+    method = solver.method or "DOP853"
+    if method not in C_METHODS:
+        raise ValueError(f"method={method!r} is not a C integrator; valid: {C_METHODS} "
                          f"(engine='scipy' takes {SCIPY_METHODS})")
     _static(controller, "c")
     load = _constant_load(plant, "c")
     segs = _grid(t_end, [plan.t0, plan.tf], solver.dt_out)
     t = np.concatenate([segs[0]] + [s[1:] for s in segs[1:]])
-    meta = {"engine": "c", "method": solver.method, "rtol": solver.rtol, "atol": solver.atol}
+    meta = {"engine": "c", "method": method, "rtol": solver.rtol, "atol": solver.atol}
     if isinstance(controller, FlatnessSMC):
         # The run and its series (voltages, references, sliding variables) in two C calls on one controller.
         X, cols, status, stats = _core.continuous_result(controller, plant.motor, load, x0, t, rtol=solver.rtol,
                                                          atol=solver.atol, effects=plant.effects,
-                                                         method=solver.method)
+                                                         method=method)
         stats = {**stats, "controller_status": _core.status_names(np.bitwise_or.reduce(status))}
         return Run(t, X, {**meta, **stats}, columns=cols)
     X, stats = _core.run_continuous(controller, plant.motor, load, x0, t, rtol=solver.rtol, atol=solver.atol,
-                                    effects=plant.effects, method=solver.method)
+                                    effects=plant.effects, method=method)
     return Run(t, X, {**meta, **stats})
 
 
 def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, solver: Continuous, t_end: float,
                       x0: Array) -> Run:
     """:func:`scipy.integrate.solve_ivp`, restarted at the plan's knots."""
-    if solver.method not in SCIPY_METHODS:
-        raise ValueError(f"method={solver.method!r} is not a solve_ivp method; valid: {SCIPY_METHODS}")
+    method = solver.method or "LSODA"
+    if method not in SCIPY_METHODS:
+        raise ValueError(f"method={method!r} is not a solve_ivp method; valid: {SCIPY_METHODS}")
     law = _static(controller, "scipy")
 
     def closed_loop(t: float, x: Array) -> Array:
@@ -171,14 +173,14 @@ def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, so
     xs: list[Array] = []
     x = x0
     for seg in _grid(t_end, [plan.t0, plan.tf], solver.dt_out):
-        sol = solve_ivp(closed_loop, (seg[0], seg[-1]), x, method=solver.method, t_eval=seg, rtol=solver.rtol,
+        sol = solve_ivp(closed_loop, (seg[0], seg[-1]), x, method=method, t_eval=seg, rtol=solver.rtol,
                         atol=solver.atol)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
             raise RuntimeError(f"integration failed on [{seg[0]:.6g}, {seg[-1]:.6g}] s: {sol.message}")
         ts.append(sol.t if not ts else sol.t[1:])
         xs.append(sol.y if not xs else sol.y[:, 1:])
         x = sol.y[:, -1]
-    meta = {"engine": "scipy", "method": solver.method, "rtol": solver.rtol, "atol": solver.atol}
+    meta = {"engine": "scipy", "method": method, "rtol": solver.rtol, "atol": solver.atol}
     return Run(np.concatenate(ts), np.concatenate(xs, axis=1), meta)
 
 
@@ -237,7 +239,7 @@ def assemble(run: Run, plant: Plant, plan: RestToRest, controller: Controller,
     metadata.
     """
     t, X = run.t, run.x
-    meta = {**run.meta, **settings.as_dict(), "controller": type(controller).__name__,
+    meta = {**settings.as_dict(), **run.meta, "controller": type(controller).__name__,
             "measurement": controller.measurement, "gains": controller.gains.as_dict(), "plan": plan.as_dict(),
             "plant": plant.as_dict()}
     if run.y is not None:

@@ -27,7 +27,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_integer, check_nonnegative, check_positive
+from ..validate import check_finite, check_integer, check_nonnegative, check_positive
 from .motor import Load, MotorParams, load_function, rhs
 
 
@@ -142,7 +142,8 @@ class Plant:
             raise ValueError(f"Plant.effects={self.effects!r} is not a PlantEffects (or None)")
         if self.effects is not None and not self.effects.active:
             object.__setattr__(self, "effects", None)
-        load_function(self.load)  # a constant must be finite; a function is checked where it is called
+        if not callable(self.load):  # a function is checked where it is called
+            object.__setattr__(self, "load", check_finite("load", self.load))
 
     @property
     def constant_load(self) -> Optional[float]:
