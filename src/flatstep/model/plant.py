@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..validate import check_finite, check_integer, check_nonnegative, check_positive
-from .motor import Load, MotorParams, load_function, rhs
+from .motor import Load, MotorParams, rhs
 
 
 @dataclass(frozen=True)
