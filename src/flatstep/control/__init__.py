@@ -2,10 +2,10 @@
 from .cascade import CascadeFOC, CascadeGains
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
-from .protocol import Controller, StaticController, is_static
+from .protocol import Controller, SlidingController, StaticController, is_static
 from .smc import MEASUREMENTS, FlatnessSMC, SMCGains
 from .tuning import CONTROLLER_TYPES, LABELS, make_controller
 
-__all__ = ["Controller", "StaticController", "is_static", "FlatnessSMC", "SMCGains", "MEASUREMENTS",
-           "Microstepping", "MicrostepGains", "CascadeFOC", "CascadeGains", "ExactLinearization", "LinearizationGains",
-           "CONTROLLER_TYPES", "LABELS", "make_controller"]
+__all__ = ["Controller", "StaticController", "SlidingController", "is_static", "FlatnessSMC", "SMCGains",
+           "MEASUREMENTS", "Microstepping", "MicrostepGains", "CascadeFOC", "CascadeGains", "ExactLinearization",
+           "LinearizationGains", "CONTROLLER_TYPES", "LABELS", "make_controller"]

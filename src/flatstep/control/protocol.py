@@ -62,6 +62,16 @@ class StaticController(Controller, Protocol):
         ...
 
 
+@runtime_checkable
+class SlidingController(StaticController, Protocol):
+    """A static law with sliding variables (the paper's ``s1``, ``s2`` of eq. (12)), which results report."""
+
+    def sliding_variables(self, t: ArrayLike, x: ArrayLike,
+                          ddtheta: Optional[ArrayLike] = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The sliding variables at times ``t`` for states ``x`` (4, n), vectorized over time."""
+        ...
+
+
 def is_static(controller: Any) -> TypeGuard[StaticController]:
     """Whether ``controller`` can run in the continuous loop (it has no state between steps)."""
     return isinstance(controller, StaticController) and controller.initial_state() is None

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
 from .. import _core
-from ..control.protocol import Controller, StaticController, is_static
+from ..control.protocol import Controller, SlidingController, StaticController, is_static
 from ..control.smc import FlatnessSMC
 from ..loop.reference import DriveLoop, run_reference
 from ..model.flat import flat_to_state, polar
@@ -264,7 +264,7 @@ def assemble(run: Run, plant: Plant, plan: RestToRest, controller: Controller,
     ref = plan.flag(t)
     x_ref, v_ref = flat_to_state(ref, controller.motor)
     rho, phi = polar(X[0], X[1])
-    s1, s2 = controller.sliding_variables(t, X, acc) if hasattr(controller, "sliding_variables") else (None, None)
+    s1, s2 = controller.sliding_variables(t, X, acc) if isinstance(controller, SlidingController) else (None, None)
     return SimResult(t=t, ia=X[0], ib=X[1], omega=X[2], theta=X[3], rho=rho, phi=phi, va=v[0], vb=v[1],
                      theta_ref=ref.theta, omega_ref=ref.dtheta, rho_ref=ref.rho, ia_ref=x_ref[0], ib_ref=x_ref[1],
                      va_ref=v_ref[0], vb_ref=v_ref[1], s1=s1, s2=s2, meta=meta)

@@ -140,7 +140,7 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
     theta_prev: Optional[float] = None
     y: tuple[float | NDArray[np.float64], ...]
     faults: list[float] = []
-    ctrl_state = controller.initial_state() if hasattr(controller, "initial_state") else None
+    ctrl_state = controller.initial_state()
     for k in range(n_periods + 1):
         t = k * Ts
         X[:, k] = x
