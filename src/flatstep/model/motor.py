@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Callable, TypedDict, Union
+from typing import Callable, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -17,17 +17,6 @@ Load = Union[float, Callable[[NDArray[np.float64]], ArrayLike]]
 
 STATE_NAMES = ("ia", "ib", "omega", "theta")
 INPUT_NAMES = ("va", "vb")
-
-
-class MotorFields(TypedDict):
-    """The fields of :class:`MotorParams` as keyword arguments (a preset)."""
-
-    R: float
-    L: float
-    Km: float
-    J: float
-    B: float
-    Nr: int
 
 
 @dataclass(frozen=True)
@@ -71,7 +60,7 @@ class MotorParams:
     def preset(cls, name: str) -> "MotorParams":
         """Return a named parameter set; see :data:`PRESETS`."""
         try:
-            return cls(**PRESETS[name])
+            return PRESETS[name]
         except KeyError:
             raise ValueError(f"unknown motor preset {name!r}; valid presets: {sorted(PRESETS)}") from None
 
@@ -93,9 +82,9 @@ class MotorParams:
 #: data at https://infosys.beckhoff.com/content/1033/as1000_ba/1426750347.html . Km is the standstill
 #: torque over the current-vector norm with both phases at rated current, 0.38 / (sqrt(2) * 1.0 A); B is
 #: not in the datasheet and is taken as 1e-4 N m s/rad, the paper's value.
-PRESETS: dict[str, MotorFields] = {
-    "paper": MotorFields(R=8.4, L=0.010, Km=0.05, J=3.6e-6, B=1e-4, Nr=50),
-    "nema17": MotorFields(R=4.10, L=9.50e-3, Km=0.38 / math.sqrt(2.0), J=5.6e-6, B=1e-4, Nr=50),
+PRESETS: dict[str, MotorParams] = {
+    "paper": MotorParams(R=8.4, L=0.010, Km=0.05, J=3.6e-6, B=1e-4, Nr=50),
+    "nema17": MotorParams(R=4.10, L=9.50e-3, Km=0.38 / math.sqrt(2.0), J=5.6e-6, B=1e-4, Nr=50),
 }
 
 

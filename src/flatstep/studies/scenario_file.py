@@ -85,7 +85,7 @@ def _motor(where: str, table: dict[str, Any], section: str, base: MotorParams) -
     if "preset" in table:
         if table["preset"] not in PRESETS:
             raise ValueError(f"{where}: [{section}] preset={table['preset']!r} is unknown; valid: {sorted(PRESETS)}")
-        values = {**PRESETS[table["preset"]]}
+        values = PRESETS[table["preset"]].as_dict()
     values.update({k: v for k, v in table.items() if k in MOTOR_KEYS[1:]})
     motor = _wrap(where, section, MotorParams, **values)
     scale = table.get("scale", {})
