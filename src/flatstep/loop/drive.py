@@ -18,10 +18,16 @@ class Drive:
 
     Parameters
     ----------
-    v_bus : bus voltage [V]; each phase voltage is limited to ``|v| <= v_bus``.
-    pwm : ``"averaged"`` (the bridge delivers the commanded voltage, default) or ``"switched"`` (bipolar,
+    v_bus : float
+        Bus voltage [V], > 0; each phase voltage is limited to ``|v| <= v_bus``.
+    pwm : {"averaged", "switched"}
+        ``"averaged"`` (the bridge delivers the commanded voltage, default) or ``"switched"`` (bipolar,
         centre-aligned PWM at ``f_pwm``: the phase sees +-v_bus, with ``dead_time`` per edge during which the
         freewheeling diodes apply ``-sign(i) v_bus``).
+    f_pwm : float
+        PWM frequency [Hz], > 0 (switched mode).
+    dead_time : float
+        Dead time per edge [s], in [0, 1/(4 f_pwm)) (switched mode).
     """
 
     v_bus: float = 24.0
