@@ -2,6 +2,7 @@
 #ifndef FS_BATCH_H
 #define FS_BATCH_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include "controller.h"
@@ -22,6 +23,7 @@ struct batch_run {
     size_t n_periods;       // periods from t = 0 (states at k Ts, k = 0..n_periods)
     fs_real x0[4];          // start state (ia, ib, omega, theta)
     const fs_real *noise;   // (n_periods + 1) x 2 current-noise samples, or NULL for none
+    fs_real lost_error;     // |theta - theta*| [rad] beyond which the move is lost (SimResult's lost_error), > 0
 };
 
 // Summary of one run over the control instants t_k = k Ts, the values of SimResult.summary.
@@ -33,6 +35,10 @@ struct batch_summary {
     fs_real max_abs_theta_error_move;   // over t0 <= t_k <= tf (n_move samples)
     fs_real max_abs_theta_error_after;  // over t_k > tf (n_after samples)
     size_t n_move, n_after;
+    bool lost;               // |theta - theta*| exceeded lost_error at some t_k
+    fs_real lost_at;         // the first such t_k (0 when not lost)
+    uint32_t fault_periods;  // periods whose controller step faulted (sim_stats)
+    fs_real t_first_fault;   // the first of them (0 when none)
 };
 
 // Returns the number of runs whose status is not SIM_OK; runs the n scenarios one after another on sampled_run,

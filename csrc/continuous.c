@@ -124,7 +124,8 @@ int continuous_run(const struct controller *ctrl, const struct plant *plant, con
     int rc = SIM_OK, e, m;
     st->steps = st->rejected = st->rhs_evals = 0;
     st->controller_status = CTRL_OK;
-    st->t_fail = 0;
+    st->fault_periods = 0;
+    st->t_fail = st->t_first_fault = 0;
     if (!ctrl->stateless || !times_valid(t_out, n_out, 1) || !times_valid(p->knots, p->n_knots, 0) || !state_finite(x0)
         || !plant_valid(plant) || !(p->rtol > 0) || !(p->atol > 0) || !(p->h_max > 0)
         || p->method > CONTINUOUS_DOP853_DENSE)

@@ -118,9 +118,9 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
     uint32_t status;
     size_t k;
     int m;
-    st->steps = st->rejected = st->rhs_evals = 0;
+    st->steps = st->rejected = st->rhs_evals = st->fault_periods = 0;
     st->controller_status = CTRL_OK;
-    st->t_fail = 0;
+    st->t_fail = st->t_first_fault = 0;
     if (!finite4(x0) || !plant_valid(plant))
         return SIM_EARGS;
     if (s->sensed)
@@ -140,6 +140,8 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
         measure(s, plant, x, noise ? &noise[2 * k] : quiet, y, &torque);
         status = ctrl->step(ctrl->self, t, y, v);  // 0 V on a fault: the drive de-energises for this period
         st->controller_status |= status;
+        if (status & CTRL_FAULTS && st->fault_periods++ == 0)
+            st->t_first_fault = t;
         drive_step(&s->drive, v, v_apply);
         v_out[2 * k] = v_apply[0];  // the averaged command, also under switched PWM
         v_out[2 * k + 1] = v_apply[1];

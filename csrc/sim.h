@@ -18,6 +18,8 @@ enum sim_status {
 struct sim_stats {
     uint32_t steps, rejected, rhs_evals;  // integrator work
     uint32_t controller_status;           // OR of the ctrl_status bits of every controller call
+    uint32_t fault_periods;               // sampled loop: periods whose step faulted (0 V applied)
+    fs_real t_first_fault;                // sampled loop: time of the first of them (0 when none)
     fs_real t_fail;                       // time of the failure when the run returns an error
 };
 // cffi:end

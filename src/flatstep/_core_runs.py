@@ -35,6 +35,7 @@ from ._core_structs import (
 )
 from .control.protocol import Controller
 from .control.smc import FlatnessSMC
+from .engine.result import lost_error
 from .loop.drive import Drive
 from .loop.observers import Observer
 from .loop.sensors import Sensors
@@ -292,7 +293,8 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
     -------
     list of dict or None
         Per run the :meth:`~flatstep.engine.result.SimResult.summary` values computed in C over the control
-        instants, with ``controller_status``, or None for a run that failed (non-finite state, refused loop).
+        instants (the status and lost_at against one full step of the plant, the count of faulted periods),
+        or None for a run that failed (non-finite state, refused loop).
     """
     n = len(runs)
     c_runs, out = ffi.new("struct batch_run[]", max(n, 1)), ffi.new("struct batch_summary[]", max(n, 1))
@@ -311,6 +313,7 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         c.n_periods = r["n_periods"]
         c.x0 = [float(v) for v in r["x0"]]
         c.noise = _in(noise)
+        c.lost_error = lost_error(r["motor"].Nr, ctrl.plan.theta1, ctrl.plan.theta2)
     scratch = np.empty(6 * (max((r["n_periods"] for r in runs), default=0) + 1))
     lib.batch_sampled(c_runs, n, _out(scratch), scratch.size, out)
     rows: list[Optional[dict[str, Any]]] = []
@@ -319,7 +322,10 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         if o.status != lib.SIM_OK:
             rows.append(None)
             continue
-        row = {key: float(getattr(o, key)) for key in SUMMARY_KEYS}
+        faults = int(o.fault_periods)
+        row: dict[str, Any] = {"status": "lost" if o.lost else "fault" if faults else "ok",
+                               "lost_at": float(o.lost_at) if o.lost else None, "controller_faults": faults}
+        row.update({key: float(getattr(o, key)) for key in SUMMARY_KEYS})
         if o.n_move:
             row["max_abs_theta_error_move"] = float(o.max_abs_theta_error_move)
         if o.n_after:

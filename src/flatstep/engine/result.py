@@ -1,7 +1,23 @@
-"""Time series of a closed-loop run and its summary numbers."""
+r"""Time series of a closed-loop run, its status and its summary numbers.
+
+**Status** (:attr:`SimResult.status`, and the ``status`` key of :meth:`SimResult.summary`, batch rows, compare
+and robustness reports):
+
+* ``"lost"``: the move was lost: at the time ``lost_at``, :math:`|\theta - \theta^*|` exceeded
+  :func:`lost_error`: one full step, :math:`\pi/(2N_r)` (the angle between two detent positions of a
+  two-phase motor: beyond it the rotor settles in another detent, the step an open-loop drive would skip), or
+  half the move :math:`|\theta_2 - \theta_1|/2` if that is smaller (the rotor is then nearer its start than
+  its target: a move shorter than a step, as the paper's 0.02 rad, is lost long before a full step);
+* ``"fault"``: the move was kept, but the controller faulted in ``controller_faults`` periods (outside its
+  law's domain: it applied 0 V there), the first at ``first_fault_time``;
+* ``"ok"``: neither.
+
+A run whose state became non-finite does not return a result: it raises a RuntimeError naming the time.
+"""
 from __future__ import annotations
 
 import csv
+import math
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Optional
@@ -10,6 +26,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 Array = NDArray[np.float64]
+#: A run's statuses, best first (module docstring).
+STATUSES = ("ok", "fault", "lost")
+
+
+def full_step(Nr: int) -> float:
+    r"""One full step of a two-phase motor with ``Nr`` rotor teeth [rad]: :math:`\pi/(2N_r)`."""
+    return math.pi / (2 * Nr)
+
+
+def lost_error(Nr: int, theta1: float, theta2: float) -> float:
+    """The tracking error beyond which a move from ``theta1`` to ``theta2`` is lost [rad].
+
+    One full step, or half the move if that is smaller (a move of zero length: one full step); see the module
+    docstring.
+    """
+    half = 0.5 * abs(theta2 - theta1)
+    return min(full_step(Nr), half) if half > 0 else full_step(Nr)
 
 
 @dataclass
@@ -57,9 +90,29 @@ class SimResult:
         out.update(theta_error=self.theta_error, rho_error=self.rho_error)
         return out
 
-    def summary(self) -> dict[str, float]:
-        """End-of-horizon values and maxima over the horizon (the keys of summary.json)."""
+    @property
+    def lost_at(self) -> Optional[float]:
+        """The first time |theta - theta*| exceeded :func:`lost_error` [s], or ``None``."""
+        Nr, plan = self.meta.get("plant", {}).get("motor", {}).get("Nr"), self.meta.get("plan")
+        if Nr is None or plan is None:
+            raise ValueError("this SimResult has no plant or plan in its metadata (meta['plant'], meta['plan']): "
+                             "the full step that decides a lost move is unknown; build results with flatstep.simulate")
+        beyond = np.flatnonzero(np.abs(self.theta_error) > lost_error(int(Nr), plan["theta1"], plan["theta2"]))
+        return float(self.t[beyond[0]]) if beyond.size else None
+
+    @property
+    def status(self) -> str:
+        """``"lost"``, ``"fault"`` or ``"ok"`` (module docstring)."""
+        if self.lost_at is not None:
+            return "lost"
+        return "fault" if self.meta.get("controller_faults", 0) else "ok"
+
+    def summary(self) -> dict[str, Any]:
+        """Status, end-of-horizon values and maxima over the horizon (the keys of summary.json)."""
         return {
+            "status": self.status,
+            "lost_at": self.lost_at,
+            "controller_faults": int(self.meta.get("controller_faults", 0)),
             "theta_final": float(self.theta[-1]),
             "ia_final": float(self.ia[-1]),
             "ib_final": float(self.ib[-1]),
