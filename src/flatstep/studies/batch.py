@@ -2,17 +2,22 @@
 
 Each worker receives a chunk of scenarios and returns one summary row per run (the keys of
 :meth:`~flatstep.engine.result.SimResult.summary` plus ``index``, ``name`` and ``error``), so that only a few
-numbers per run cross process boundaries. With ``out=`` the rows are appended to a JSON-lines file as
-chunks finish; running again with the same file skips the rows already there.
+numbers per run cross process boundaries. With ``out=`` the rows are appended to a batch file (JSON lines,
+:mod:`flatstep.studies.batch_file`) as chunks finish; running the same batch again with the same file skips
+the rows already there.
 """
 from __future__ import annotations
 
+import ctypes
 import json
 import math
 import os
+import signal
 import sys
+import threading
 import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from contextlib import ExitStack
 from dataclasses import replace
 from itertools import product
 from pathlib import Path
@@ -20,6 +25,8 @@ from typing import Any, Iterable, Optional, Sequence, TextIO
 
 from ..engine.result import SimResult
 from ..validate import check_integer
+from .batch_file import BatchWriteError, open_batch_file, pid_alive
+from .fingerprint import fingerprint
 from .scenario import Scenario
 
 
@@ -118,21 +125,68 @@ class _Progress:
 
 
 def _done_indices(out: Path) -> set[int]:
-    """The indices of the rows already in the JSON-lines file ``out`` (none if it does not exist)."""
+    """The indices of the rows in the batch file ``out`` (none if it does not exist), its header skipped.
+
+    It reads the file as it is, checking no fingerprint; :func:`run_batch` checks them before reusing a row.
+    """
     if not out.exists():
         return set()
     done = set()
     for line in out.read_text().splitlines():
         try:
-            done.add(int(json.loads(line)["index"]))
+            row = json.loads(line)
+            if "flatstep_batch" not in row:
+                done.add(int(row["index"]))
         except (ValueError, KeyError, TypeError):
-            continue  # a line cut by an interruption: that run is simply done again
+            continue  # a line cut by an interruption
     return done
+
+
+#: ``prctl`` option: the signal a process receives when its parent dies (linux/prctl.h).
+_PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent(parent: int) -> None:
+    """Process-pool initializer: end this worker when its parent dies, even by SIGKILL.
+
+    On Linux it asks the kernel for SIGTERM when the parent dies (``prctl(PR_SET_PDEATHSIG, SIGTERM)``
+    through ctypes); elsewhere, or if that fails, a daemon thread checks every 0.2 s whether ``os.getppid()``
+    changed and ends the worker if so. A worker whose parent died before this ran ends at once. The default
+    process pool of :func:`run_batch` uses it; give it to your own pool as
+    ``ProcessPoolExecutor(initializer=die_with_parent, initargs=(os.getpid(),))``.
+
+    Parameters
+    ----------
+    parent : int
+        The pid of the process that runs the batch.
+
+    Notes
+    -----
+    The kernel sends the signal when the *thread* that started the worker ends: the pool must be created and
+    used by one thread that outlives it (as :func:`run_batch` does).
+    """
+    armed = False
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            armed = libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) == 0
+        except (OSError, AttributeError):
+            armed = False
+    ppid = os.getppid()
+    if not pid_alive(parent) or (ppid == 1 and parent != 1):  # the parent died before the signal was asked for
+        os._exit(1)
+    if not armed:
+        def watch() -> None:
+            while os.getppid() == ppid:
+                time.sleep(0.2)
+            os._exit(1)
+
+        threading.Thread(target=watch, name="flatstep-die-with-parent", daemon=True).start()
 
 
 def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Optional[Executor] = None,
               workers: Optional[int] = None, chunk_size: Optional[int] = None, progress: Optional[bool] = None,
-              out: str | Path | None = None, keep: Sequence[str] = ()) -> list[dict[str, Any]]:
+              out: str | Path | None = None, keep: Sequence[str] = (), fresh: bool = False) -> list[dict[str, Any]]:
     """Run every scenario and return one summary row per scenario, in input order.
 
     Parameters
@@ -144,7 +198,7 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     executor : concurrent.futures.Executor, optional
         Any executor (e.g. a Dask ``distributed.Client``'s ``get_executor()``); default: ``workers`` threads on
         the C engine (its runs release the GIL), a process pool of ``workers`` processes on the reference
-        engines.
+        engines, whose workers end when the calling process dies (:func:`die_with_parent`).
     workers : int, optional
         Threads or processes of the default executor (default: all cores).
     chunk_size : int, optional
@@ -152,21 +206,42 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     progress : bool, optional
         ``False`` draws no progress bar; otherwise one is drawn on stderr once the work has taken more than 2 s.
     out : str or Path, optional
-        A JSON-lines file; rows are appended as chunks finish, and rows already in it are not run again.
+        A batch file (JSON lines, docs/batch-files.md): a header, then one row per run, appended as chunks
+        finish, each with its scenario's fingerprint. Run again with the same file, the batch reuses the rows
+        already there, provided the file was written by this version of flatstep, for this engine and
+        ``keep``, and each row's fingerprint is that of the scenario at its index (the list may have grown);
+        otherwise it is refused with a ValueError. A lock file ``<out>.lock`` keeps a second writer out.
     keep : sequence of str
         Names of time series (see :meth:`~flatstep.engine.result.SimResult.series`) to return in each row as
         ``series_<name>`` lists, for figures.
+    fresh : bool
+        Start the file ``out`` afresh: an existing file is renamed to ``<out>.bak`` (``.bak.2``, ... if taken),
+        never deleted.
 
     Returns
     -------
     list of dict
         One row per scenario, in input order.
 
+    Raises
+    ------
+    ValueError
+        For a bad argument, a file ``out`` that holds another batch (naming what differs), or a file another
+        live process is writing (naming the lock and its pid).
+    BatchWriteError
+        If writing ``out`` fails (an OSError, e.g. a full disk): the writing stops, the batch runs on to its
+        end, and then this exception carries every row (``.rows``, input order) and the file (``.path``).
+
     Notes
     -----
     Summary rows of sampled runs on the C engine (:func:`summarised_in_c`, no ``keep``) are computed in C, one
     call per chunk (``_core.run_sampled_summaries``: runs and summaries in C, threads instead of processes,
     since the C call releases the GIL); the rows equal those of one ``Scenario.run`` per scenario.
+
+    A row is written with one ``os.write`` of a whole line, and the file is synced (``os.fsync``) after each
+    chunk, so a crash loses at most the chunks in flight; a last line cut short is truncated off on the next
+    run, with a warning. The lock is an ``O_CREAT | O_EXCL`` file holding the writer's pid, removed when the
+    batch ends (also on an exception); one left by a killed writer (its pid gone) is taken over with a warning.
     """
     scenarios = list(scenarios)
     bad = [i for i, s in enumerate(scenarios) if not isinstance(s, Scenario)]
@@ -180,48 +255,40 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
         raise ValueError(f"keep={list(keep)!r} names unknown series; valid: {sorted(valid)}")
     in_c = engine == "c" and not keep and all(summarised_in_c(s) for s in scenarios)
     keep = tuple(keep)
-    out_path = Path(out) if out is not None else None
     rows: dict[int, dict[str, Any]] = {}
-    if out_path is not None:
-        done = _done_indices(out_path)
-        for line in out_path.read_text().splitlines() if done else []:
-            try:
-                row = json.loads(line)
-                rows[int(row["index"])] = row
-            except (ValueError, KeyError, TypeError):
-                continue
-    todo = [(i, s) for i, s in enumerate(scenarios) if i not in rows]
-    n_workers = workers or os.cpu_count() or 1
-    size = chunk_size or max(1, len(todo) // (8 * n_workers))
-    chunks = [todo[k:k + size] for k in range(0, len(todo), size)]
-    bar = _Progress(len(todo), sys.stderr, progress is not False)
-    sink: Optional[TextIO] = None
-    if out_path is not None:
-        sink = open(out_path, "a")
-        if out_path.stat().st_size and not out_path.read_bytes().endswith(b"\n"):
-            sink.write("\n")  # close a line cut by an interruption
+    with ExitStack() as stack:
+        sink = None
+        if out is not None:
+            from .. import __version__
 
-    def record(batch: list[dict[str, Any]]) -> None:
-        for row in batch:
-            rows[row["index"]] = row
+            fingerprints = [fingerprint(s, engine, keep, __version__) for s in scenarios]
+            sink, done = open_batch_file(Path(out), fingerprints, engine, keep, __version__, fresh, stack)
+            rows.update(done)
+        todo = [(i, s) for i, s in enumerate(scenarios) if i not in rows]
+        n_workers = workers or os.cpu_count() or 1
+        size = chunk_size or max(1, len(todo) // (8 * n_workers))
+        chunks = [todo[k:k + size] for k in range(0, len(todo), size)]
+        bar = _Progress(len(todo), sys.stderr, progress is not False)
+
+        def record(batch: list[dict[str, Any]]) -> None:
+            for row in batch:
+                rows[row["index"]] = row
             if sink is not None:
-                sink.write(json.dumps(row) + "\n")
-        if sink is not None:
-            sink.flush()
-        bar.update(len(batch))
+                sink.append(batch)
+            bar.update(len(batch))
 
-    run_chunk = _run_chunk_c if in_c else _run_chunk
-    try:
+        run_chunk = _run_chunk_c if in_c else _run_chunk
         if executor is None and (n_workers == 1 or len(chunks) <= 1):
             for chunk in chunks:
                 record(run_chunk(chunk, engine, keep))
         else:
             own = executor is None
             # C runs release the GIL: threads share the work without a process pool's start-up; the Python
-            # reference engines hold it and need processes.
+            # reference engines hold it and need processes, which end with this process.
             pool: Executor = executor if executor is not None else (
                 ThreadPoolExecutor(max_workers=n_workers) if engine == "c"
-                else ProcessPoolExecutor(max_workers=n_workers))
+                else ProcessPoolExecutor(max_workers=n_workers, initializer=die_with_parent,
+                                         initargs=(os.getpid(),)))
             try:
                 futures: list[Future[list[dict[str, Any]]]] = [pool.submit(run_chunk, chunk, engine, keep)
                                                               for chunk in chunks]
@@ -230,9 +297,8 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
             finally:
                 if own:
                     pool.shutdown(cancel_futures=True)
-    finally:
-        if sink is not None:
-            sink.close()
+    if sink is not None and sink.error is not None:
+        raise BatchWriteError(sink.path, sink.error, [rows.get(i) for i in range(len(scenarios))])
     return [rows[i] for i in range(len(scenarios))]
 
 
