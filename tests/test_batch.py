@@ -1,7 +1,14 @@
+import errno
 import itertools
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -125,3 +132,313 @@ def test_the_c_batch_path_gives_the_per_run_rows(monkeypatch):
     for row, scenario in zip(fast[:-1], grid):
         assert {k: row[k] for k in row if k not in ("index", "name", "error")} == scenario.run().summary(), \
             scenario.name
+
+
+# --- batch files: fingerprints, resume, lock, crash, full disk ---------------------------------------------------
+
+GRID = scenario_grid(SAMPLED, plant=loads(0.0, 1e-5, 2e-5, 3e-5))
+
+
+def counting(monkeypatch):
+    """The indices of the scenarios run from now on (a counter on both chunk runners of run_batch)."""
+    import flatstep.studies.batch as batch
+
+    ran = []
+    for name in ("_run_chunk", "_run_chunk_c"):
+        real = getattr(batch, name)
+
+        def run(chunk, engine, keep, real=real):
+            ran.extend(i for i, _ in chunk)
+            return real(chunk, engine, keep)
+
+        monkeypatch.setattr(batch, name, run)
+    return ran
+
+
+def test_fingerprints_follow_the_content_not_the_object():
+    from flatstep.studies.fingerprint import fingerprint
+
+    def fp(scenario, engine="c", keep=(), version="1"):
+        return fingerprint(scenario, engine, keep, version)
+
+    twin = Scenario("s", loop=fs.DriveLoop(5e-5, substeps=4), measurement="model",
+                    gains=fs.SMCGains(W1=150.0, W2=3e5, eps1=0.0375, eps2=75, xi=0.9, wn=400))
+    assert twin is not SAMPLED and fp(twin) == fp(SAMPLED) and len(fp(SAMPLED)) == 16
+    changed = [replace(SAMPLED, name="t"), replace(SAMPLED, t_end=0.06000000000000001),
+               replace(SAMPLED, plant=fs.Plant(MOTOR, load=1e-5)), replace(SAMPLED, loop=fs.DriveLoop(5e-5, substeps=3))]
+    prints = {fp(SAMPLED), fp(SAMPLED, engine="python"), fp(SAMPLED, keep=("t",)), fp(SAMPLED, version="2"),
+              *map(fp, changed)}
+    assert len(prints) == 8  # every change of content, engine, keep or version changes the fingerprint
+    k1, k2 = 1e-5, 2e-5  # a load function: its code and the values it closes over count, not its address
+
+    def ramp(k):
+        return fs.Plant(MOTOR, load=lambda t: k * t)
+
+    assert fp(replace(SAMPLED, plant=ramp(k1))) == fp(replace(SAMPLED, plant=ramp(k1)))
+    assert fp(replace(SAMPLED, plant=ramp(k1))) != fp(replace(SAMPLED, plant=ramp(k2)))
+
+
+def test_the_file_starts_with_a_header_and_rows_carry_fingerprints(tmp_path):
+    from flatstep.studies.batch import _done_indices
+
+    out = tmp_path / "rows.jsonl"
+    rows = run_batch(GRID[:2], out=out, workers=1)
+    head, *lines = [json.loads(x) for x in out.read_text().splitlines()]
+    assert head["flatstep_batch"] == 1 and head["version"] == fs.__version__ and head["engine"] == "c"
+    assert head["scenarios"] == 2 and len(head["scenarios_hash"]) == 16 and head["keep"] == []
+    assert [r["index"] for r in lines] == [0, 1] and lines[0]["fingerprint"] != lines[1]["fingerprint"]
+    assert all("fingerprint" not in r for r in rows)  # returned rows are the summaries, as without a file
+    assert _done_indices(out) == {0, 1}
+
+
+@pytest.mark.parametrize("second, match", [
+    (dict(scenarios=[GRID[0], GRID[2]]),
+     r"line 3, the row of scenario 1 \(\"s\[plant=.*\), was computed for another scenario than this batch's scenario 1"),
+    (dict(engine="python"), r"the engine differs: the file has 'c', this batch 'python'"),
+    (dict(keep=("t",)), r"keep differs: the file has \[\], this batch \['t'\]"),
+    (dict(scenarios=GRID[:1]), "the row of scenario 1, and this batch has 1"),
+    (dict(version="9.9"), r"the flatstep version differs: the file has '.*', this batch '9.9'"),
+])
+def test_a_file_of_another_batch_is_refused_naming_the_difference(tmp_path, monkeypatch, second, match):
+    out = tmp_path / "rows.jsonl"
+    run_batch(GRID[:2], out=out, workers=1)
+    before = out.read_bytes()
+    ran = counting(monkeypatch)
+    if "version" in second:
+        monkeypatch.setattr(fs, "__version__", second.pop("version"))
+    scenarios = second.pop("scenarios", GRID[:2])
+    with pytest.raises(ValueError, match=match) as info:
+        run_batch(scenarios, out=out, workers=1, **second)
+    assert str(out) in str(info.value) and "fresh=True" in str(info.value)
+    assert ran == [] and out.read_bytes() == before and not (tmp_path / "rows.jsonl.lock").exists()
+
+
+def test_a_file_without_a_header_is_refused(tmp_path):
+    out = tmp_path / "old.jsonl"
+    out.write_text('{"index": 0, "name": "s", "theta_final": 1.0, "error": null}\n')
+    with pytest.raises(ValueError, match="old.jsonl holds another batch: its first line is not a flatstep batch"):
+        run_batch(GRID[:1], out=out, workers=1)
+    with pytest.raises(ValueError, match="is a directory"):
+        run_batch(GRID[:1], out=tmp_path, workers=1)
+
+
+def test_fresh_moves_the_old_file_to_bak(tmp_path, monkeypatch):
+    out = tmp_path / "rows.jsonl"
+    run_batch(GRID[:2], out=out, workers=1)
+    old = out.read_bytes()
+    ran = counting(monkeypatch)
+    rows = run_batch(GRID[2:], out=out, workers=1, fresh=True)
+    assert (tmp_path / "rows.jsonl.bak").read_bytes() == old and ran == [0, 1]
+    assert [json.loads(x)["index"] for x in out.read_text().splitlines()[1:]] == [0, 1]
+    assert rows[0]["name"] == GRID[2].name
+    run_batch(GRID[2:], out=out, workers=1, fresh=True)
+    assert (tmp_path / "rows.jsonl.bak").read_bytes() == old and (tmp_path / "rows.jsonl.bak.2").exists()
+
+
+def test_a_resume_reuses_exactly_the_matching_rows(tmp_path, monkeypatch):
+    out = tmp_path / "rows.jsonl"
+    clean = run_batch(GRID, workers=1)
+    ran = counting(monkeypatch)
+    run_batch(GRID[:2], out=out, workers=1)
+    assert ran == [0, 1]
+    rows = run_batch(GRID, out=out, workers=2, chunk_size=1)  # the list grew: rows 0 and 1 are reused
+    assert sorted(ran) == [0, 1, 2, 3] and rows == clean
+    assert json.loads(out.read_text().splitlines()[0])["scenarios"] == 4  # the header follows the grown list
+    ran.clear()
+    assert run_batch(GRID, out=out, workers=1) == clean and ran == []  # nothing left to run
+
+
+@pytest.mark.parametrize("tail, dropped", [
+    ('{"index": 2, "theta_fi', 22),  # cut in a row
+    ('{"index": 2, "fingerprint": "0"}', 32),  # whole, but the newline never came
+    ("#!garbage\n", 10),  # closed by a newline, not JSON
+])
+def test_a_last_line_cut_short_is_truncated_off(tmp_path, monkeypatch, tail, dropped):
+    out = tmp_path / "rows.jsonl"
+    run_batch(GRID[:2], out=out, workers=1)
+    whole = out.read_bytes()
+    out.write_bytes(whole + tail.encode())
+    ran = counting(monkeypatch)
+    with pytest.warns(BatchFileWarning, match=f"rows.jsonl: dropping {dropped} bytes"):
+        rows = run_batch(GRID[:3], out=out, workers=1)
+    assert ran == [2] and rows[2]["error"] is None
+    assert out.read_bytes().splitlines()[1:3] == whole.splitlines()[1:]  # the whole rows are kept
+    assert [json.loads(x)["index"] for x in out.read_text().splitlines()[1:]] == [0, 1, 2]
+
+
+def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path, monkeypatch):
+    import threading
+
+    import flatstep.studies.batch as batch
+
+    out, lock = tmp_path / "rows.jsonl", tmp_path / "rows.jsonl.lock"
+    started, go, real = threading.Event(), threading.Event(), batch._run_chunk_c
+
+    def slow(chunk, engine, keep):
+        started.set()
+        assert go.wait(10)
+        return real(chunk, engine, keep)
+
+    monkeypatch.setattr(batch, "_run_chunk_c", slow)
+    first = threading.Thread(target=run_batch, args=(GRID,), kwargs=dict(out=out, workers=1))
+    first.start()
+    try:
+        assert started.wait(10) and lock.read_text() == f"{os.getpid()}\n"
+        with pytest.raises(ValueError, match=f"rows.jsonl is being written by process {os.getpid()} "
+                                             f"\\(lock {lock}\\)"):
+            run_batch(GRID, out=out, workers=1)
+    finally:
+        go.set()
+        first.join()
+    assert not lock.exists()  # released by the first writer
+    assert [json.loads(x)["index"] for x in out.read_text().splitlines()[1:]] == [0, 1, 2, 3]  # written once
+    lock.write_text(f"{os.getpid()}\n")  # a lock file held by a live process (this one)
+    with pytest.raises(ValueError, match=f"process {os.getpid()}"):
+        run_batch(GRID, out=out, workers=1)
+    assert lock.exists()  # not the refused writer's to remove
+
+
+def test_a_stale_lock_is_taken_over(tmp_path):
+    out, lock = tmp_path / "rows.jsonl", tmp_path / "rows.jsonl.lock"
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()  # reaped: its pid no longer runs
+    lock.write_text(f"{gone.pid}\n")
+    with pytest.warns(BatchFileWarning, match=f"taking over a stale lock \\(pid {gone.pid} no longer runs\\)"):
+        run_batch(GRID[:1], out=out, workers=1)
+    assert not lock.exists()
+    lock.write_text("")  # a writer killed before it wrote its pid: held for 10 s, then stale
+    with pytest.raises(ValueError, match="has not written its pid yet"):
+        run_batch(GRID[:1], out=out, workers=1)
+    os.utime(lock, (time.time() - 60, time.time() - 60))
+    with pytest.warns(BatchFileWarning, match="stale lock"):
+        run_batch(GRID[:1], out=out, workers=1)
+
+
+def test_a_full_disk_hands_back_the_rows(tmp_path, monkeypatch):
+    from flatstep.studies.batch_file import BatchWriteError, RowWriter
+
+    out = tmp_path / "rows.jsonl"
+    clean = run_batch(GRID, workers=1)
+    real, written = RowWriter._write, []
+
+    def write(self, data):
+        if len(written) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        written.append(data)
+        real(self, data)
+
+    monkeypatch.setattr(RowWriter, "_write", write)
+    with pytest.warns(BatchFileWarning, match="writing failed"), pytest.raises(BatchWriteError) as info:
+        run_batch(GRID, out=out, workers=1, chunk_size=1)
+    assert f"writing the batch file {out} failed (No space left on device)" in str(info.value)
+    assert info.value.errno == errno.ENOSPC and info.value.path == out
+    assert info.value.rows == clean  # computed to the end, in input order
+    assert len(out.read_text().splitlines()) == 3 and not (tmp_path / "rows.jsonl.lock").exists()
+    monkeypatch.setattr(RowWriter, "_write", real)
+    ran = counting(monkeypatch)
+    assert run_batch(GRID, out=out, workers=1) == clean and ran == [2, 3]  # the disk has room again
+
+
+KILLED_BATCH = """
+import sys
+import flatstep as fs
+from flatstep.studies.batch import run_batch
+from tests.test_batch import killed_grid
+run_batch(killed_grid(), engine="python", workers=2, chunk_size=1, out=sys.argv[1], progress=False)
+"""
+
+
+def killed_grid():
+    """Six sampled runs of about 0.2 s each on the Python engine."""
+    return [replace(SAMPLED, name=f"k{i}", t_end=0.045, plant=fs.Plant(MOTOR, load=i * 1e-6)) for i in range(6)]
+
+
+def descendants(pid):
+    """The pids of the live processes descended from ``pid`` (from /proc)."""
+    parent = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if fields[0] != "Z":
+            parent[int(stat.parent.name)] = int(fields[1])
+    found, todo = set(), [pid]
+    while todo:
+        p = todo.pop()
+        kids = [c for c, pp in parent.items() if pp == p]
+        found.update(kids)
+        todo.extend(kids)
+    return found
+
+
+def running(pid):
+    """Whether ``pid`` is a live process (a zombie is not)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_kill_9_of_the_parent_ends_its_workers_and_the_file_resumes(tmp_path, monkeypatch):
+    out = tmp_path / "rows.jsonl"
+    root = Path(__file__).resolve().parent.parent
+    proc = subprocess.Popen([sys.executable, "-c", KILLED_BATCH, str(out)], cwd=root)
+    try:
+        deadline = time.monotonic() + 30
+        while not (out.exists() and out.read_text().count("\n") >= 2):  # the header and a row
+            assert proc.poll() is None and time.monotonic() < deadline
+            time.sleep(0.02)
+        workers = descendants(proc.pid)
+        assert len(workers) >= 2
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+    deadline = time.monotonic() + 5
+    while any(running(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert [w for w in workers if running(w)] == []
+    assert (tmp_path / "rows.jsonl.lock").read_text() == f"{proc.pid}\n"  # left behind by the killed writer
+    written = {json.loads(x)["index"] for x in out.read_text().splitlines()[1:] if x.endswith("}")}
+    clean = run_batch(killed_grid(), engine="python", workers=2, chunk_size=1)
+    ran = counting(monkeypatch)
+    with pytest.warns(BatchFileWarning, match="stale lock"):
+        rows = run_batch(killed_grid(), engine="python", workers=1, out=out)
+    assert sorted(ran) == sorted(set(range(6)) - written) and len(ran) < 6
+    assert sorted(json.loads(x)["index"] for x in out.read_text().splitlines()[1:]) == list(range(6))
+    assert rows == clean and all(r["error"] is None for r in rows)
+
+
+ORPHAN = """
+import os, sys, time
+from flatstep.studies import batch
+parent = os.getpid()
+child = os.fork()
+if child == 0:
+    if sys.argv[1] == "watchdog":
+        batch.sys = type(sys)("fake_sys")
+        batch.sys.platform = "darwin"  # no prctl: the watchdog thread
+    batch.die_with_parent(parent)
+    time.sleep(30)
+    os._exit(0)
+print(child, flush=True)
+time.sleep(30)
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("how", ["prctl", "watchdog"])
+def test_die_with_parent_ends_a_worker_when_its_parent_is_killed(how):
+    proc = subprocess.Popen([sys.executable, "-c", ORPHAN, how], stdout=subprocess.PIPE, text=True)
+    try:
+        child = int(proc.stdout.readline())
+        assert running(child)
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        proc.stdout.close()
+    deadline = time.monotonic() + 3
+    while running(child) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert not running(child)

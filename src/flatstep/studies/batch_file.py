@@ -297,9 +297,13 @@ def open_batch_file(path: Path, fingerprints: Sequence[str], engine: str, keep: 
 
     Raises
     ------
+    ValueError
+        If ``path`` is a directory, holds another batch (:func:`read_rows`) or is locked (:func:`acquire_lock`).
     BatchWriteError
         If the file cannot be read, created or repaired (an OSError).
     """
+    if path.is_dir():
+        raise ValueError(f"out={str(path)!r} is a directory; give the name of a batch file (JSON lines)")
     lock = acquire_lock(path)
     stack.callback(release_lock, lock)
     try:
