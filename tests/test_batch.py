@@ -193,7 +193,8 @@ def test_the_file_starts_with_a_header_and_rows_carry_fingerprints(tmp_path):
 
 @pytest.mark.parametrize("second, match", [
     (dict(scenarios=[GRID[0], GRID[2]]),
-     r"line 3, the row of scenario 1 \(\"s\[plant=.*\), was computed for another scenario than this batch's scenario 1"),
+     r"line 3, the row of scenario 1 \(\"s\[plant=.*'load': 1e-05}\]\"\), was computed for another scenario than "
+     r"this batch's scenario 1 \(\"s\[plant=.*'load': 2e-05}\]\"\)"),
     (dict(engine="python"), r"the engine differs: the file has 'c', this batch 'python'"),
     (dict(keep=("t",)), r"keep differs: the file has \[\], this batch \['t'\]"),
     (dict(scenarios=GRID[:1]), "the row of scenario 1, and this batch has 1"),
@@ -442,3 +443,17 @@ def test_die_with_parent_ends_a_worker_when_its_parent_is_killed(how):
     while running(child) and time.monotonic() < deadline:
         time.sleep(0.02)
     assert not running(child)
+
+
+def test_a_file_that_cannot_be_created_raises_batch_write_error(tmp_path, monkeypatch):
+    import flatstep.studies.batch_file as batch_file
+
+    def full(path, head, rest):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(batch_file, "_rewrite", full)
+    ran = counting(monkeypatch)
+    with pytest.raises(fs.BatchWriteError, match="opening the batch file .*rows.jsonl failed \\(No space left"
+                                                 " on device\\); 0 of 4 rows") as info:
+        run_batch(GRID, out=tmp_path / "rows.jsonl", workers=1)
+    assert info.value.rows == [None] * 4 and ran == [] and not (tmp_path / "rows.jsonl.lock").exists()

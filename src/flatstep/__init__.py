@@ -30,6 +30,7 @@ from .model.plant import Plant, PlantEffects
 from .plan.feasibility import FeasibilityReport, InfeasiblePlanError, check_feasibility
 from .plan.rest_to_rest import PAPER_PLAN, RestToRest, point_to_point, psi
 from .studies.batch import run_batch, scenario_grid
+from .studies.batch_file import BatchWriteError
 from .studies.scenario import PAPER_SCENARIOS, Scenario
 
 __version__ = "0.1.0"
@@ -44,5 +45,5 @@ __all__ = [
     "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "make_controller",
     "Drive", "Sensors", "Observer", "DriveLoop", "Continuous",
     "simulate", "SimResult",
-    "Scenario", "PAPER_SCENARIOS", "run_batch", "scenario_grid",
+    "Scenario", "PAPER_SCENARIOS", "run_batch", "scenario_grid", "BatchWriteError",
 ]

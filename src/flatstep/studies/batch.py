@@ -262,7 +262,8 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
             from .. import __version__
 
             fingerprints = [fingerprint(s, engine, keep, __version__) for s in scenarios]
-            sink, done = open_batch_file(Path(out), fingerprints, engine, keep, __version__, fresh, stack)
+            sink, done = open_batch_file(Path(out), fingerprints, [s.name for s in scenarios], engine, keep,
+                                         __version__, fresh, stack)
             rows.update(done)
         todo = [(i, s) for i, s in enumerate(scenarios) if i not in rows]
         n_workers = workers or os.cpu_count() or 1

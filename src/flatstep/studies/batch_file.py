@@ -96,7 +96,7 @@ def acquire_lock(path: Path) -> Path:
                                  f"finish, or write to another file; if no batch is running, delete {lock}") from None
             if _lock_pid(lock) == pid:  # still the stale one
                 warnings.warn(f"{lock}: taking over a stale lock (pid {pid} no longer runs)", BatchFileWarning,
-                              stacklevel=3)
+                              stacklevel=4)
                 lock.unlink(missing_ok=True)
             continue
         with os.fdopen(fd, "w") as f:
@@ -135,7 +135,8 @@ def _refuse(path: Path, what: str) -> ValueError:
                       f"{path.name}.bak and start afresh, or write to another file")
 
 
-def read_rows(path: Path, head: dict[str, Any], fingerprints: Sequence[str]) -> dict[int, dict[str, Any]]:
+def read_rows(path: Path, head: dict[str, Any], fingerprints: Sequence[str],
+              names: Sequence[str]) -> dict[int, dict[str, Any]]:
     """The rows of the batch file ``path`` that belong to this batch, after checking and repairing the file.
 
     A missing or empty file is created with the header ``head``. A last line cut short (no newline, or not
@@ -150,6 +151,8 @@ def read_rows(path: Path, head: dict[str, Any], fingerprints: Sequence[str]) -> 
         The header of this batch (:func:`header`).
     fingerprints : sequence of str
         The fingerprint of each scenario, in input order.
+    names : sequence of str
+        The name of each scenario, for messages.
 
     Returns
     -------
@@ -176,7 +179,7 @@ def read_rows(path: Path, head: dict[str, Any], fingerprints: Sequence[str]) -> 
             end -= len(line) + 1  # a last line cut short (then closed by a newline)
     if end < len(data):
         warnings.warn(f"{path}: dropping {len(data) - end} bytes of a last line cut short", BatchFileWarning,
-                      stacklevel=3)
+                      stacklevel=4)
         os.truncate(path, end)
     if end == 0:
         _rewrite(path, head, b"")
@@ -198,7 +201,7 @@ def read_rows(path: Path, head: dict[str, Any], fingerprints: Sequence[str]) -> 
             raise _refuse(path, f"line {k} is the row of scenario {i}, and this batch has {len(fingerprints)}")
         if row.pop("fingerprint") != fingerprints[i]:
             raise _refuse(path, f"line {k}, the row of scenario {i} ({row.get('name')!r}), was computed for "
-                                f"another scenario than this batch's scenario {i} (or another engine or version)")
+                                f"another scenario than this batch's scenario {i} ({names[i]!r})")
         rows[i] = {"index": i, **row}
     if (first.get("scenarios"), first.get("scenarios_hash")) != (head["scenarios"], head["scenarios_hash"]):
         _rewrite(path, {**head, "created": first.get("created")}, data[len(lines[0]) + 1:end])
@@ -208,11 +211,14 @@ def read_rows(path: Path, head: dict[str, Any], fingerprints: Sequence[str]) -> 
 def _rewrite(path: Path, head: dict[str, Any], rest: bytes) -> None:
     """Replace ``path`` by ``head`` followed by ``rest``, atomically (a new file, synced, renamed over it)."""
     tmp = path.with_name(path.name + ".tmp")
-    with open(tmp, "wb") as f:
-        f.write(json.dumps(head).encode() + b"\n" + rest)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as f:
+            f.write(json.dumps(head).encode() + b"\n" + rest)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 class RowWriter:
@@ -257,7 +263,7 @@ class RowWriter:
         except OSError as exc:
             self.error = exc
             warnings.warn(f"{self.path}: writing failed ({exc}); the batch goes on without writing, and its rows "
-                          "come back on the BatchWriteError raised at its end", BatchFileWarning, stacklevel=3)
+                          "come back on the BatchWriteError raised at its end", BatchFileWarning, stacklevel=4)
             self.close()
 
     def close(self) -> None:
@@ -267,8 +273,8 @@ class RowWriter:
             os.close(fd)
 
 
-def open_batch_file(path: Path, fingerprints: Sequence[str], engine: str, keep: Sequence[str], version: str,
-                    fresh: bool, stack: ExitStack) -> tuple[RowWriter, dict[int, dict[str, Any]]]:
+def open_batch_file(path: Path, fingerprints: Sequence[str], names: Sequence[str], engine: str, keep: Sequence[str],
+                    version: str, fresh: bool, stack: ExitStack) -> tuple[RowWriter, dict[int, dict[str, Any]]]:
     """Lock the batch file ``path`` until ``stack`` closes, check and repair it; its writer and its rows.
 
     With ``fresh``, an existing file is first moved to ``<path>.bak`` (:func:`backup`).
@@ -279,6 +285,8 @@ def open_batch_file(path: Path, fingerprints: Sequence[str], engine: str, keep: 
         The batch file.
     fingerprints : sequence of str
         The fingerprint of each scenario, in input order.
+    names : sequence of str
+        The name of each scenario, for messages.
     engine : str
         The batch's engine.
     keep : sequence of str
@@ -309,7 +317,7 @@ def open_batch_file(path: Path, fingerprints: Sequence[str], engine: str, keep: 
     try:
         if fresh and path.exists():
             backup(path)
-        rows = read_rows(path, header(engine, keep, fingerprints, version), fingerprints)
+        rows = read_rows(path, header(engine, keep, fingerprints, version), fingerprints, names)
     except OSError as exc:
         raise BatchWriteError(path, exc, [None] * len(fingerprints), action="opening") from exc
     sink = RowWriter(path, fingerprints)
