@@ -225,7 +225,8 @@ class RowWriter:
     """Appends rows to a batch file, each as one ``os.write`` of a whole line; syncs after each chunk.
 
     The first OSError stops the writing: it is kept in :attr:`error` (and announced by a
-    :class:`BatchFileWarning`), and later rows are not written.
+    :class:`BatchFileWarning`), a line written in part is truncated off if the file allows, and later rows are
+    not written.
 
     Parameters
     ----------
@@ -239,8 +240,10 @@ class RowWriter:
         self.path, self.fingerprints = path, fingerprints
         self.error: Optional[OSError] = None
         self.fd: Optional[int] = None
+        self.size = 0  # the bytes of whole lines
         try:
             self.fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+            self.size = os.fstat(self.fd).st_size
         except OSError as exc:
             self.error = exc
 
@@ -257,11 +260,17 @@ class RowWriter:
             return
         try:
             for row in rows:
-                line = {"index": row["index"], "fingerprint": self.fingerprints[row["index"]], **row}
-                self._write(json.dumps(line).encode() + b"\n")
+                line = json.dumps({"index": row["index"], "fingerprint": self.fingerprints[row["index"]], **row})
+                data = line.encode() + b"\n"
+                self._write(data)
+                self.size += len(data)
             os.fsync(self.fd)
         except OSError as exc:
             self.error = exc
+            try:
+                os.ftruncate(self.fd, self.size)  # drop a line written in part (else the next run does)
+            except OSError:
+                pass
             warnings.warn(f"{self.path}: writing failed ({exc}); the batch goes on without writing, and its rows "
                           "come back on the BatchWriteError raised at its end", BatchFileWarning, stacklevel=4)
             self.close()
