@@ -9,11 +9,12 @@ static fs_real max_abs(fs_real a, fs_real b)
 }
 
 // Returns nothing; writes the summary of a successful run from its states x and applied voltages v at the
-// n + 1 instants k Ts against the plan, and whether and when |theta - theta*| first exceeded lost_error.
+// n + 1 instants k Ts against the plan, and whether and when the move was lost: |theta - theta*| first beyond
+// the run's lost_error, or else beyond its arrival_error from some t_k to the end (lost at that t_k).
 static void summarize(const struct plan_coef *plan, fs_real Ts, size_t n, const fs_real *x, const fs_real *v,
-                      fs_real lost_error, struct batch_summary *o)
+                      const struct batch_run *run, struct batch_summary *o)
 {
-    fs_real flag[PLAN_FLAG_LEN], t, err;
+    fs_real flag[PLAN_FLAG_LEN], t, err, away = -1;  // away: start of the excursion beyond arrival_error, or -1
     size_t k;
     o->max_abs_theta_error = o->max_abs_rho_error = o->max_abs_va = o->max_abs_vb = 0;
     o->max_abs_theta_error_move = o->max_abs_theta_error_after = 0;
@@ -25,10 +26,14 @@ static void summarize(const struct plan_coef *plan, fs_real Ts, size_t n, const 
         plan_flag(plan, t, flag);
         err = x[4 * k + 3] - flag[PLAN_THETA];
         o->max_abs_theta_error = max_abs(o->max_abs_theta_error, err);
-        if (!o->lost && fs_fabs(err) > lost_error) {
+        if (!o->lost && fs_fabs(err) > run->lost_error) {
             o->lost = true;
             o->lost_at = t;
         }
+        if (!(fs_fabs(err) > run->arrival_error))
+            away = -1;
+        else if (away < 0)
+            away = t;
         o->max_abs_rho_error = max_abs(o->max_abs_rho_error, fs_hypot(x[4 * k], x[4 * k + 1]) - flag[PLAN_RHO]);
         o->max_abs_va = max_abs(o->max_abs_va, v[2 * k]);
         o->max_abs_vb = max_abs(o->max_abs_vb, v[2 * k + 1]);
@@ -41,6 +46,10 @@ static void summarize(const struct plan_coef *plan, fs_real Ts, size_t n, const 
         }
         if (k == n)
             o->final_theta_error = err;
+    }
+    if (!o->lost && away >= 0) {  // it ends beyond arrival_error: lost from the start of that excursion
+        o->lost = true;
+        o->lost_at = away;
     }
     o->ia_final = x[4 * n];
     o->ib_final = x[4 * n + 1];
@@ -62,7 +71,8 @@ size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, s
         m = runs[i].n_periods + 1;
         out[i].controller_status = 0;
         if (scratch_len < 6 || runs[i].n_periods > scratch_len / 6 - 1 || !plan_init(&plan, &runs[i].reference)
-            || !(runs[i].lost_error > 0) || sampled_init(&loop, &runs[i].loop) != SIM_OK)
+            || !(runs[i].lost_error > 0) || !(runs[i].arrival_error > 0)
+            || sampled_init(&loop, &runs[i].loop) != SIM_OK)
             out[i].status = SIM_EARGS;  // the scratch cannot hold this run, or its plan or loop is invalid
         else {
             out[i].status = sampled_run(&loop, &runs[i].ctrl, &runs[i].plant, runs[i].x0, runs[i].n_periods,
@@ -71,8 +81,7 @@ size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, s
             out[i].fault_periods = st.fault_periods;
             out[i].t_first_fault = st.t_first_fault;
             if (out[i].status == SIM_OK)
-                summarize(&plan, runs[i].loop.Ts, runs[i].n_periods, scratch, scratch + 4 * m, runs[i].lost_error,
-                          &out[i]);
+                summarize(&plan, runs[i].loop.Ts, runs[i].n_periods, scratch, scratch + 4 * m, &runs[i], &out[i]);
         }
         failed += out[i].status != SIM_OK;
     }

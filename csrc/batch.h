@@ -23,7 +23,8 @@ struct batch_run {
     size_t n_periods;       // periods from t = 0 (states at k Ts, k = 0..n_periods)
     fs_real x0[4];          // start state (ia, ib, omega, theta)
     const fs_real *noise;   // (n_periods + 1) x 2 current-noise samples, or NULL for none
-    fs_real lost_error;     // |theta - theta*| [rad] beyond which the move is lost (SimResult's lost_error), > 0
+    fs_real lost_error;     // |theta - theta*| [rad] beyond which the move is lost at any time (one full step), > 0
+    fs_real arrival_error;  // the same at the end of the run (SimResult's arrival_error: at most lost_error), > 0
 };
 
 // Summary of one run over the control instants t_k = k Ts, the values of SimResult.summary.

@@ -65,3 +65,39 @@ def test_simulate_hold_damping_flag(capsys):
     assert s["theta_final"] == pytest.approx(0.02 - 1e-4 / stiffness, abs=1e-6)
     assert main(["simulate", "--hold-damping", "0"]) == 2
     assert "hold_damping=0.0" in capsys.readouterr().err
+
+
+def test_a_lost_move_exits_3_and_says_when(tmp_path, capsys):
+    """The paper's gains on a 20 kHz drive lose the move (docs/drive.md): exit code 3 and a warning."""
+    path = tmp_path / "lost.toml"
+    path.write_text("[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n[controller]\nmeasurement = \"model\"\n"
+                    "[load]\ntorque = 1e-5\n")
+    assert main(["simulate", str(path), "--json"]) == 3
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["status"] == "lost"
+    assert "lost its move at t = " in captured.err
+
+
+def test_version_negative_values_and_no_traceback(capsys, monkeypatch):
+    import importlib
+
+    import flatstep
+
+    cli_main = importlib.import_module("flatstep.cli.main")  # the module (flatstep.cli.main is the function)
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out.strip() == f"flatstep {flatstep.__version__}"
+    assert main(["simulate", "--load-torque", "-1e-5", "--json"]) == 0  # a negative value in scientific notation
+    assert json.loads(capsys.readouterr().out)["status"] == "ok"
+
+    def broken(args):
+        raise RuntimeError("something unexpected")
+
+    monkeypatch.setattr(cli_main, "cmd_reproduce", broken)
+    assert main(["reproduce"]) == 1
+    err = capsys.readouterr().err
+    assert "internal error: RuntimeError: something unexpected" in err and "--debug" in err
+    assert "Traceback" not in err
+    assert main(["--debug", "reproduce"]) == 1
+    assert "Traceback" in capsys.readouterr().err

@@ -35,7 +35,7 @@ from ._core_structs import (
 )
 from .control.protocol import Controller
 from .control.smc import FlatnessSMC
-from .engine.result import lost_error
+from .engine.result import arrival_error, full_step
 from .loop.drive import Drive
 from .loop.observers import Observer
 from .loop.sensors import Sensors
@@ -313,7 +313,8 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         c.n_periods = r["n_periods"]
         c.x0 = [float(v) for v in r["x0"]]
         c.noise = _in(noise)
-        c.lost_error = lost_error(r["motor"].Nr, ctrl.plan.theta1, ctrl.plan.theta2)
+        c.lost_error = full_step(r["motor"].Nr)
+        c.arrival_error = arrival_error(r["motor"].Nr, ctrl.plan.theta1, ctrl.plan.theta2)
     scratch = np.empty(6 * (max((r["n_periods"] for r in runs), default=0) + 1))
     lib.batch_sampled(c_runs, n, _out(scratch), scratch.size, out)
     rows: list[Optional[dict[str, Any]]] = []

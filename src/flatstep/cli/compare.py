@@ -13,6 +13,7 @@ from ..control.tuning import CONTROLLER_TYPES, LABELS
 from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band
 from ..studies.robustness import encoder_count
 from ..studies.scenario_file import load_scenario
+from .status import exit_code, warn
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)
 COLUMNS: tuple[tuple[str, str, float | Literal["angle"]], ...] = (
@@ -80,6 +81,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     log(f"{len(nominal)} controllers on the scenario's plant")
     report: dict[str, Any] = {"scenario": scenario.name, "band_rad": band, "count_rad": count,
                               "controllers": {k: {"label": LABELS[k], "metrics": v["metrics"], "faults": v["faults"],
+                                                  "status": v["status"], "lost_at": v["lost_at"],
                                                   "gains": v["result"].meta["gains"],
                                                   "engine": v["result"].meta["engine"]} for k, v in nominal.items()}}
     worst = None
@@ -89,8 +91,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                               log=log)
         report["robustness"] = {"relative_error": study.relative_error, "parameters": list(study.parameters),
                                 "plants": len(next(iter(worst.values()))["rows"]),
-                                "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"]}
-                                          for k, v in worst.items()}}
+                                "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"],
+                                              "statuses": v["statuses"]} for k, v in worst.items()}}
     if args.scales:
         scales = [float(x) for x in args.scales.split(",")]
         baselines = [k for k in kinds if k != "smc"]
@@ -109,24 +111,34 @@ def cmd_compare(args: argparse.Namespace) -> int:
                         title=f"{scenario.name}: {report['robustness']['plants']} plants, parameters off by "
                               f"+-{report['robustness']['relative_error']:.0%}")
         (out / "compare.json").write_text(json.dumps(report, indent=2) + "\n")
+    statuses = [v["status"] for v in nominal.values()]
+    if worst is not None:
+        statuses += [s for v in worst.values() for s, n in v["statuses"].items() for _ in range(n)]
+    code = exit_code(statuses)
     if args.json:
         print(json.dumps(report, indent=2))
-        return 0
+        return code
     print(f"{scenario.name}: the scenario's plant (settling band {band:.3g} rad)")
     rows = {k: v["metrics"] for k, v in nominal.items()}
     print(table(rows, count))
+    print("status: " + ", ".join(f"{LABELS[k]} {v['status']}" for k, v in nominal.items()))
     for kind, v in nominal.items():
-        if v["faults"]:
-            print(f"warning: {LABELS[kind]}: {v['faults']} controller faults (0 V applied for those periods)")
+        warn(LABELS[kind], {"status": v["status"], "lost_at": v["lost_at"], "controller_faults": v["faults"]})
     line = _target_line(rows)
     if worst is not None:
         r = report["robustness"]
         print(f"\nworst over {r['plants']} plants, {', '.join(r['parameters'])} off by +-{r['relative_error']:.0%}")
         rows = {k: v["worst"] for k, v in worst.items() if v["worst"]}
         print(table(rows, count))
+        print("status over the plants: " + ", ".join(
+            f"{LABELS[k]} {v['statuses']['ok']} ok/{v['statuses']['lost']} lost/{v['statuses']['fault']} faulted"
+            for k, v in worst.items()))
         for kind, v in worst.items():
             if v["failed"]:
                 print(f"warning: {LABELS[kind]}: {v['failed']} of {v['runs']} runs failed: {v['failures'][0]}")
+            if v["statuses"]["lost"] or v["statuses"]["fault"]:
+                print(f"flatstep: warning: {LABELS[kind]}: {v['statuses']['lost']} of {v['runs']} plants lost the "
+                      f"move, {v['statuses']['fault']} faulted", file=sys.stderr)
         line = _target_line(rows) or line
     if args.scales:
         where = "worst over the plants" if worst is not None else "the scenario's plant"
@@ -136,7 +148,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                                  f" {m['peak_voltage']:6.3g} V" for k, m in res.items()))
     if line:
         print("\n" + line)
-    return 0
+    return code
 
 
 def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -16,6 +16,7 @@ from ..model.plant import Plant
 from ..studies.robustness import encoder_count
 from ..studies.scenario import Scenario
 from ..studies.scenario_file import load_scenario
+from .status import exit_code, warn
 
 
 def _design_scenario(args: argparse.Namespace) -> Scenario:
@@ -54,14 +55,14 @@ def cmd_design(args: argparse.Namespace) -> int:
         designed = replace(base, gains=d.gains, loop=replace(loop, observer=d.observer if s else None))
         paper = replace(designed, gains=SMCGains())
         runs = {"paper's gains": paper.run(), "designed gains": designed.run()}
-        report["runs"] = {k: {**r.summary(), "controller_faults": r.meta.get("controller_faults", 0)}
-                          for k, r in runs.items()}
+        report["runs"] = {k: r.summary() for k, r in runs.items()}
         plot_overlay(runs, base.plan, encoder_count(base), title=f"{base.name}: {1 / loop.control_period:g} Hz "
                      f"control, load {load:g} N m", path=out / "design.png")
         (out / "design.json").write_text(json.dumps(report, indent=2) + "\n")
+    designed_status = [report["runs"]["designed gains"]["status"]] if "runs" in report else []
     if args.json:
         print(json.dumps(report, indent=2))
-        return 0
+        return exit_code(designed_status)
     print("designed gains: " + ", ".join(f"{k}={v:.6g}" for k, v in report["gains"].items() if v is not None))
     print("observer: " + ", ".join(f"{k}={v:.6g}" for k, v in report["observer"].items()))
     print("rationale: " + ", ".join(f"{k}={v:.6g}" for k, v in report["rationale"].items()))
@@ -71,8 +72,11 @@ def cmd_design(args: argparse.Namespace) -> int:
         move = summ.get("max_abs_theta_error_move", float("nan"))
         print(f"{label:>15}: max |theta - theta*| during the move {move:.3e} "
               f"rad, after it {summ.get('max_abs_theta_error_after', float('nan')):.3e} rad, peak |v| "
-              f"{max(summ['max_abs_va'], summ['max_abs_vb']):.3g} V, controller faults {summ['controller_faults']}")
-    return 0
+              f"{max(summ['max_abs_va'], summ['max_abs_vb']):.3g} V, controller faults {summ['controller_faults']}, "
+              f"status {summ['status']}")
+    if "runs" in report:
+        warn("designed gains", report["runs"]["designed gains"])
+    return exit_code(designed_status)
 
 
 def add_design_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -1,12 +1,22 @@
-"""Command line: ``flatstep reproduce`` and ``flatstep simulate``."""
+"""flatstep: plan and control stepping motors by differential flatness and sliding modes.
+
+Commands: ``reproduce`` (the paper's figures), ``simulate`` (one move), ``design`` (gains for a drive),
+``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``bench``
+(benchmarks). ``flatstep COMMAND --help`` lists a command's flags. Exit codes: 0 every run ok, 1 an unexpected
+error, 2 a refused input, 3 a lost move, 4 a controller fault, 130 interrupted (docs/errors.md).
+"""
 from __future__ import annotations
 
 import argparse
 import json
+import re
+import signal
 import sys
+import traceback
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
+from .. import __version__
 from ..control.smc import MEASUREMENTS, SMCGains
 from ..engine.result import SimResult
 from ..engine.simulate import simulate
@@ -19,11 +29,12 @@ from ..studies.scenario_file import load_scenario
 from .compare import add_compare_command
 from .design import add_design_command
 from .robustness import add_robustness_command
+from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, exit_code, warn
 
 TABLE_KEYS = ("theta_final", "max_abs_theta_error", "max_abs_rho_error", "max_abs_va", "max_abs_vb", "omega_final")
 
 
-def _table(summaries: dict[str, dict[str, float]]) -> str:
+def _table(summaries: dict[str, dict[str, Any]]) -> str:
     """The runs' summaries as a fixed-width table, one row per run (the columns of :data:`TABLE_KEYS`)."""
     head = f"{'run':<6}" + "".join(f"{k:>21}" for k in TABLE_KEYS)
     rows = [f"{name:<6}" + "".join(f"{s[k]:>21.6e}" for k in TABLE_KEYS) for name, s in summaries.items()]
@@ -44,7 +55,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     out = Path(args.out)
     titles = {"fig1": "Fig. 1: ideal closed loop, no load (W1 = W2 = 100)",
               "fig2": "Fig. 2: constant load torque 1e-5 N m (W1 = W2 = 300)"}
-    summaries: dict[str, dict[str, float]] = {}
+    summaries: dict[str, dict[str, Any]] = {}
     for name, scenario in PAPER_SCENARIOS.items():
         result = scenario.run()
         _write(out, name, scenario, result, titles[name])
@@ -52,7 +63,9 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     (out / "summary.json").write_text(json.dumps(summaries, indent=2) + "\n")
     print(_table(summaries))
     print(f"wrote {out / 'fig1.png'}, {out / 'fig2.png'}, {out / 'summary.json'}")
-    return 0
+    for name, summary in summaries.items():
+        warn(name, summary)
+    return exit_code(s["status"] for s in summaries.values())
 
 
 SIM_FLAGS = ("theta1", "theta2", "rho1", "rho2", "t0", "tf", "t_end", "load_torque", "W1", "W2", "eps1", "eps2",
@@ -94,7 +107,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                f"load {scenario.simulated_plant.load:g} N m, {scenario.measurement} measurement")
         (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(json.dumps(summary, indent=2) if args.json else _table({"run": summary}))
-    return 0
+    if not args.json:
+        print(f"status: {summary['status']}")
+    warn(scenario.name, summary)
+    return exit_code([summary["status"]])
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -104,10 +120,30 @@ def cmd_bench(args: argparse.Namespace) -> int:
     return bench_main(args.which, args.repeat)
 
 
+DESCRIPTION = """Plan and control stepping motors by differential flatness and sliding modes.
+
+Commands: reproduce (the paper's figures), simulate (one move), design (gains for a drive), robustness (a
+scenario under parameter errors), compare (every controller on one scenario), bench (benchmarks).
+'flatstep COMMAND --help' lists a command's flags.
+
+Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
+move; 4 a controller faulted; 130 interrupted (docs/errors.md)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with negative numbers in scientific notation taken as values (``--load-torque -1e-5``)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``flatstep`` argument parser, one subcommand per ``cmd_*``."""
-    parser = argparse.ArgumentParser(prog="flatstep", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = _Parser(prog="flatstep", description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"flatstep {__version__}")
+    parser.add_argument("--debug", action="store_true", help="print the traceback of an unexpected error")
+    sub: Any = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     rep = sub.add_parser("reproduce", help="run the paper's Fig. 1 and Fig. 2 scenarios")
     rep.add_argument("--out", default="out", help="output directory (default: out)")
@@ -150,16 +186,27 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status (2 for a refused plan or a bad value)."""
+    """Run the command line; returns the exit status (:mod:`flatstep.cli.status`, docs/errors.md)."""
+    if hasattr(signal, "SIGPIPE"):  # a closed pipe (``flatstep ... | head``) ends the output quietly
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
+        return int(args.func(args))
     except InfeasiblePlanError as exc:
         print(f"flatstep: refused: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_REFUSED
     except ValueError as exc:
         print(f"flatstep: error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_REFUSED
+    except KeyboardInterrupt:
+        print("flatstep: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # noqa: BLE001 -- the command line never prints a traceback unless asked to
+        if args.debug:
+            traceback.print_exc()
+        print(f"flatstep: internal error: {type(exc).__name__}: {exc} (run again with --debug for the traceback, "
+              "and please report it)", file=sys.stderr)
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

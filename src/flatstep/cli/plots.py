@@ -86,8 +86,9 @@ def plot_robustness(study: dict[str, Any], count: float | None, plan: RestToRest
             for y, ls in ((1, ":"), (-1, ":"), (0.5, "--"), (-0.5, "--")):
                 ax.axhline(y, color="k", ls=ls, lw=0.8)
         w = s.get("worst_counts", s["worst_rad"])
-        ax.set_title(f"{label}: {s['runs'] - s['failed']}/{s['runs']} runs; worst move {w.get('move', np.nan):.3g}, "
-                     f"rest {w.get('rest', np.nan):.3g} {unit}", fontsize=10)
+        st = s["statuses"]
+        ax.set_title(f"{label}: {st['ok']}/{s['runs']} runs ok, {st['lost']} lost their move, {st['fault']} faulted; "
+                     f"worst move {w.get('move', np.nan):.3g}, rest {w.get('rest', np.nan):.3g} {unit}", fontsize=10)
         ax.set_ylabel(rf"$\theta - \theta^*$ [{unit}]")
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("t [s] (shaded: the move)")

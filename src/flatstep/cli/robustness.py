@@ -3,12 +3,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from ..studies.robustness import REST_AFTER, encoder_count, run_study
 from ..studies.scenario_file import Robustness, load_scenario
+from .status import exit_code
 
 
 def cmd_robustness(args: argparse.Namespace) -> int:
@@ -31,18 +33,24 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         plot_robustness(result, count, scenario.plan, title=f"{scenario.name}: plant parameters off by "
                         f"+-{study.relative_error:.0%} ({len(result['errors'])} plants)", path=out / "robustness.png")
         (out / "robustness.json").write_text(json.dumps(report, indent=2) + "\n")
+    own = report["sets"]["scenario"]
+    code = exit_code(["lost"] * own["statuses"]["lost"] + ["fault"] * own["statuses"]["fault"])
     if args.json:
         print(json.dumps(report, indent=2))
-        return 0
+        return code
     unit = "counts" if count else "rad"
     print(f"{scenario.name}: {len(result['errors'])} plants, parameters off by +-{study.relative_error:.0%}")
-    print(f"{'gains':<14}{'runs ok':>9}{'worst move':>14}{'worst rest':>14}{'final':>12}{'peak |v|':>11}  [{unit}, V]")
+    print(f"{'gains':<14}{'runs ok':>9}{'lost':>6}{'fault':>6}{'worst move':>14}{'worst rest':>14}{'final':>12}"
+          f"{'peak |v|':>11}  [{unit}, V]")
     for label, s in report["sets"].items():
-        w, wv = s.get("worst_counts", s["worst_rad"]), s["worst_rad"]
-        print(f"{label:<14}{s['runs'] - s['failed']:>5}/{s['runs']:<3}{w.get('move', float('nan')):>14.3f}"
-              f"{w.get('rest', float('nan')):>14.3f}{w.get('final', float('nan')):>12.3f}"
-              f"{wv.get('peak_voltage', float('nan')):>11.3g}")
-    return 0
+        w, wv, st = s.get("worst_counts", s["worst_rad"]), s["worst_rad"], s["statuses"]
+        print(f"{label:<14}{st['ok']:>5}/{s['runs']:<3}{st['lost']:>6}{st['fault']:>6}"
+              f"{w.get('move', float('nan')):>14.3f}{w.get('rest', float('nan')):>14.3f}"
+              f"{w.get('final', float('nan')):>12.3f}{wv.get('peak_voltage', float('nan')):>11.3g}")
+    if own["failed"] or code:
+        print(f"flatstep: warning: the scenario's gains: {own['statuses']['lost']} of {own['runs']} plants lost the "
+              f"move, {own['statuses']['fault']} faulted, {own['failed']} failed", file=sys.stderr)
+    return code
 
 
 def add_robustness_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

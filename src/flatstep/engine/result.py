@@ -3,11 +3,13 @@ r"""Time series of a closed-loop run, its status and its summary numbers.
 **Status** (:attr:`SimResult.status`, and the ``status`` key of :meth:`SimResult.summary`, batch rows, compare
 and robustness reports):
 
-* ``"lost"``: the move was lost: at the time ``lost_at``, :math:`|\theta - \theta^*|` exceeded
-  :func:`lost_error`: one full step, :math:`\pi/(2N_r)` (the angle between two detent positions of a
-  two-phase motor: beyond it the rotor settles in another detent, the step an open-loop drive would skip), or
-  half the move :math:`|\theta_2 - \theta_1|/2` if that is smaller (the rotor is then nearer its start than
-  its target: a move shorter than a step, as the paper's 0.02 rad, is lost long before a full step);
+* ``"lost"``: the move was lost, first at the time ``lost_at``: :math:`|\theta - \theta^*|` exceeded one
+  full step, :math:`\pi/(2N_r)` (the angle between two detent positions of a two-phase motor: beyond it the
+  rotor settles in another detent, the step an open-loop drive would skip), or the run ends with
+  :math:`|\theta - \theta^*|` beyond :func:`arrival_error`, half the move :math:`|\theta_2 - \theta_1|/2` if
+  that is smaller than a step (the rotor then rests nearer its start than its target: a move shorter than a
+  step, as the paper's 0.02 rad, is lost long before it is a full step off); ``lost_at`` is then the start of
+  that last excursion;
 * ``"fault"``: the move was kept, but the controller faulted in ``controller_faults`` periods (outside its
   law's domain: it applied 0 V there), the first at ``first_fault_time``;
 * ``"ok"``: neither.
@@ -35,8 +37,8 @@ def full_step(Nr: int) -> float:
     return math.pi / (2 * Nr)
 
 
-def lost_error(Nr: int, theta1: float, theta2: float) -> float:
-    """The tracking error beyond which a move from ``theta1`` to ``theta2`` is lost [rad].
+def arrival_error(Nr: int, theta1: float, theta2: float) -> float:
+    """The error at rest (from ``tf`` on) beyond which a move from ``theta1`` to ``theta2`` is lost [rad].
 
     One full step, or half the move if that is smaller (a move of zero length: one full step); see the module
     docstring.
@@ -92,13 +94,19 @@ class SimResult:
 
     @property
     def lost_at(self) -> Optional[float]:
-        """The first time |theta - theta*| exceeded :func:`lost_error` [s], or ``None``."""
+        """The first time the move was lost [s] (module docstring), or ``None``."""
         Nr, plan = self.meta.get("plant", {}).get("motor", {}).get("Nr"), self.meta.get("plan")
         if Nr is None or plan is None:
             raise ValueError("this SimResult has no plant or plan in its metadata (meta['plant'], meta['plan']): "
                              "the full step that decides a lost move is unknown; build results with flatstep.simulate")
-        beyond = np.flatnonzero(np.abs(self.theta_error) > lost_error(int(Nr), plan["theta1"], plan["theta2"]))
-        return float(self.t[beyond[0]]) if beyond.size else None
+        err = np.abs(self.theta_error)
+        beyond = np.flatnonzero(err > full_step(int(Nr)))
+        if beyond.size:
+            return float(self.t[beyond[0]])
+        near = np.flatnonzero(err <= arrival_error(int(Nr), plan["theta1"], plan["theta2"]))
+        if near.size and near[-1] == err.size - 1:
+            return None  # it ends within arrival_error of the target
+        return float(self.t[near[-1] + 1]) if near.size else float(self.t[0])
 
     @property
     def status(self) -> str:

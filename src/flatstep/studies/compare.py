@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..control.tuning import CONTROLLER_TYPES
-from ..engine.result import SimResult
+from ..engine.result import STATUSES, SimResult
 from ..plan.rest_to_rest import RestToRest
 from .batch import run_batch
 from .robustness import encoder_count, perturbed, plant_errors
@@ -106,7 +106,7 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
             bandwidth_scale: float = 1.0, engine: str = "c") -> dict[str, dict[str, Any]]:
     """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects).
 
-    Returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n}}``.
+    Returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n, "status": ..., "lost_at": ...}}``.
     """
     band = default_band(scenario) if band is None else band
     out: dict[str, dict[str, Any]] = {}
@@ -114,7 +114,8 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
         sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
         r = sc.run(engine)
         out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.simulated_plant.motor.R),
-                     "result": r, "faults": int(r.meta.get("controller_faults", 0))}
+                     "result": r, "faults": int(r.meta.get("controller_faults", 0)), "status": r.status,
+                     "lost_at": r.lost_at}
     return out
 
 
@@ -154,7 +155,9 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
             row["metrics"] = m
             worst = m if not worst else {k: _worse(worst[k], m[k]) for k in METRICS}
         failed = [r["error"] for r in rows if r["error"] is not None]
-        out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed, "rows": rows}
+        statuses = {s: sum(r.get("status") == s for r in rows if r["error"] is None) for s in STATUSES}
+        out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed,
+                     "statuses": statuses, "rows": rows}
         if log is not None:
             log(f"{kind}{'' if bandwidth_scale == 1 or kind == 'smc' else f' x{bandwidth_scale:g}'} on "
                 f"{len(rows)} plants")

@@ -8,6 +8,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..control.smc import SMCGains
+from ..engine.result import STATUSES
 from .batch import run_batch
 from .scenario import Scenario
 from .scenario_file import Robustness
@@ -64,7 +65,11 @@ def run_study(scenario: Scenario, study: Robustness, *, with_paper_gains: bool =
 
 
 def _summarise(rows: list[dict[str, Any]], scenario: Scenario, count: Optional[float]) -> dict[str, Any]:
-    """One set's summary: runs, failures, the worst move/rest/final errors [rad] and peak voltage, in counts too."""
+    """One set's summary: runs, failures, statuses, worst errors [rad] and peak voltage, in counts too.
+
+    The statuses count the rows that ran by their status (ok, fault, lost); the worst errors are those during
+    the move, at rest and at the end.
+    """
     plan = scenario.plan
     failed = [r for r in rows if r["error"] is not None]
     ok = [r for r in rows if r["error"] is None]
@@ -77,8 +82,9 @@ def _summarise(rows: list[dict[str, Any]], scenario: Scenario, count: Optional[f
         for key, val in (("move", during), ("rest", float(np.max(rest)) if rest.size else float("nan")),
                          ("final", float(e[-1])), ("peak_voltage", float(v))):
             worst[key] = max(worst.get(key, -np.inf), val)
+    statuses = {s: sum(r.get("status") == s for r in ok) for s in STATUSES}
     summary: dict[str, Any] = {"runs": len(rows), "failed": len(failed), "failures": [r["error"] for r in failed],
-               "worst_rad": worst, "rows": rows}
+                               "statuses": statuses, "worst_rad": worst, "rows": rows}
     if count:
         summary["worst_counts"] = {k: worst[k] / count for k in ("move", "rest", "final") if k in worst}
     return summary
