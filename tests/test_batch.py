@@ -415,14 +415,14 @@ def test_kill_9_of_the_parent_ends_its_workers_and_the_file_resumes(tmp_path, mo
 
 ORPHAN = """
 import os, sys, time
-from flatstep.studies import batch
+from flatstep.studies import workers
 parent = os.getpid()
 child = os.fork()
 if child == 0:
     if sys.argv[1] == "watchdog":
-        batch.sys = type(sys)("fake_sys")
-        batch.sys.platform = "darwin"  # no prctl: the watchdog thread
-    batch.die_with_parent(parent)
+        workers.sys = type(sys)("fake_sys")
+        workers.sys.platform = "darwin"  # no prctl: the watchdog thread
+    workers.die_with_parent(parent)
     time.sleep(30)
     os._exit(0)
 print(child, flush=True)

@@ -8,13 +8,10 @@ the rows already there.
 """
 from __future__ import annotations
 
-import ctypes
 import json
 import math
 import os
-import signal
 import sys
-import threading
 import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from contextlib import ExitStack
@@ -25,9 +22,10 @@ from typing import Any, Iterable, Optional, Sequence, TextIO
 
 from ..engine.result import SimResult
 from ..validate import check_integer
-from .batch_file import BatchWriteError, open_batch_file, pid_alive
+from .batch_file import BatchWriteError, open_batch_file
 from .fingerprint import fingerprint
 from .scenario import Scenario
+from .workers import die_with_parent
 
 
 def _run_one(index: int, scenario: Scenario, engine: str, keep: Sequence[str]) -> dict[str, Any]:
@@ -140,48 +138,6 @@ def _done_indices(out: Path) -> set[int]:
         except (ValueError, KeyError, TypeError):
             continue  # a line cut by an interruption
     return done
-
-
-#: ``prctl`` option: the signal a process receives when its parent dies (linux/prctl.h).
-_PR_SET_PDEATHSIG = 1
-
-
-def die_with_parent(parent: int) -> None:
-    """Process-pool initializer: end this worker when its parent dies, even by SIGKILL.
-
-    On Linux it asks the kernel for SIGTERM when the parent dies (``prctl(PR_SET_PDEATHSIG, SIGTERM)``
-    through ctypes); elsewhere, or if that fails, a daemon thread checks every 0.2 s whether ``os.getppid()``
-    changed and ends the worker if so. A worker whose parent died before this ran ends at once. The default
-    process pool of :func:`run_batch` uses it; give it to your own pool as
-    ``ProcessPoolExecutor(initializer=die_with_parent, initargs=(os.getpid(),))``.
-
-    Parameters
-    ----------
-    parent : int
-        The pid of the process that runs the batch.
-
-    Notes
-    -----
-    The kernel sends the signal when the *thread* that started the worker ends: the pool must be created and
-    used by one thread that outlives it (as :func:`run_batch` does).
-    """
-    armed = False
-    if sys.platform.startswith("linux"):
-        try:
-            libc = ctypes.CDLL(None, use_errno=True)
-            armed = libc.prctl(_PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) == 0
-        except (OSError, AttributeError):
-            armed = False
-    ppid = os.getppid()
-    if not pid_alive(parent) or (ppid == 1 and parent != 1):  # the parent died before the signal was asked for
-        os._exit(1)
-    if not armed:
-        def watch() -> None:
-            while os.getppid() == ppid:
-                time.sleep(0.2)
-            os._exit(1)
-
-        threading.Thread(target=watch, name="flatstep-die-with-parent", daemon=True).start()
 
 
 def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Optional[Executor] = None,
