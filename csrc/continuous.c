@@ -147,8 +147,8 @@ int continuous_run(const struct controller *ctrl, const struct plant *plant, con
         e = seg_init(&g, &op, &c, a, x);
         xs = g.method == CONTINUOUS_DOPRI5 ? g.u.d5.x : g.u.d8.x;
         for (t = a; e == ODE_OK && t < b; steps++) {
-            if (steps >= p->max_steps) {
-                rc = SIM_EMAXSTEPS;
+            if (steps >= p->max_steps || (p->cancel && *p->cancel)) {
+                rc = steps >= p->max_steps ? SIM_EMAXSTEPS : SIM_ECANCELLED;
                 break;
             }
             e = seg_step(&g, b);

@@ -27,12 +27,13 @@
 enum continuous_method { CONTINUOUS_DOP853 = 0, CONTINUOUS_DOPRI5, CONTINUOUS_DOP853_DENSE };
 
 struct continuous_params {
-    fs_real rtol, atol;    // error control, > 0
-    fs_real h_max;         // largest step [s], > 0
-    uint32_t max_steps;    // bound on accepted steps over the whole run
-    uint32_t method;       // enum continuous_method
-    const fs_real *knots;  // times where the reference's derivatives jump (the plan's t0, tf), nondecreasing
-    size_t n_knots;        // how many (knots may be NULL when 0)
+    fs_real rtol, atol;               // error control, > 0
+    fs_real h_max;                    // largest step [s], > 0
+    uint32_t max_steps;               // bound on accepted steps over the whole run
+    uint32_t method;                  // enum continuous_method
+    const fs_real *knots;             // times where the reference's derivatives jump (the plan's t0, tf), nondecreasing
+    size_t n_knots;                   // how many (knots may be NULL when 0)
+    const volatile uint32_t *cancel;  // NULL, or a flag another thread sets to stop the run (SIM_ECANCELLED)
 };
 
 // Returns SIM_OK or an error sim_status; runs the closed loop from x0 at t_out[0] with ideal sensors (the state

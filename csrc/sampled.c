@@ -45,6 +45,7 @@ int sampled_init(struct sampled *s, const struct sampled_params *p)
     s->model = p->model;
     s->have_prev = false;
     s->theta_prev = 0;
+    s->cancel = p->cancel;
     return SIM_OK;
 }
 
@@ -152,6 +153,10 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
             status_out[k] = status;
         if (k == n_periods)
             break;
+        if (s->cancel && *s->cancel) {
+            st->t_fail = t;
+            return SIM_ECANCELLED;
+        }
         integrate(s, &c, v_apply, t, x, st);
         if (!finite4(x)) {
             st->t_fail = t + s->Ts;

@@ -28,6 +28,7 @@ struct sampled_params {
     struct drive_params drive;        // bus saturation (v_bus = infinity: none), computation delay, PWM
     struct motor_params model;        // the controller's nominal model: the observer's torque, the bridge's
                                       // start voltage R x0 (the start equilibrium)
+    const volatile uint32_t *cancel;  // NULL, or a flag another thread sets to stop the run (SIM_ECANCELLED)
 };
 
 // Caller-owned state of a run: the parts' states and the previous encoder angle.
@@ -42,6 +43,7 @@ struct sampled {
     struct motor_params model;
     fs_real theta_prev;  // last angle the controller saw (backward difference)
     bool have_prev;
+    const volatile uint32_t *cancel;
 };
 
 // Returns SIM_OK, or SIM_EARGS when a part's parameters are invalid (s is then left unusable).

@@ -13,6 +13,7 @@ enum sim_status {
     SIM_EHMIN,       // continuous loop: the step size fell below rounding level
     SIM_EMAXSTEPS,   // continuous loop: more than max_steps accepted steps
     SIM_ENONFINITE,  // sampled loop: the plant state became NaN or infinite
+    SIM_ECANCELLED,  // the caller's cancel flag was set (another thread asked the run to stop)
 };
 
 struct sim_stats {

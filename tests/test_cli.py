@@ -101,3 +101,24 @@ def test_version_negative_values_and_no_traceback(capsys, monkeypatch):
     assert "Traceback" not in err
     assert main(["--debug", "reproduce"]) == 1
     assert "Traceback" in capsys.readouterr().err
+
+
+def test_ctrl_c_stops_a_long_c_run_quickly(tmp_path):
+    """SIGINT during a long C run (10 s of 20 kHz control): the run stops within a second, exit code 130."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    path = tmp_path / "long.toml"
+    path.write_text("t_end = 10.0\n[drive]\ncontrol_rate = 20000.0\nsubsteps = 200\n[controller]\n"
+                    "measurement = \"model\"\n")
+    proc = subprocess.Popen([sys.executable, "-m", "flatstep", "simulate", str(path)], stderr=subprocess.PIPE,
+                            stdout=subprocess.PIPE, text=True)
+    time.sleep(2.0)  # imports done, the C run under way
+    assert proc.poll() is None, proc.communicate()
+    start = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=20)
+    assert proc.returncode == 130 and "interrupted" in err
+    assert time.perf_counter() - start < 1.0

@@ -277,7 +277,7 @@ static double max_error(const struct smc *s, const double *x, int k0, int k1)
 static int loop_checks(void)
 {
     struct sampled_params p = {
-        5e-5, 4, false, false, drive_sensors(), {0}, {INFINITY, false, DRIVE_AVERAGED, 0, 0}, {0, 0, 0, 0, 0, 0}};
+        5e-5, 4, false, false, drive_sensors(), {0}, {INFINITY, false, DRIVE_AVERAGED, 0, 0}, {0, 0, 0, 0, 0, 0}, NULL};
     struct plant plant;
     struct sim_stats st;
     struct sampled s;

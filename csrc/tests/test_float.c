@@ -12,7 +12,7 @@ int main(void)
     struct plant plant = {{0, 0, 0, 0, 0, 0}, 0, {0, 0, 0, 0, 0}};
     struct controller c;
     const float knots[2] = {0.02f, 0.04f};
-    struct continuous_params cp = {1e-5f, 1e-8f, 1.0f, 100000, CONTINUOUS_DOP853, knots, 2};
+    struct continuous_params cp = {1e-5f, 1e-8f, 1.0f, 100000, CONTINUOUS_DOP853, knots, 2, NULL};
     struct sim_stats st;
     float f[PLAN_FLAG_LEN], x[4], vff[2], y[5], v[2], t_out[2] = {0.0f, 0.06f}, x_out[8], x0[4] = {0.4f, 0, 0, 0};
     int i, failures = 0, rc;

@@ -29,10 +29,13 @@ static void paper(struct smc *s, struct plant *plant, double w, double load, dou
 }
 
 // Returns sampled_run's status on an ideal loop (no sensors, observer or bus) with period Ts and RK4 substeps.
+static volatile uint32_t cancel_flag;
+
 static int run_ideal(struct smc *s, const struct plant *plant, const double x0[4], double Ts, uint32_t substeps,
                      size_t n, struct sim_stats *st)
 {
     struct sampled_params p = {0};
+    p.cancel = &cancel_flag;
     p.Ts = Ts;
     p.substeps = substeps;
     p.drive.v_bus = INFINITY;
@@ -57,7 +60,7 @@ static double max_theta_error(const struct smc *s, const double *t, const double
 // Returns 0 after the continuous-loop checks (paper Fig. 1 and Fig. 2, faults, arguments).
 static int continuous_checks(void)
 {
-    struct continuous_params cp = {1e-10, 1e-12, 1.0, 1000000, CONTINUOUS_DOP853, knots, 2};
+    struct continuous_params cp = {1e-10, 1e-12, 1.0, 1000000, CONTINUOUS_DOP853, knots, 2, NULL};
     struct plant plant;
     struct sim_stats st;
     struct smc s;
@@ -98,6 +101,11 @@ static int continuous_checks(void)
           st.controller_status);
     x0[0] = 0.4;
     cp.max_steps = 10;
+    cp.cancel = &cancel_flag;
+    cancel_flag = 1;
+    CHECK(continuous_run(&ctrl, &plant, x0, t_out, N_OUT, &cp, x_out, &st) == SIM_ECANCELLED, "cancelled");
+    cancel_flag = 0;
+    cp.cancel = NULL;
     CHECK(continuous_run(&ctrl, &plant, x0, t_out, N_OUT, &cp, x_out, &st) == SIM_EMAXSTEPS, "max_steps = 10");
     cp.max_steps = 1000000;
     t_out[5] = 1.0;
@@ -111,7 +119,7 @@ static int continuous_checks(void)
 // Returns 0 after the sampled-loop checks: convergence to the continuous loop as Ts -> 0, faults, arguments.
 static int sampled_checks(void)
 {
-    struct continuous_params cp = {1e-10, 1e-12, 1.0, 1000000, CONTINUOUS_DOP853, knots, 2};
+    struct continuous_params cp = {1e-10, 1e-12, 1.0, 1000000, CONTINUOUS_DOP853, knots, 2, NULL};
     struct plant plant;
     struct sim_stats st;
     struct smc s;
@@ -143,6 +151,10 @@ static int sampled_checks(void)
           "x0 = 0: rc %d status %u", rc, st.controller_status);
     x0[0] = 0.4;
     CHECK(run_ideal(&s, &plant, x0, 1e-4, 0, 600, &st) == SIM_EARGS, "substeps = 0");
+    cancel_flag = 1;  // as another thread would set it: the run stops after the current period
+    rc = run_ideal(&s, &plant, x0, 1e-4, 4, 600, &st);
+    CHECK(rc == SIM_ECANCELLED && st.t_fail == 0 && st.steps == 0, "cancelled sampled run: rc %d", rc);
+    cancel_flag = 0;
     CHECK(run_ideal(&s, &plant, x0, -1e-4, 4, 600, &st) == SIM_EARGS, "Ts < 0");
     plant.effects.detent_torque = -1;
     CHECK(run_ideal(&s, &plant, x0, 1e-4, 4, 600, &st) == SIM_EARGS, "negative detent torque");

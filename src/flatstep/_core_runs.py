@@ -28,6 +28,7 @@ from ._core_structs import (
     _stats,
     _u32,
     _vec,
+    cancellable,
     controller_struct,
     ffi,
     lib,
@@ -136,11 +137,15 @@ def _run_continuous(iface: CData, plant: CData, x0: ArrayLike, t_out: Array, *, 
     x0v = _vec(x0)
     k = _vec(sorted(float(t) for t in knots))
     X = np.empty((t_out.size, 4))
-    params = ffi.new("struct continuous_params *",
-                     dict(rtol=rtol, atol=atol, h_max=min(h_max, 1e300), max_steps=max_steps,
-                          method=CONTINUOUS_METHODS[method], knots=_in(k), n_knots=k.size))
     st = ffi.new("struct sim_stats *")
-    rc = lib.continuous_run(iface, plant, _in(x0v), _in(t_out), t_out.size, params, _out(X), st)
+
+    def run(cancel: CData) -> int:
+        params = ffi.new("struct continuous_params *",
+                         dict(rtol=rtol, atol=atol, h_max=min(h_max, 1e300), max_steps=max_steps,
+                              method=CONTINUOUS_METHODS[method], knots=_in(k), n_knots=k.size, cancel=cancel))
+        return int(lib.continuous_run(iface, plant, _in(x0v), _in(t_out), t_out.size, params, _out(X), st))
+
+    rc = cancellable(run)
     _check(rc, st, "continuous")
     return X, _stats(st, "stage_status")
 
@@ -255,18 +260,23 @@ def run_sampled(controller: Controller, motor: MotorParams, load: float, x0: Arr
     """
     n1 = n_periods + 1
     noise_rows = _noise(sensors, n1, noise)
-    s = ffi.new("struct sampled *")
     fields = _loop_fields(controller.motor, Ts, substeps, drive, sensors, observer, compute_delay)
-    if lib.sampled_init(s, ffi.new("struct sampled_params *", fields)):
-        raise ValueError(f"sampled_init rejected the loop (control_period={Ts!r}, substeps={substeps!r}, "
-                         f"sensors={sensors!r}, observer={observer!r}, drive={drive!r})")
     bound = controller_struct(controller)
     x0v = _vec(x0)
     X, V, Y = np.empty((n1, 4)), np.empty((n1, 2)), np.empty((n1, 5))
     status = np.empty(n1, dtype=np.uint32)
     st = ffi.new("struct sim_stats *")
-    rc = lib.sampled_run(s, bound.iface, _plant(motor, load, effects), _in(x0v), n_periods, _in(noise_rows), _out(X),
-                         _out(V), _out(Y), _u32(status), st)
+    plant = _plant(motor, load, effects)
+
+    def run(cancel: CData) -> int:
+        s = ffi.new("struct sampled *")
+        if lib.sampled_init(s, ffi.new("struct sampled_params *", {**fields, "cancel": cancel})):
+            raise ValueError(f"sampled_init rejected the loop (control_period={Ts!r}, substeps={substeps!r}, "
+                             f"sensors={sensors!r}, observer={observer!r}, drive={drive!r})")
+        return int(lib.sampled_run(s, bound.iface, plant, _in(x0v), n_periods, _in(noise_rows), _out(X), _out(V),
+                                   _out(Y), _u32(status), st))
+
+    rc = cancellable(run)
     _check(rc, st, "sampled")
     return (np.ascontiguousarray(X.T), np.ascontiguousarray(V.T), np.ascontiguousarray(Y.T), status,
             _stats(st))
@@ -316,7 +326,13 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         c.lost_error = full_step(r["motor"].Nr)
         c.arrival_error = arrival_error(r["motor"].Nr, ctrl.plan.theta1, ctrl.plan.theta2)
     scratch = np.empty(6 * (max((r["n_periods"] for r in runs), default=0) + 1))
-    lib.batch_sampled(c_runs, n, _out(scratch), scratch.size, out)
+
+    def run(cancel: CData) -> int:
+        for i in range(n):
+            c_runs[i].loop.cancel = cancel
+        return int(lib.batch_sampled(c_runs, n, _out(scratch), scratch.size, out))
+
+    cancellable(run)
     rows: list[Optional[dict[str, Any]]] = []
     for i in range(n):
         o = out[i]

@@ -5,7 +5,8 @@ row-major ``(n, k)`` on the C side and ``(k, n)`` (components first, as in the P
 """
 from __future__ import annotations
 
-from typing import Any, NamedTuple, Optional
+import threading
+from typing import Any, Callable, NamedTuple, Optional, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -29,7 +30,8 @@ STATUS_BITS = {"nonfinite": lib.CTRL_NONFINITE, "rho": lib.CTRL_RHO, "sqrt": lib
 FAULT_BITS = lib.CTRL_FAULTS
 _SIM_ERRORS = {lib.SIM_EARGS: "invalid arguments", lib.SIM_ECONTROL: "the controller faulted",
                lib.SIM_EHMIN: "the step size fell below rounding level",
-               lib.SIM_EMAXSTEPS: "more than max_steps steps", lib.SIM_ENONFINITE: "the state became non-finite"}
+               lib.SIM_EMAXSTEPS: "more than max_steps steps", lib.SIM_ENONFINITE: "the state became non-finite",
+               lib.SIM_ECANCELLED: "cancelled"}
 _PARAM_ERRORS = {lib.SMC_EMOTOR: "motor", lib.SMC_EPLAN: "plan", lib.SMC_EGAINS: "gains",
                  lib.SMC_EMEASUREMENT: "measurement", lib.SMC_ELIMITS: "v_limit/rho_min"}
 #: Defaults of the guards in smc_step: bound on hypot(va, vb) [V] and smallest rho acted on [A].
@@ -163,3 +165,41 @@ def _check(rc: int, st: CData, what: str) -> None:
     if rc != lib.SIM_OK:
         raise RuntimeError(f"C {what} run failed at t = {st.t_fail:.6g} s: {_SIM_ERRORS.get(rc, rc)} "
                            f"(controller status {status_names(st.controller_status)})")
+
+
+Result = TypeVar("Result")
+
+
+def cancellable(call: Callable[[CData], Result]) -> Result:
+    """``call(cancel)`` so that Ctrl-C stops the C run it makes within milliseconds.
+
+    ``cancel`` is a ``uint32_t *`` the call passes to the C loop (``sampled_params.cancel``,
+    ``continuous_params.cancel``), which polls it once per control period or step. In the main thread the call
+    runs in a helper thread (cffi releases the GIL), so that the main thread stays free to receive the
+    KeyboardInterrupt, set the flag, wait for the run to stop and raise the KeyboardInterrupt again. In any
+    other thread the call runs in place: Python delivers Ctrl-C to the main thread only.
+    """
+    cancel = ffi.new("uint32_t *")
+    if threading.current_thread() is not threading.main_thread():
+        return call(cancel)
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = call(cancel)
+        except BaseException as exc:  # handed to the main thread below
+            box["error"] = exc
+
+    worker = threading.Thread(target=target, name="flatstep C run", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+    except KeyboardInterrupt:
+        cancel[0] = 1
+        worker.join()
+        raise
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
