@@ -22,7 +22,7 @@ int main(int argc, char **argv)
     struct controller c;
     struct sim_stats st;
     const double knots[2] = {0.02, 0.04};
-    struct continuous_params cp = {1e-7, 1e-9, 1.0, 1000000, CONTINUOUS_DOP853, knots, 2};
+    struct continuous_params cp = {1e-7, 1e-9, 1.0, 1000000, CONTINUOUS_DOP853, knots, 2, NULL};
     double x0[4] = {0.4, 0, 0, 0};
     int reps = argc > 1 ? atoi(argv[1]) : 50, r, i, rc = SIM_OK;
     smc_params_default(&p);
