@@ -52,8 +52,9 @@ def plot_plants(study: dict[str, dict[str, Any]], labels: dict[str, str], plan: 
     for ax, (kind, s) in zip(axes[:, 0], study.items(), strict=True):  # one panel per controller
         plot_traces(ax, s["rows"], scale, plan, lw=0.6)
         worst = s["worst"].get("move_max", np.nan) if s["worst"] else np.nan
-        ax.set_title(f"{labels.get(kind, kind)}: {s['runs'] - s['failed']}/{s['runs']} runs, worst max error "
-                     f"during the move {worst / scale:.3g} {unit}", fontsize=10)
+        st = s["statuses"]
+        ax.set_title(f"{labels.get(kind, kind)}: {st['ok']}/{s['runs']} runs ok, {st['lost']} lost their move, "
+                     f"{st['fault']} faulted; worst max error during the move {worst / scale:.3g} {unit}", fontsize=10)
         ax.set_ylabel(rf"$\theta - \theta^*$ [{unit}]")
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("t [s] (shaded: the move)")
