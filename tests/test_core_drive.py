@@ -92,18 +92,18 @@ def test_the_saturation_runs_use_the_bus(motor, plan):
 
 
 def test_delays_shift_what_the_c_loop_sees(motor, plan):
-    c, _ = run_pair(motor, plan, "model", dict(sensors=Sensors(delay=8)), t_end=0.03)
+    c, _ = run_pair(motor, plan, "model", dict(sensors=Sensors(delay=8)), t_end=0.04)
     enc = Sensors(delay=8).read_angle(c.theta)
     np.testing.assert_array_equal(c.meta["measured"]["theta"][8:], enc[:-8])
     assert np.all(c.meta["measured"]["theta"][:8] == enc[0])
     c, _ = run_pair(motor, plan, "observer", dict(sensors=Sensors(), observer=Observer(1500.0), compute_delay=True),
-                    t_end=0.03)
+                    t_end=0.04)
     assert c.va[0] == motor.R * c.ia[0] and c.vb[0] == 0.0  # the start equilibrium until the first command lands
 
 
 def test_controller_faults_are_counted_alike(motor, plan):
     """No current at all: rho = 0 is outside the law's domain, so both loops de-energise every period."""
-    c, py = run_pair(motor, plan, "model", dict(sensors=Sensors()), x0=[0.0, 0.0, 0.0, 0.0], t_end=0.005)
+    c, py = run_pair(motor, plan, "model", dict(sensors=Sensors()), x0=[0.0, 0.0, 0.0, 0.0], t_end=0.04)
     assert c.meta["controller_faults"] == py.meta["controller_faults"] == c.t.size
     assert c.meta["first_fault_time"] == py.meta["first_fault_time"] == 0.0
     assert np.all(c.va == 0) and np.all(c.theta == py.theta)
@@ -117,7 +117,7 @@ def test_controller_faults_are_counted_alike(motor, plan):
 ])
 def test_default_engine_is_c(motor, plan, options):
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "observer" if "observer" in options else "ideal")
-    r = fs.simulate(motor, plan, ctrl, loop=fs.DriveLoop(TS, **options), t_end=2e-3)
+    r = fs.simulate(motor, plan, ctrl, loop=fs.DriveLoop(TS, **options), t_end=0.04)
     assert r.meta["engine"] == "c" and r.meta["control_period"] == TS
 
 
@@ -139,7 +139,7 @@ def test_c_engine_refuses_what_it_does_not_model(motor, plan):
     loop = fs.DriveLoop(TS, sensors=Sensors(delay=9), observer=Observer())
     with pytest.raises(ValueError, match=r"sensors.delay=9 periods \(the C loop holds at most 8\)"):
         fs.simulate(motor, plan, ctrl, loop=loop, engine="c")
-    assert fs.simulate(motor, plan, ctrl, loop=loop, engine="python", t_end=2e-3).meta["engine"] == "python"
+    assert fs.simulate(motor, plan, ctrl, loop=loop, engine="python", t_end=0.04).meta["engine"] == "python"
 
 
 def test_run_sampled_checks_the_noise_shape(motor, plan):

@@ -77,7 +77,7 @@ def test_effects_act_on_the_plant_only(motor, plan):
     """The detent moves the sampled run's rest position; the ideal measurement reads the true acceleration."""
     fx = PlantEffects(detent_torque=1e-3)
     ctrl = fs.FlatnessSMC(motor, plan, fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500), "ideal")
-    kw = dict(loop=fs.DriveLoop(TS, substeps=4), engine="python", t_end=0.03)
+    kw = dict(loop=fs.DriveLoop(TS, substeps=4), engine="python", t_end=0.04)
     clean = fs.simulate(motor, plan, ctrl, **kw)
     detent = fs.simulate(fs.Plant(motor, fx), plan, ctrl, **kw)
     assert detent.meta["plant"]["effects"]["detent_torque"] == 1e-3 and clean.meta["plant"]["effects"] is None

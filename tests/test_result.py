@@ -36,7 +36,7 @@ def test_faults_are_counted(motor, plan):
     """Zero currents at the start are outside the law's domain (rho = 0): 0 V, counted, status "fault" or
     worse, never "ok"."""
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "model")
-    r = fs.simulate(motor, plan, ctrl, loop=DRIVE, x0=np.zeros(4), t_end=0.01)
+    r = fs.simulate(motor, plan, ctrl, loop=DRIVE, x0=np.zeros(4), t_end=0.04)
     s = r.summary()
     assert s["controller_faults"] > 0 and s["status"] in ("fault", "lost")
     assert r.meta["first_fault_time"] == 0.0
@@ -55,7 +55,7 @@ def test_batch_rows_carry_the_status_on_both_paths(gains, status):
 
 
 def test_a_result_without_a_plant_refuses_to_guess(motor, plan):
-    r = fs.simulate(motor, plan, t_end=0.03)
+    r = fs.simulate(motor, plan, t_end=0.04)
     with pytest.raises(ValueError, match="full step"):
         replace(r, meta={}).status
 

@@ -102,7 +102,7 @@ def test_bad_simulation_inputs(motor, plan, kwargs, match):
 def test_a_load_function_runs_only_on_scipy(motor, plan, timing, engine):
     plant = fs.Plant(motor, load=lambda t: 0.0 * t)
     if engine == "scipy":
-        r = fs.simulate(plant, plan, engine="scipy", solver=LSODA, t_end=1e-3)
+        r = fs.simulate(plant, plan, engine="scipy", solver=LSODA, t_end=0.04)
         assert r.meta["plant"]["load"].startswith("<function")
         return
     with pytest.raises(ValueError, match=f"engine='{engine}' takes a constant load torque"):
@@ -111,13 +111,13 @@ def test_a_load_function_runs_only_on_scipy(motor, plan, timing, engine):
 
 def test_meta_records_the_plant_the_settings_and_the_engine(motor, plan):
     plant = fs.Plant(motor, load=1e-5)
-    r = fs.simulate(plant, plan, solver=fs.Continuous(rtol=1e-9, atol=1e-11, dt_out=1e-4), t_end=0.01)
+    r = fs.simulate(plant, plan, solver=fs.Continuous(rtol=1e-9, atol=1e-11, dt_out=1e-4), t_end=0.04)
     assert r.meta["plant"] == plant.as_dict() and r.meta["plant"]["load"] == 1e-5
     assert (r.meta["engine"], r.meta["method"], r.meta["rtol"], r.meta["atol"], r.meta["dt_out"]) == \
         ("c", "DOP853", 1e-9, 1e-11, 1e-4)
-    assert r.t.size == 101
+    assert r.t.size == 401
     loop = fs.DriveLoop(1e-4, substeps=2, compute_delay=True, drive=fs.Drive(v_bus=24.0))
-    r = fs.simulate(motor, plan, loop=loop, engine="python", t_end=0.01)
+    r = fs.simulate(motor, plan, loop=loop, engine="python", t_end=0.04)
     assert r.meta["engine"] == "python" and r.meta["plant"] == fs.Plant(motor).as_dict()
     assert {k: r.meta[k] for k in loop.as_dict()} == loop.as_dict() and r.meta["drive"]["v_bus"] == 24.0
 

@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from ._flatstep_core import ffi, lib
 from .control.protocol import Controller
 from .control.smc import FlatnessSMC
+from .errors import RunError
 from .model.motor import MotorParams
 from .model.plant import PlantEffects
 from .plan.rest_to_rest import RestToRest
@@ -32,6 +33,8 @@ _SIM_ERRORS = {lib.SIM_EARGS: "invalid arguments", lib.SIM_ECONTROL: "the contro
                lib.SIM_EHMIN: "the step size fell below rounding level",
                lib.SIM_EMAXSTEPS: "more than max_steps steps", lib.SIM_ENONFINITE: "the state became non-finite",
                lib.SIM_ECANCELLED: "cancelled"}
+_SIM_REASONS = {lib.SIM_ECONTROL: "fault", lib.SIM_EHMIN: "step_size", lib.SIM_EMAXSTEPS: "max_steps",
+                lib.SIM_ENONFINITE: "nonfinite"}
 _PARAM_ERRORS = {lib.SMC_EMOTOR: "motor", lib.SMC_EPLAN: "plan", lib.SMC_EGAINS: "gains",
                  lib.SMC_EMEASUREMENT: "measurement", lib.SMC_ELIMITS: "v_limit/rho_min"}
 #: Defaults of the guards in smc_step: bound on hypot(va, vb) [V] and smallest rho acted on [A].
@@ -163,8 +166,9 @@ def _stats(st: CData, key: str = "controller_status") -> dict[str, Any]:
 def _check(rc: int, st: CData, what: str) -> None:
     """Raise a RuntimeError naming the failure and when it happened if a C run returned ``rc != SIM_OK``."""
     if rc != lib.SIM_OK:
-        raise RuntimeError(f"C {what} run failed at t = {st.t_fail:.6g} s: {_SIM_ERRORS.get(rc, rc)} "
-                           f"(controller status {status_names(st.controller_status)})")
+        raise RunError(_SIM_REASONS.get(rc, "args"), float(st.t_fail),
+                       f"C {what} run failed at t = {st.t_fail:.6g} s: {_SIM_ERRORS.get(rc, rc)} "
+                       f"(controller status {status_names(st.controller_status)})")
 
 
 Result = TypeVar("Result")

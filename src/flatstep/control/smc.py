@@ -37,7 +37,7 @@ from ..model.flat import flat_voltages, polar
 from ..model.motor import MotorParams
 from ..model.motor import acceleration as motor_acceleration
 from ..plan.rest_to_rest import RestToRest
-from ..validate import check_finite, check_positive
+from ..validate import check_finite, check_quantity
 
 MEASUREMENTS = ("ideal", "model", "observer")
 
@@ -57,13 +57,14 @@ class SMCGains:
 
     def __post_init__(self) -> None:
         for name in ("W1", "W2", "eps1", "eps2", "wn"):
-            object.__setattr__(self, name, check_positive(name, getattr(self, name)))
+            object.__setattr__(self, name, check_quantity("gain", getattr(self, name), as_name=name))
         if self.hold_damping is not None:
-            object.__setattr__(self, "hold_damping", check_positive("hold_damping", self.hold_damping))
+            object.__setattr__(self, "hold_damping",
+                               check_quantity("damping", self.hold_damping, as_name="hold_damping"))
         xi = check_finite("xi", self.xi)
         if xi <= 0:
             raise ValueError(f"xi={xi!r} must be > 0 for the error dynamics e'' + 2 xi wn e' + wn^2 e = 0 to be stable")
-        object.__setattr__(self, "xi", xi)
+        object.__setattr__(self, "xi", check_quantity("damping", xi, as_name="xi"))
 
     @property
     def alpha1(self) -> float:

@@ -14,6 +14,7 @@ the continuous loop (:func:`scipy.integrate.solve_ivp`). :data:`RUNNERS` lists t
 from __future__ import annotations
 
 import math
+import time
 from typing import Any, Callable, NamedTuple, Optional, Union
 
 import numpy as np
@@ -23,12 +24,14 @@ from scipy.integrate import solve_ivp
 from .. import _core
 from ..control.protocol import Controller, SlidingController, StaticController, is_static
 from ..control.smc import FlatnessSMC
+from ..errors import RunError
 from ..loop.reference import DriveLoop, run_reference
 from ..model.flat import flat_to_state, polar
 from ..model.motor import MotorParams, rhs
 from ..model.plant import Plant
 from ..plan.rest_to_rest import RestToRest
-from ..validate import check_positive
+from ..validate import check_quantity
+from ..validate.limits import check_resources, check_timing, estimate
 from .result import SimResult
 from .settings import C_METHODS, SCIPY_METHODS, Continuous
 
@@ -98,12 +101,47 @@ def simulate(plant: Union[Plant, MotorParams], plan: RestToRest, controller: Opt
     if runner is None:
         valid = [e for (k, e) in RUNNERS if k == timing]
         raise ValueError(f"engine={engine!r} does not run {timing} control; valid: {valid}")
-    t_end = check_positive("t_end", t_end, unit=" s")
-    x0 = plan.x0(plant.motor.Nr) if x0 is None else np.asarray(x0, dtype=float)
-    if x0.shape != (4,) or not np.all(np.isfinite(x0)):
-        raise ValueError(f"x0={x0!r} must be 4 finite numbers (ia, ib, omega, theta)")
+    t_end = check_quantity("t_end", t_end)
+    x0 = plan.x0(plant.motor.Nr) if x0 is None else check_x0(x0)
     settings = loop if loop is not None else (solver or Continuous())
+    check_run(plan, t_end, settings, engine)
     return assemble(runner(plant, plan, controller, settings, t_end, x0), plant, plan, controller, settings)
+
+
+#: Largest |current| [A], |speed| [rad/s] and |angle| [rad] of a start state ``x0``.
+X0_LIMITS = (1e3, 1e6, 1e6)
+
+
+def check_x0(x0: ArrayLike) -> Array:
+    """``x0`` as 4 floats, or a ValueError if it is not 4 finite numbers within :data:`X0_LIMITS`."""
+    try:
+        x = np.asarray(x0, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"x0={x0!r} must be 4 finite numbers (ia, ib, omega, theta)") from None
+    if x.shape != (4,) or not np.all(np.isfinite(x)):
+        raise ValueError(f"x0={x0!r} must be 4 finite numbers (ia, ib, omega, theta)")
+    i_max, w_max, th_max = X0_LIMITS
+    if max(abs(x[0]), abs(x[1])) > i_max or abs(x[2]) > w_max or abs(x[3]) > th_max:
+        raise ValueError(f"x0={x.tolist()!r} is out of range: |ia|, |ib| <= {i_max:g} A, |omega| <= {w_max:g} rad/s, "
+                         f"|theta| <= {th_max:g} rad")
+    return x
+
+
+def check_run(plan: RestToRest, t_end: float, settings: Union[DriveLoop, Continuous], engine: str,
+              series: bool = True) -> None:
+    """Refuse a run that is inconsistent (``0 <= t0 < tf <= t_end``, enough control periods over the move) or
+    above the resource limits of :mod:`flatstep.validate.limits` (``series=False``: summaries only).
+    """
+    if isinstance(settings, DriveLoop):
+        check_timing(plan.t0, plan.tf, t_end, settings.control_period)
+        drive = settings.drive
+        pwm = drive.pwm_periods(settings.control_period) if drive is not None and drive.pwm == "switched" else 0
+        cost = estimate(t_end, control_period=settings.control_period, substeps=settings.substeps,
+                        pwm_per_period=pwm)
+    else:
+        check_timing(plan.t0, plan.tf, t_end)
+        cost = estimate(t_end, dt_out=settings.dt_out, extra_samples=2)
+    check_resources(cost, engine=engine, series=series)
 
 
 def _grid(t_end: float, knots: list[float], dt_out: float) -> list[Array]:
@@ -146,11 +184,11 @@ def _continuous_c(plant: Plant, plan: RestToRest, controller: Controller, solver
         # The run and its series (voltages, references, sliding variables) in two C calls on one controller.
         X, cols, status, stats = _core.continuous_result(controller, plant.motor, load, x0, t, rtol=solver.rtol,
                                                          atol=solver.atol, effects=plant.effects,
-                                                         method=method)
+                                                         method=method, max_steps=solver.max_steps)
         stats = {**stats, "controller_status": _core.status_names(np.bitwise_or.reduce(status))}
         return Run(t, X, {**meta, **stats}, columns=cols)
     X, stats = _core.run_continuous(controller, plant.motor, load, x0, t, rtol=solver.rtol, atol=solver.atol,
-                                    effects=plant.effects, method=method)
+                                    effects=plant.effects, method=method, max_steps=solver.max_steps)
     return Run(t, X, {**meta, **stats})
 
 
@@ -161,8 +199,16 @@ def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, so
     if method not in SCIPY_METHODS:
         raise ValueError(f"method={method!r} is not a solve_ivp method; valid: {SCIPY_METHODS}")
     law = _static(controller, "scipy")
+    start, calls = time.monotonic(), [0]
 
     def closed_loop(t: float, x: Array) -> Array:
+        calls[0] += 1
+        if calls[0] > solver.max_steps:
+            raise RunError("max_steps", t, f"scipy {method} run stopped at t = {t:.6g} s: more than max_steps="
+                           f"{solver.max_steps} right-hand-side evaluations (a stiff or diverging state)")
+        if calls[0] % 256 == 0 and time.monotonic() - start > solver.max_wall_time:
+            raise RunError("wall_time", t, f"scipy {method} run stopped at t = {t:.6g} s: it took longer than "
+                           f"max_wall_time={solver.max_wall_time:g} s")
         v = law.voltages(t, x, plant.acceleration(x, t))
         dx = rhs(t, x, v, plant.motor, plant.load)
         if plant.effects is not None:
@@ -176,7 +222,9 @@ def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, so
         sol = solve_ivp(closed_loop, (seg[0], seg[-1]), x, method=method, t_eval=seg, rtol=solver.rtol,
                         atol=solver.atol)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
-            raise RuntimeError(f"integration failed on [{seg[0]:.6g}, {seg[-1]:.6g}] s: {sol.message}")
+            reason = "nonfinite" if not np.all(np.isfinite(sol.y)) else "step_size"
+            raise RunError(reason, float(sol.t[-1]) if sol.t.size else seg[0],
+                           f"scipy {method} integration failed on [{seg[0]:.6g}, {seg[-1]:.6g}] s: {sol.message}")
         ts.append(sol.t if not ts else sol.t[1:])
         xs.append(sol.y if not xs else sol.y[:, 1:])
         x = sol.y[:, -1]

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_finite, check_positive
+from ..validate import check_choice, check_finite, check_quantity
 
 PWM_MODES = ("averaged", "switched")
 
@@ -36,13 +36,13 @@ class Drive:
     dead_time: float = 0.0
 
     def __post_init__(self) -> None:
-        check_positive("v_bus", self.v_bus, unit=" V")
-        check_positive("f_pwm", self.f_pwm, unit=" Hz")
-        if self.pwm not in PWM_MODES:
-            raise ValueError(f"pwm={self.pwm!r} is not a PWM mode; valid: {PWM_MODES}")
+        object.__setattr__(self, "v_bus", check_quantity("v_bus", self.v_bus))
+        object.__setattr__(self, "f_pwm", check_quantity("rate", self.f_pwm, as_name="f_pwm"))
+        check_choice("pwm", self.pwm, PWM_MODES)
         dt = check_finite("dead_time", self.dead_time)
         if not 0.0 <= dt < 0.25 / self.f_pwm:
             raise ValueError(f"dead_time={dt!r} s must be in [0, {0.25 / self.f_pwm:.3g}) s (a quarter PWM period)")
+        object.__setattr__(self, "dead_time", dt)
 
     def saturate(self, v: ArrayLike) -> NDArray[np.float64]:
         """Scale the voltage vector (va, vb) so that ``max(|va|, |vb|) <= v_bus``, keeping its direction."""

@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from scipy.signal import place_poles
 
 from ..model.motor import MotorParams
-from ..validate import check_positive
+from ..validate import check_count, check_positive, check_quantity
 
 
 @dataclass(frozen=True)
@@ -34,10 +34,9 @@ class Observer:
     load_states: int = 2
 
     def __post_init__(self) -> None:
-        check_positive("bandwidth", self.bandwidth, unit=" rad/s")
-        if self.load_states not in (0, 1, 2):
-            raise ValueError(f"load_states={self.load_states!r} must be 0 (speed only), 1 (constant load) "
-                             "or 2 (load ramp)")
+        object.__setattr__(self, "bandwidth", check_quantity("bandwidth", self.bandwidth))
+        object.__setattr__(self, "load_states", check_count("load_states", self.load_states,
+                                                            why="0: speed only, 1: constant load, 2: load ramp"))
 
     @property
     def order(self) -> int:

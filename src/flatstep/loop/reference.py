@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..control.protocol import Controller
 from ..model.motor import MotorParams, acceleration, torque
 from ..model.plant import PlantEffects, plant_acceleration, plant_rhs
-from ..validate import check_integer, check_positive
+from ..validate import check_bool, check_count, check_quantity
 from .drive import Drive
 from .observers import Observer
 from .sensors import Sensors
@@ -64,11 +64,10 @@ class DriveLoop:
     observer: Optional[Observer] = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "control_period", check_positive("control_period", self.control_period, unit=" s"))
-        object.__setattr__(self, "substeps",
-                           check_integer("substeps", self.substeps, why="RK4 steps per control period"))
-        if not isinstance(self.compute_delay, (bool, np.bool_)):
-            raise ValueError(f"compute_delay={self.compute_delay!r} must be True or False")
+        object.__setattr__(self, "control_period",
+                           check_quantity("period", self.control_period, as_name="control_period"))
+        object.__setattr__(self, "substeps", check_count("substeps", self.substeps, why="RK4 steps per control period"))
+        object.__setattr__(self, "compute_delay", check_bool("compute_delay", self.compute_delay))
         for name, kind in (("drive", Drive), ("sensors", Sensors), ("observer", Observer)):
             part = getattr(self, name)
             if part is not None and not isinstance(part, kind):
@@ -77,7 +76,7 @@ class DriveLoop:
     @classmethod
     def at(cls, rate: float, **parts: Any) -> "DriveLoop":
         """The loop at a control rate [Hz] (``control_period = 1 / rate``), with the other settings as keywords."""
-        return cls(control_period=1.0 / check_positive("rate", rate, unit=" Hz"), **parts)
+        return cls(control_period=1.0 / check_quantity("rate", rate), **parts)
 
     def as_dict(self) -> dict[str, Any]:
         """The settings, the parts as their own dicts (absent when ideal), for a result's metadata."""

@@ -8,7 +8,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_finite, check_integer, check_nonnegative, check_positive
+from ..validate import check_count, check_finite, check_quantity
 
 
 @dataclass(frozen=True)
@@ -46,18 +46,21 @@ class Sensors:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name, low in (("encoder_counts", 4), ("current_bits", 2), ("delay", 0)):
-            if getattr(self, name) is not None:
-                check_integer(name, getattr(self, name), low=low, why="or None for an exact measurement")
+        for name in ("encoder_counts", "current_bits", "delay"):
+            if getattr(self, name) is not None or name == "delay":
+                object.__setattr__(self, name, check_count(name, getattr(self, name),
+                                                           why="or None for an exact measurement"
+                                                           if name != "delay" else "control periods"))
+        object.__setattr__(self, "seed", check_count("seed", self.seed, why="the noise's seed"))
         off = check_finite("encoder_offset", self.encoder_offset)
         if not -0.5 <= off < 0.5:
             raise ValueError(f"encoder_offset={off!r} must be in [-0.5, 0.5) counts")
-        check_positive("current_range", self.current_range, unit=" A")
-        if len(self.current_offset) != 2:
+        object.__setattr__(self, "current_range", check_quantity("current_range", self.current_range))
+        if not isinstance(self.current_offset, (tuple, list)) or len(self.current_offset) != 2:
             raise ValueError(f"current_offset={self.current_offset!r} must be two offsets (ia, ib) in A")
         object.__setattr__(self, "current_offset",
-                           tuple(check_finite("current_offset", o) for o in self.current_offset))
-        check_nonnegative("current_noise", self.current_noise, unit=" A")
+                           tuple(check_quantity("current_offset", o) for o in self.current_offset))
+        object.__setattr__(self, "current_noise", check_quantity("current_noise", self.current_noise))
 
     @property
     def angle_step(self) -> float:

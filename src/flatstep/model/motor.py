@@ -11,7 +11,7 @@ from typing import Callable, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_finite, check_integer, check_nonnegative, check_positive
+from ..validate import check_count, check_finite, check_quantity
 
 Load = Union[float, Callable[[NDArray[np.float64]], ArrayLike]]
 
@@ -47,14 +47,10 @@ class MotorParams:
     Nr: int
 
     def __post_init__(self) -> None:
-        for name, unit in (("R", " ohm"), ("L", " H"), ("Km", " V s/rad"), ("J", " kg m^2")):
-            object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=unit))
-        object.__setattr__(self, "B", check_nonnegative("B", self.B, unit=" N m s/rad",
-                                                        why="viscous friction cannot be negative"))
-        Nr: object = self.Nr
-        if isinstance(Nr, float) and Nr.is_integer() and Nr >= 1:  # a whole float such as 50.0 is 50 teeth
-            Nr = int(Nr)
-        object.__setattr__(self, "Nr", check_integer("Nr", Nr, why="number of rotor teeth"))
+        for name in ("R", "L", "Km", "J", "B"):  # ranges: flatstep.validate.ranges
+            object.__setattr__(self, name, check_quantity(name, getattr(self, name)))
+        # a whole float such as 50.0 is 50 teeth
+        object.__setattr__(self, "Nr", check_count("Nr", self.Nr, why="number of rotor teeth"))
 
     @classmethod
     def preset(cls, name: str) -> "MotorParams":

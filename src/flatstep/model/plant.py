@@ -27,7 +27,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_finite, check_integer, check_nonnegative, check_positive
+from ..validate import check_count, check_quantity
 from .motor import Load, MotorParams, rhs
 
 
@@ -58,13 +58,12 @@ class PlantEffects:
 
     def __post_init__(self) -> None:
         for name in ("detent_torque", "coulomb_torque"):
-            object.__setattr__(self, name, check_nonnegative(name, getattr(self, name), unit=" N m",
-                                                             why="an amplitude"))
-        object.__setattr__(self, "coulomb_speed", check_positive("coulomb_speed", self.coulomb_speed, unit=" rad/s"))
-        object.__setattr__(self, "detent_harmonic", check_integer("detent_harmonic", self.detent_harmonic))
+            object.__setattr__(self, name, check_quantity("torque_amplitude", getattr(self, name), as_name=name))
+        object.__setattr__(self, "coulomb_speed", check_quantity("coulomb_speed", self.coulomb_speed))
+        object.__setattr__(self, "detent_harmonic", check_count("detent_harmonic", self.detent_harmonic))
         if self.magnetizing_resistance is not None:
             object.__setattr__(self, "magnetizing_resistance",
-                               check_positive("magnetizing_resistance", self.magnetizing_resistance, unit=" ohm"))
+                               check_quantity("magnetizing_resistance", self.magnetizing_resistance))
 
     @property
     def active(self) -> bool:
@@ -143,7 +142,7 @@ class Plant:
         if self.effects is not None and not self.effects.active:
             object.__setattr__(self, "effects", None)
         if not callable(self.load):  # a function is checked where it is called
-            object.__setattr__(self, "load", check_finite("load", self.load))
+            object.__setattr__(self, "load", check_quantity("load", self.load))
 
     @property
     def constant_load(self) -> Optional[float]:

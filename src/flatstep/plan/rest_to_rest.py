@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.equilibria import equilibrium_currents, stable_angle
 from ..model.flat import FlatFlag
 from ..model.motor import MotorParams
-from ..validate import check_finite, check_positive
+from ..validate import check_finite, check_quantity
 
 #: Coefficients r1..r6 of eq. (17).
 PAPER_R = (252.0, 1050.0, 1800.0, 1575.0, 700.0, 126.0)
@@ -72,10 +72,9 @@ class RestToRest:
     tf: float = 0.04
 
     def __post_init__(self) -> None:
-        for name in ("theta1", "theta2", "t0", "tf"):
-            object.__setattr__(self, name, check_finite(name, getattr(self, name)))
-        for name in ("rho1", "rho2"):
-            object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=" A"))
+        for name, kind in (("theta1", "angle"), ("theta2", "angle"), ("rho1", "current"), ("rho2", "current"),
+                           ("t0", "time"), ("tf", "time")):  # ranges: flatstep.validate.ranges
+            object.__setattr__(self, name, check_quantity(kind, getattr(self, name), as_name=name))
         if not self.tf > self.t0:
             raise ValueError(f"tf={self.tf!r} s must be greater than t0={self.t0!r} s")
 

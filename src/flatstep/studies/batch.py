@@ -37,8 +37,10 @@ def _run_one(index: int, scenario: Scenario, engine: str, keep: Sequence[str]) -
         series = result.series()
         row.update({f"series_{k}": series[k].tolist() for k in keep})
         row["error"] = None
-    except (ValueError, RuntimeError) as exc:  # an infeasible or failed run is a result, not a crash
-        row["error"] = f"{type(exc).__name__}: {exc}"
+    except ValueError as exc:  # a refused or infeasible run is a result, not a crash
+        row.update(status="refused", error=f"{type(exc).__name__}: {exc}")
+    except RuntimeError as exc:  # so is a run that stopped early (RunError: non-finite state, step bound)
+        row.update(status="failed", error=f"{type(exc).__name__}: {exc}")
     return row
 
 

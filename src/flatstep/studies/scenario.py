@@ -10,13 +10,13 @@ from ..control.smc import SMCGains
 from ..control.tuning import AnyController, make_controller
 from ..engine.result import SimResult
 from ..engine.settings import Continuous
-from ..engine.simulate import simulate
+from ..engine.simulate import check_run, simulate
 from ..loop.reference import DriveLoop
 from ..model.motor import MotorParams
 from ..model.plant import Plant
 from ..plan.feasibility import FeasibilityReport, check_feasibility
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
-from ..validate import check_positive
+from ..validate import check_quantity
 
 
 @dataclass(frozen=True)
@@ -67,7 +67,11 @@ class Scenario:
     t_end: float = 0.06
 
     def __post_init__(self) -> None:
-        check_positive("t_end", self.t_end, unit=" s")
+        object.__setattr__(self, "t_end", check_quantity("t_end", self.t_end))
+        object.__setattr__(self, "bandwidth_scale", check_quantity("scale", self.bandwidth_scale,
+                                                                  as_name="bandwidth_scale"))
+        if not isinstance(self.name, str):
+            raise ValueError(f"Scenario.name={self.name!r} must be a string")
         for name, kind in (("motor", MotorParams), ("plan", RestToRest), ("gains", SMCGains), ("plant", Plant),
                            ("loop", DriveLoop), ("solver", Continuous)):
             value = getattr(self, name)
@@ -76,6 +80,8 @@ class Scenario:
         if self.loop is not None and self.solver is not None:
             raise ValueError("a scenario has either a loop (sampled control) or a solver (continuous control)")
         self.controller()  # validates the measurement mode and the controller type
+        # timing and the integration's cost (the memory of the series is checked when a run returns them)
+        check_run(self.plan, self.t_end, self.loop or self.solver or Continuous(), "c", series=False)
 
     @property
     def simulated_plant(self) -> Plant:

@@ -1,0 +1,110 @@
+"""Whether a run is consistent and affordable, checked before anything runs.
+
+Consistency: the run starts at ``t = 0``, so ``0 <= t0 < tf <= t_end`` (a horizon that ends before the move
+would cut it short without a word), and a sampled controller needs a control period well below the move's
+duration (at least :data:`MIN_PERIODS_PER_MOVE` periods over ``tf - t0``).
+
+Resources: a run is refused up front, with the estimate and how to lower it, when it would
+
+* return more than :data:`MAX_RESULT_BYTES` of time series (:data:`BYTES_PER_SAMPLE` per returned sample);
+* take more than :data:`MAX_STEPS` plant integration steps on the C core (control periods x RK4 substeps, or x
+  PWM segments in switched mode; about 15 s on one core of a 2020s PC) or :data:`MAX_STEPS_REFERENCE` on the
+  readable Python reference loop, about 100x slower per step.
+
+docs/errors.md lists these limits. They are module constants: a user who really needs a larger run may raise them
+(``flatstep.validate.limits.MAX_STEPS = ...``), knowingly.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+from .checks import InputError
+
+#: Fewest control periods a sampled controller gets over the move ``[t0, tf]``.
+MIN_PERIODS_PER_MOVE = 10
+#: Bytes of results per returned sample (about 22 float64 series and the engine's working arrays).
+BYTES_PER_SAMPLE = 256
+#: Largest result of one run [bytes] (1 GiB: about 4.2 million samples).
+MAX_RESULT_BYTES = 1 << 30
+#: Most plant integration steps of one run on the C core.
+MAX_STEPS = 200_000_000
+#: Most plant integration steps of one run on the Python reference loop (``engine="python"``).
+MAX_STEPS_REFERENCE = 2_000_000
+#: Segments of one PWM period in switched mode (csrc/drive.h ``DRIVE_PWM_SEGMENTS``).
+PWM_SEGMENTS = 9
+
+
+@dataclass(frozen=True)
+class RunEstimate:
+    """What a run would cost: returned samples, result memory [bytes], plant integration steps, PWM periods."""
+
+    samples: int
+    result_bytes: int
+    steps: int
+    pwm_periods: int
+
+
+def _fmt_bytes(n: float) -> str:
+    """``n`` bytes in KiB, MiB, GiB, TiB or PiB."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024.0:
+            return f"{n:.3g} {unit}"
+        n /= 1024.0
+    return f"{n:.3g} PiB"
+
+
+def check_timing(t0: float, tf: float, t_end: float, control_period: Optional[float] = None) -> None:
+    """Raise an :class:`InputError` unless ``0 <= t0 < tf <= t_end`` and the move spans enough control periods."""
+    if t0 < 0.0:
+        raise InputError("t0", t0, f"t0={t0!r} s is before the run starts (t = 0): the move must start at t0 >= 0")
+    if not tf > t0:
+        raise InputError("tf", tf, f"tf={tf!r} s must be greater than t0={t0!r} s")
+    if t_end < tf:
+        raise InputError("t_end", t_end, f"t_end={t_end!r} s ends before the move does (tf={tf!r} s): the run would "
+                                         f"cut the move short; give t_end >= {tf!r} s")
+    if control_period is not None and tf - t0 < MIN_PERIODS_PER_MOVE * control_period:
+        raise InputError("control_period", control_period,
+                         f"control_period={control_period!r} s is too long for a move of {tf - t0:.6g} s: a sampled "
+                         f"controller needs at least {MIN_PERIODS_PER_MOVE} periods over the move; give a control "
+                         f"rate of at least {MIN_PERIODS_PER_MOVE / (tf - t0):.6g} Hz or a longer move")
+
+
+def estimate(t_end: float, *, control_period: Optional[float] = None, substeps: int = 1, pwm_per_period: int = 0,
+             dt_out: Optional[float] = None, extra_samples: int = 0) -> RunEstimate:
+    """The cost of a sampled run (``control_period``) or of a continuous one (``dt_out``) to ``t_end``."""
+    if control_period is not None:
+        periods = max(1.0, math.ceil(t_end / control_period - 1e-9))
+        samples = periods + 1
+        pwm = periods * pwm_per_period
+        steps = pwm * PWM_SEGMENTS if pwm_per_period else periods * substeps
+    else:
+        samples = t_end / (dt_out or 1e-5) + 1 + extra_samples
+        pwm, steps = 0, 0
+    big = float(2**62)
+    return RunEstimate(int(min(samples, big)), int(min(samples * BYTES_PER_SAMPLE, big)), int(min(steps, big)),
+                       int(min(pwm, big)))
+
+
+def check_resources(cost: RunEstimate, *, engine: str = "c", series: bool = True, what: str = "the run") -> None:
+    """Raise an :class:`InputError` if a run of cost ``cost`` is above the limits of this module.
+
+    ``series=False`` for runs that return summaries only (a batch's C path): their memory does not grow with the
+    horizon.
+    """
+    if series and cost.result_bytes > MAX_RESULT_BYTES:
+        raise InputError("t_end", cost.samples,
+                         f"{what} would return {cost.samples:.4g} samples, about {_fmt_bytes(cost.result_bytes)} of "
+                         f"results, above the limit of {_fmt_bytes(MAX_RESULT_BYTES)} (flatstep.validate.limits."
+                         "MAX_RESULT_BYTES); shorten t_end, or lengthen the control period (sampled) or dt_out "
+                         "(continuous)")
+    limit = MAX_STEPS_REFERENCE if engine == "python" else MAX_STEPS
+    if cost.steps > limit:
+        how = ("lower f_pwm or the control rate, or shorten t_end" if cost.pwm_periods else
+               "lower substeps or the control rate, or shorten t_end")
+        name = "MAX_STEPS_REFERENCE" if engine == "python" else "MAX_STEPS"
+        detail = f" ({cost.pwm_periods:.4g} PWM periods)" if cost.pwm_periods else ""
+        raise InputError("substeps", cost.steps,
+                         f"{what} would take {cost.steps:.4g} plant integration steps{detail} on engine={engine!r}, "
+                         f"above the limit of {limit:.4g} (flatstep.validate.limits.{name}); {how}")

@@ -1,0 +1,94 @@
+"""The ranges flatstep accepts for every physical quantity a user gives, in one table (docs/errors.md lists it).
+
+The bounds are wide: several orders of magnitude around real stepping motors and drives. They are there to
+refuse values that are not a motor (a 1e10-tooth rotor, a 1e300 N m load, a 1 THz PWM), that would overflow the
+C core's integers or floats, or that would make a run's numbers meaningless; not to second-guess a design.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A range of valid values: ``low < x`` (or ``<=`` when ``low_closed``) and ``x <= high``."""
+
+    low: float
+    high: float
+    unit: str
+    why: str
+    low_closed: bool = False
+
+    @property
+    def unit_suffix(self) -> str:
+        """`` unit`` for messages, or nothing for a dimensionless quantity."""
+        return f" {self.unit}" if self.unit else ""
+
+    def contains(self, x: float) -> bool:
+        """Whether ``x`` is in the range."""
+        above = x >= self.low if self.low_closed else x > self.low
+        return above and x <= self.high
+
+    def describe(self) -> str:
+        """The range in interval notation with its unit, e.g. ``(0, 1e+04] ohm``."""
+        return f"{'[' if self.low_closed else '('}{self.low:g}, {self.high:g}]{self.unit_suffix}"
+
+
+def _q(low: float, high: float, unit: str, why: str, low_closed: bool = False) -> Quantity:
+    return Quantity(low, high, unit, why, low_closed)
+
+
+#: Every bounded quantity by name. Integers (teeth, counts, bits, substeps) are bounded in
+#: :data:`INTEGER_RANGES`.
+QUANTITIES: dict[str, Quantity] = {
+    # the motor
+    "R": _q(0.0, 1e4, "ohm", "a phase resistance above 0 and at most 10 kohm"),
+    "L": _q(0.0, 10.0, "H", "a phase inductance above 0 and at most 10 H"),
+    "Km": _q(0.0, 100.0, "V s/rad", "a torque constant above 0 and at most 100 N m/A"),
+    "J": _q(0.0, 100.0, "kg m^2", "an inertia above 0 and at most 100 kg m^2"),
+    "B": _q(0.0, 1e3, "N m s/rad", "viscous friction cannot be negative", low_closed=True),
+    # the plant's effects and load
+    "torque_amplitude": _q(0.0, 1e3, "N m", "an amplitude, >= 0 and at most 1000 N m", low_closed=True),
+    "coulomb_speed": _q(0.0, 1e6, "rad/s", "the speed scale of the smooth sign, > 0"),
+    "magnetizing_resistance": _q(0.0, 1e9, "ohm", "an iron-loss resistance above 0"),
+    "load": _q(-1e3, 1e3, "N m", "a load torque within +-1000 N m", low_closed=True),
+    # the plan
+    "angle": _q(-1e6, 1e6, "rad", "an angle within +-1e6 rad", low_closed=True),
+    "current": _q(0.0, 1e3, "A", "a current-vector norm above 0 (the angle of a zero vector is undefined) and "
+                                 "at most 1000 A"),
+    "time": _q(0.0, 1e6, "s", "the run starts at t = 0: times are >= 0 and at most 1e6 s", low_closed=True),
+    "t_end": _q(0.0, 1e6, "s", "a horizon above 0"),
+    # the controller
+    "gain": _q(0.0, 1e12, "", "a gain above 0 and at most 1e12"),
+    "damping": _q(0.0, 1e3, "", "a damping ratio above 0"),
+    "relative": _q(0.0, 0.5, "", "a relative parameter error in [0, 0.5)", low_closed=True),
+    "scale": _q(0.0, 1e3, "", "a factor above 0 and at most 1000"),
+    # the drive, sensors and observer
+    "v_bus": _q(0.0, 1e4, "V", "a bus voltage above 0 and at most 10 kV"),
+    "rate": _q(0.0, 1e8, "Hz", "a rate above 0 and at most 100 MHz"),
+    "period": _q(1e-8, 1e3, "s", "a period of at least 10 ns and at most 1000 s", low_closed=True),
+    "current_range": _q(0.0, 1e4, "A", "an ADC full scale above 0"),
+    "current_noise": _q(0.0, 1e3, "A", "a noise standard deviation, >= 0", low_closed=True),
+    "current_offset": _q(-1e3, 1e3, "A", "an offset within +-1000 A", low_closed=True),
+    "bandwidth": _q(0.0, 1e9, "rad/s", "a bandwidth above 0"),
+    # the solver
+    "tolerance": _q(0.0, 1.0, "", "an error tolerance above 0 and at most 1"),
+    "dt_out": _q(0.0, 1e6, "s", "an output spacing above 0"),
+}
+
+#: Integer quantities: ``(low, high)``, inclusive.
+INTEGER_RANGES: dict[str, tuple[int, int]] = {
+    "Nr": (1, 1000),
+    "detent_harmonic": (1, 1000),
+    "substeps": (1, 100_000),
+    "encoder_counts": (4, 2**30),
+    "current_bits": (2, 32),
+    "delay": (0, 1000),
+    "seed": (0, 2**63 - 1),
+    "samples": (0, 10_000_000),
+    "load_states": (0, 2),
+}
+
+#: The largest value of each unbounded-above quantity, for documentation.
+UNBOUNDED = math.inf
