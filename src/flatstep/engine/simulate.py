@@ -129,8 +129,10 @@ def check_x0(x0: ArrayLike) -> Array:
 
 def check_run(plan: RestToRest, t_end: float, settings: Union[DriveLoop, Continuous], engine: str,
               series: bool = True) -> None:
-    """Refuse a run that is inconsistent (``0 <= t0 < tf <= t_end``, enough control periods over the move) or
-    above the resource limits of :mod:`flatstep.validate.limits` (``series=False``: summaries only).
+    """Refuse a run that is inconsistent, or above the resource limits of :mod:`flatstep.validate.limits`.
+
+    Consistent: ``0 <= t0 < tf <= t_end``, and enough control periods over the move; ``series=False`` for a run
+    that returns summaries only.
     """
     if isinstance(settings, DriveLoop):
         check_timing(plan.t0, plan.tf, t_end, settings.control_period)

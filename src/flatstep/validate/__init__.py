@@ -1,5 +1,6 @@
-"""The boundary's checks: every value a user gives goes through them, from the Python constructors, the scenario
-files and the command line alike.
+"""The boundary's checks: every value a user gives goes through them.
+
+The Python constructors, the scenario files and the command line all use them.
 
 * :mod:`~flatstep.validate.checks`: type, finiteness and range of one value (:class:`InputError`);
 * :mod:`~flatstep.validate.ranges`: the valid range of every physical quantity, in one table;
