@@ -53,8 +53,8 @@ def test_bad_value_names_itself(capsys):
 
 
 def test_unknown_measurement_is_an_argparse_error(capsys):
-    with pytest.raises(SystemExit):
-        main(["simulate", "--measurement", "perfect"])
+    assert main(["simulate", "--measurement", "perfect"]) == 2
+    assert "invalid choice: 'perfect'" in capsys.readouterr().err
 
 
 def test_simulate_hold_damping_flag(capsys):
@@ -85,9 +85,7 @@ def test_version_negative_values_and_no_traceback(capsys, monkeypatch):
 
     cli_main = importlib.import_module("flatstep.cli.main")  # the module (flatstep.cli.main is the function)
 
-    with pytest.raises(SystemExit) as exit_:
-        main(["--version"])
-    assert exit_.value.code == 0 and capsys.readouterr().out.strip() == f"flatstep {flatstep.__version__}"
+    assert main(["--version"]) == 0 and capsys.readouterr().out.strip() == f"flatstep {flatstep.__version__}"
     assert main(["simulate", "--load-torque", "-1e-5", "--json"]) == 0  # a negative value in scientific notation
     assert json.loads(capsys.readouterr().out)["status"] == "ok"
 
@@ -115,7 +113,7 @@ def test_ctrl_c_stops_a_long_c_run_quickly(tmp_path):
                     "measurement = \"model\"\n")
     proc = subprocess.Popen([sys.executable, "-m", "flatstep", "simulate", str(path)], stderr=subprocess.PIPE,
                             stdout=subprocess.PIPE, text=True)
-    time.sleep(2.0)  # imports done, the C run under way
+    time.sleep(4.0)  # imports done, the C run under way (on a loaded machine too)
     assert proc.poll() is None, proc.communicate()
     start = time.perf_counter()
     proc.send_signal(signal.SIGINT)

@@ -62,7 +62,7 @@ def test_scenario_file_controller_type_and_plant_effects(tmp_path):
 @pytest.mark.parametrize("tables, match", [
     (dict(controller='type = "pid"'), r"type='pid' is unknown"),
     (dict(plant="detent = 1e-3"), r"unknown key\(s\) \['detent'\] in \[plant\]"),
-    (dict(plant="coulomb_torque = -1.0"), r"\[plant\] coulomb_torque=-1.0"),
+    (dict(plant="coulomb_torque = -1.0"), r":plant.coulomb_torque: coulomb_torque=-1.0"),
     (dict(drive=None, controller='type = "microstep"'), "tuned from the control period"),
 ])
 def test_scenario_file_errors(tmp_path, tables, match):

@@ -6,13 +6,14 @@ import json
 import sys
 import time
 from dataclasses import replace
-from pathlib import Path
 from typing import Any, Literal, Optional
 
 from ..control.tuning import CONTROLLER_TYPES, LABELS
 from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band
 from ..studies.robustness import encoder_count
 from ..studies.scenario_file import load_scenario
+from ..validate import check_quantity
+from .flags import count, out_dir, quantity
 from .status import exit_code, warn
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)
@@ -66,6 +67,14 @@ class _Log:
             print(f"[compare {time.perf_counter() - self.start:6.1f} s] {what}", file=sys.stderr, flush=True)
 
 
+def _scales(text: str) -> list[float]:
+    """The factors of ``--scales`` (``0.5,2``), each a number in (0, 1000]."""
+    try:
+        return [check_quantity("scale", float(x), as_name="--scales") for x in text.split(",")]
+    except ValueError as exc:
+        raise ValueError(f"--scales {text!r}: give factors in (0, 1000] separated by commas ({exc})") from None
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
     scenario, study = load_scenario(args.scenario)
@@ -74,6 +83,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
     kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else CONTROLLER_TYPES
+    unknown = [k for k in kinds if k not in CONTROLLER_TYPES]
+    if unknown or not kinds or len(set(kinds)) != len(kinds):
+        raise ValueError(f"--controllers {args.controllers!r}: give distinct names among {list(CONTROLLER_TYPES)}, "
+                         "separated by commas")
+    if args.band is not None and args.band <= 0:
+        raise ValueError(f"--band {args.band!r}: the settling band must be > 0 rad")
     band = args.band if args.band is not None else default_band(scenario)
     count = encoder_count(scenario)
     log = _Log(enabled=not args.quiet)
@@ -94,7 +109,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                 "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"],
                                               "statuses": v["statuses"]} for k, v in worst.items()}}
     if args.scales:
-        scales = [float(x) for x in args.scales.split(",")]
+        scales = _scales(args.scales)
         baselines = [k for k in kinds if k != "smc"]
         sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,
                                 engine=args.engine, progress=not args.quiet, log=log)
@@ -102,8 +117,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.out:
         from .plots_compare import plot_overlay, plot_plants
 
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+        out = out_dir(args.out)
         plot_overlay({LABELS[k]: v["result"] for k, v in nominal.items()}, scenario.plan, count,
                      title=f"{scenario.name}: every controller on the scenario's plant", path=out / "overlay.png")
         if worst is not None:
@@ -157,11 +171,13 @@ def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]
     cmp_.add_argument("scenario", help="a scenario file (TOML) with a [drive]; its [robustness], if any, is run too")
     cmp_.add_argument("--controllers", default=None,
                       help=f"comma-separated controller types (default: all of {','.join(CONTROLLER_TYPES)})")
-    cmp_.add_argument("--band", type=float, default=None, help="settling band [rad] (default: one encoder count)")
+    cmp_.add_argument("--band", type=quantity("angle", "--band"), default=None,
+                      help="settling band [rad] (default: one encoder count)")
     cmp_.add_argument("--clean", action="store_true", help="no load, no plant effects, the plant equal to the "
                       "model (the file's drive, sensors and gains otherwise)")
     cmp_.add_argument("--no-robustness", action="store_true", help="skip the file's [robustness] study")
-    cmp_.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
+    cmp_.add_argument("--samples", type=count("samples", "--samples"), default=None,
+                      help="random plants instead of all sign combinations")
     cmp_.add_argument("--scales", default=None, help="also run the baselines with every bandwidth scaled by these "
                       "comma-separated factors (e.g. 0.5,2): the check that their tuning does not cripple them")
     cmp_.add_argument("--engine", choices=("c", "python"), default="c",

@@ -4,7 +4,6 @@ from __future__ import annotations
 import argparse
 import json
 from dataclasses import replace
-from pathlib import Path
 
 from ..control.design import design_gains
 from ..control.smc import SMCGains
@@ -16,6 +15,7 @@ from ..model.plant import Plant
 from ..studies.robustness import encoder_count
 from ..studies.scenario import Scenario
 from ..studies.scenario_file import load_scenario
+from .flags import count, out_dir, quantity
 from .status import exit_code, warn
 
 
@@ -50,8 +50,7 @@ def cmd_design(args: argparse.Namespace) -> int:
     if args.out:
         from .plots_compare import plot_overlay
 
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+        out = out_dir(args.out)
         designed = replace(base, gains=d.gains, loop=replace(loop, observer=d.observer if s else None))
         paper = replace(designed, gains=SMCGains())
         runs = {"paper's gains": paper.run(), "designed gains": designed.run()}
@@ -84,13 +83,19 @@ def add_design_command(sub: argparse._SubParsersAction[argparse.ArgumentParser])
     des = sub.add_parser("design", help="design sliding gains and observer for a sampled drive")
     des.add_argument("scenario", nargs="?", default=None, help="a scenario file with a [drive] (default: "
                      "the paper's motor and move on the flags' drive)")
-    des.add_argument("--control-rate", type=float, default=20e3, help="control rate [Hz] (default 20000)")
-    des.add_argument("--v-bus", type=float, default=24.0, help="bus voltage [V] (default 24)")
-    des.add_argument("--encoder-counts", type=int, default=16384, help="counts per revolution (default 16384)")
-    des.add_argument("--current-bits", type=int, default=12, help="current ADC bits (default 12)")
-    des.add_argument("--current-range", type=float, default=2.0, help="current ADC full scale +-A (default 2)")
-    des.add_argument("--load-torque", type=float, default=1e-5, help="expected load torque [N m] (default 1e-5)")
-    des.add_argument("--uncertainty", type=float, default=0.1, help="relative parameter error (default 0.1)")
+    des.add_argument("--control-rate", type=quantity("rate", "--control-rate"), default=20e3,
+                     help="control rate [Hz] (default 20000)")
+    des.add_argument("--v-bus", type=quantity("v_bus", "--v-bus"), default=24.0, help="bus voltage [V] (default 24)")
+    des.add_argument("--encoder-counts", type=count("encoder_counts", "--encoder-counts"), default=16384,
+                     help="counts per revolution (default 16384)")
+    des.add_argument("--current-bits", type=count("current_bits", "--current-bits"), default=12,
+                     help="current ADC bits (default 12)")
+    des.add_argument("--current-range", type=quantity("current_range", "--current-range"), default=2.0,
+                     help="current ADC full scale +-A (default 2)")
+    des.add_argument("--load-torque", type=quantity("load", "--load-torque"), default=1e-5,
+                     help="expected load torque [N m] (default 1e-5)")
+    des.add_argument("--uncertainty", type=quantity("relative", "--uncertainty"), default=0.1,
+                     help="relative parameter error, in [0, 0.5) (default 0.1)")
     des.add_argument("--compute-delay", action="store_true", help="one period between measuring and applying")
     des.add_argument("--out", default=None, help="also run the paper's and the designed gains on this drive: "
                      "design.png, design.json")

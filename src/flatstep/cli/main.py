@@ -3,7 +3,8 @@
 Commands: ``reproduce`` (the paper's figures), ``simulate`` (one move), ``design`` (gains for a drive),
 ``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``bench``
 (benchmarks). ``flatstep COMMAND --help`` lists a command's flags. Exit codes: 0 every run ok, 1 an unexpected
-error, 2 a refused input, 3 a lost move, 4 a controller fault, 130 interrupted (docs/errors.md).
+error, 2 a refused input, 3 a lost move, 4 a controller fault, 5 a run stopped early, 130 interrupted
+(docs/errors.md).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from .. import __version__
 from ..control.smc import MEASUREMENTS, SMCGains
 from ..engine.result import SimResult
 from ..engine.simulate import simulate
+from ..errors import REASONS, RunError
 from ..model.motor import MotorParams
 from ..model.plant import Plant
 from ..plan.feasibility import InfeasiblePlanError
@@ -28,8 +30,9 @@ from ..studies.scenario import PAPER_SCENARIOS, Scenario
 from ..studies.scenario_file import load_scenario
 from .compare import add_compare_command
 from .design import add_design_command
+from .flags import count, out_dir, quantity
 from .robustness import add_robustness_command
-from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, exit_code, warn
+from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
 
 TABLE_KEYS = ("theta_final", "max_abs_theta_error", "max_abs_rho_error", "max_abs_va", "max_abs_vb", "omega_final")
 
@@ -45,14 +48,13 @@ def _write(out: Path, name: str, scenario: Scenario, result: SimResult, title: s
     """Write a run's figure (``<name>.png``) and series (``<name>.csv``) to ``out``."""
     from .plots import plot_run
 
-    out.mkdir(parents=True, exist_ok=True)
     plot_run(result, title=title, path=out / f"{name}.png")
     result.to_csv(out / f"{name}.csv")
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
     """``flatstep reproduce``: the paper's Fig. 1 and Fig. 2 runs, their figures, series and summaries."""
-    out = Path(args.out)
+    out = out_dir(args.out)
     titles = {"fig1": "Fig. 1: ideal closed loop, no load (W1 = W2 = 100)",
               "fig2": "Fig. 2: constant load torque 1e-5 N m (W1 = W2 = 300)"}
     summaries: dict[str, dict[str, Any]] = {}
@@ -76,12 +78,13 @@ def _scenario_from_flags(args: argparse.Namespace) -> Scenario:
     """The scenario of ``flatstep simulate``'s flags: the paper's motor, move and gains where a flag is not given."""
     p, g = PAPER_PLAN.as_dict(), SMCGains().as_dict()
     val = {k: getattr(args, k) for k in SIM_FLAGS}
-    val = {k: v if v is not None else p.get(k, g.get(k)) for k, v in val.items()}
+    defaults = {**p, **g, "t_end": 0.06, "load_torque": 0.0, "measurement": "ideal"}
+    val = {k: v if v is not None else defaults[k] for k, v in val.items()}
     plan = RestToRest(**{k: val[k] for k in p})
     gains = SMCGains(**{k: val[k] for k in g})
     motor = MotorParams.preset("paper")
-    return Scenario("run", motor=motor, plan=plan, gains=gains, measurement=val["measurement"] or "ideal",
-                    plant=Plant(motor, load=val["load_torque"] or 0.0), t_end=val["t_end"] or 0.06)
+    return Scenario("run", motor=motor, plan=plan, gains=gains, measurement=val["measurement"],
+                    plant=Plant(motor, load=val["load_torque"]), t_end=val["t_end"])
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -101,7 +104,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                           solver=scenario.solver, t_end=scenario.t_end, x0=args.x0)
     summary = result.summary()
     if args.out:
-        out = Path(args.out)
+        out = out_dir(args.out)
         plan = scenario.plan
         _write(out, "run", scenario, result, f"{scenario.name}: theta {plan.theta1:g} -> {plan.theta2:g} rad, "
                f"load {scenario.simulated_plant.load:g} N m, {scenario.measurement} measurement")
@@ -127,7 +130,8 @@ scenario under parameter errors), compare (every controller on one scenario), be
 'flatstep COMMAND --help' lists a command's flags.
 
 Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
-move; 4 a controller faulted; 130 interrupted (docs/errors.md)."""
+move; 4 a controller faulted; 5 a run stopped before its end (non-finite state, or the continuous law
+faulted at every step); 130 interrupted (docs/errors.md)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -153,17 +157,19 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("scenario", nargs="?", default=None,
                      help="a scenario file (TOML, see examples/); or give the move and gains by flags")
     p, g = PAPER_PLAN, SMCGains()
-    for flag, default, help_ in (
-        ("--theta1", p.theta1, "start angle [rad]"), ("--theta2", p.theta2, "end angle [rad]"),
-        ("--rho1", p.rho1, "start current norm [A]"), ("--rho2", p.rho2, "end current norm [A]"),
-        ("--t0", p.t0, "move start [s]"), ("--tf", p.tf, "move end [s]"), ("--t-end", 0.06, "horizon [s]"),
-        ("--load-torque", 0.0, "constant load torque on the plant [N m]"),
-        ("--W1", g.W1, "sliding gain on s1"), ("--W2", g.W2, "sliding gain on s2"),
-        ("--eps1", g.eps1, "boundary layer of s1"), ("--eps2", g.eps2, "boundary layer of s2"),
-        ("--xi", g.xi, "damping of the theta error dynamics"), ("--wn", g.wn, "natural frequency [rad/s]"),
+    for flag, kind, default, help_ in (
+        ("--theta1", "angle", p.theta1, "start angle [rad]"), ("--theta2", "angle", p.theta2, "end angle [rad]"),
+        ("--rho1", "current", p.rho1, "start current norm [A]"), ("--rho2", "current", p.rho2, "end current norm [A]"),
+        ("--t0", "time", p.t0, "move start [s]"), ("--tf", "time", p.tf, "move end [s]"),
+        ("--t-end", "t_end", 0.06, "horizon [s]"),
+        ("--load-torque", "load", 0.0, "constant load torque on the plant [N m]"),
+        ("--W1", "gain", g.W1, "sliding gain on s1"), ("--W2", "gain", g.W2, "sliding gain on s2"),
+        ("--eps1", "gain", g.eps1, "boundary layer of s1"), ("--eps2", "gain", g.eps2, "boundary layer of s2"),
+        ("--xi", "damping", g.xi, "damping of the theta error dynamics"),
+        ("--wn", "gain", g.wn, "natural frequency [rad/s]"),
     ):
-        sim.add_argument(flag, type=float, default=None, help=f"{help_} (default {default:g})")
-    sim.add_argument("--hold-damping", type=float, default=None,
+        sim.add_argument(flag, type=quantity(kind, flag), default=None, help=f"{help_} (default {default:g})")
+    sim.add_argument("--hold-damping", type=quantity("damping", "--hold-damping"), default=None,
                      help="from tf on, hold the target's detent with this damping ratio (default: track the plan)")
     sim.add_argument("--measurement", choices=MEASUREMENTS, default=None,
                      help="ideal: true theta'' known (the paper); model: theta'' from the zero-load model")
@@ -180,7 +186,8 @@ def build_parser() -> argparse.ArgumentParser:
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d,e", help="a: planning, b: closed loop, c: controller step, "
                      "d: batch throughput, e: one engine for every run (default: a,b,c,d,e)")
-    ben.add_argument("--repeat", type=int, default=None, help="rounds per benchmark (default: each one's own)")
+    ben.add_argument("--repeat", type=count("samples", "--repeat"), default=None,
+                     help="rounds per benchmark (default: each one's own)")
     ben.set_defaults(func=cmd_bench)
     return parser
 
@@ -189,7 +196,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status (:mod:`flatstep.cli.status`, docs/errors.md)."""
     if hasattr(signal, "SIGPIPE"):  # a closed pipe (``flatstep ... | head``) ends the output quietly
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
-    args = build_parser().parse_args(argv)
+    try:
+        return _run(argv)
+    except KeyboardInterrupt:
+        print("flatstep: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    """Parse ``argv`` and run its command; every error becomes one line on stderr and an exit code."""
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as done:  # --help, --version, or a refused flag (argparse printed why): its exit code
+        return done.code if isinstance(done.code, int) else EXIT_REFUSED
     try:
         return int(args.func(args))
     except InfeasiblePlanError as exc:
@@ -198,16 +217,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as exc:
         print(f"flatstep: error: {exc}", file=sys.stderr)
         return EXIT_REFUSED
-    except KeyboardInterrupt:
-        print("flatstep: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except RunError as exc:
+        print(f"flatstep: run stopped: {exc} ({REASONS.get(exc.reason, exc.reason)})", file=sys.stderr)
+        return EXIT_STOPPED
+    except OSError as exc:  # a full disk, a file that cannot be written: not a bug of flatstep's
+        print(f"flatstep: error: {exc.strerror or exc}" + (f": {exc.filename}" if exc.filename else ""),
+              file=sys.stderr)
+        return EXIT_INTERNAL
+    except MemoryError:
+        print("flatstep: error: out of memory (shorten t_end or lower the sample rate)", file=sys.stderr)
+        return EXIT_INTERNAL
     except Exception as exc:  # noqa: BLE001 -- the command line never prints a traceback unless asked to
         if args.debug:
             traceback.print_exc()
         print(f"flatstep: internal error: {type(exc).__name__}: {exc} (run again with --debug for the traceback, "
               "and please report it)", file=sys.stderr)
         return EXIT_INTERNAL
-
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -5,11 +5,11 @@ import argparse
 import json
 import sys
 from dataclasses import replace
-from pathlib import Path
 from typing import Any
 
 from ..studies.robustness import REST_AFTER, encoder_count, run_study
 from ..studies.scenario_file import Robustness, load_scenario
+from .flags import count, out_dir
 from .status import exit_code
 
 
@@ -28,8 +28,7 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     if args.out:
         from .plots import plot_robustness
 
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+        out = out_dir(args.out)
         plot_robustness(result, count, scenario.plan, title=f"{scenario.name}: plant parameters off by "
                         f"+-{study.relative_error:.0%} ({len(result['errors'])} plants)", path=out / "robustness.png")
         (out / "robustness.json").write_text(json.dumps(report, indent=2) + "\n")
@@ -57,7 +56,8 @@ def add_robustness_command(sub: argparse._SubParsersAction[argparse.ArgumentPars
     """Add ``flatstep robustness`` to the subcommands ``sub``."""
     rob = sub.add_parser("robustness", help="a scenario under plant parameter errors ([robustness] of the file)")
     rob.add_argument("scenario", help="a scenario file (TOML)")
-    rob.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
+    rob.add_argument("--samples", type=count("samples", "--samples"), default=None,
+                     help="random plants instead of all sign combinations")
     rob.add_argument("--no-paper-gains", action="store_true", help="skip the paper's gains on the same drive")
     rob.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
     rob.add_argument("--out", default=None, help="write robustness.png and robustness.json here")

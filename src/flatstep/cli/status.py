@@ -10,6 +10,7 @@ EXIT_INTERNAL = 1      # an unexpected error (one line; --debug prints the trace
 EXIT_REFUSED = 2       # a bad value, file or flag, or an infeasible plan: nothing was run
 EXIT_LOST = 3          # a run lost its move (status "lost")
 EXIT_FAULT = 4         # no move lost, but a controller faulted (status "fault")
+EXIT_STOPPED = 5       # a run stopped before its end (flatstep.errors.RunError: non-finite state, ...)
 EXIT_INTERRUPTED = 130  # Ctrl-C
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import sys
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, Callable, Optional, TypeVar
 
@@ -24,6 +25,7 @@ from ..loop.sensors import Sensors
 from ..model.motor import PRESETS, MotorParams
 from ..model.plant import Plant, PlantEffects
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
+from ..validate import InputError, check_bool, check_count, check_quantity
 from .scenario import Scenario
 
 MOTOR_KEYS = ("preset", "R", "L", "Km", "J", "B", "Nr")
@@ -59,6 +61,22 @@ class Robustness:
     samples: int = 0
     seed: int = 0
 
+    def __post_init__(self) -> None:
+        err = check_quantity("relative", self.relative_error, as_name="relative_error")
+        if err == 0.0:
+            raise InputError("relative_error", err, "relative_error=0.0 must be > 0 (a study of no error is one run)")
+        object.__setattr__(self, "relative_error", err)
+        params = self.parameters
+        valid = MOTOR_KEYS[1:6]
+        if isinstance(params, str) or not isinstance(params, (list, tuple)) or not params or any(
+                not isinstance(p, str) or p not in valid for p in params) or len(set(params)) != len(params):
+            raise InputError("parameters", params, f"parameters={params!r} must be a non-empty list of distinct names "
+                                                   f"among {list(valid)}")
+        object.__setattr__(self, "parameters", tuple(params))
+        object.__setattr__(self, "samples", check_count("samples", self.samples,
+                                                        why="0: every sign combination; else random plants"))
+        object.__setattr__(self, "seed", check_count("seed", self.seed))
+
 
 def _check_keys(where: str, table: Any, section: str) -> dict[str, Any]:
     """``table`` if it is a table of known keys of ``section``, else a ValueError naming the file and key."""
@@ -71,19 +89,64 @@ def _check_keys(where: str, table: Any, section: str) -> dict[str, Any]:
     return table
 
 
+#: Where a value refused by a constructor was given in a scenario file, when its name is not its key.
+_SOURCES = {"control_period": "drive.control_rate", "t0": "plan.t0", "tf": "plan.tf", "t_end": "t_end",
+            "substeps": "drive.substeps"}
+
+
+def _source(where: str, section: str, name: str, keys: Any) -> str:
+    """``file:table.key`` of the value ``name`` refused in ``[section]`` (whose keys are ``keys``)."""
+    if name in keys:
+        return f"{where}:{section + '.' if section else ''}{name}"
+    if name in _SOURCES:
+        return f"{where}:{_SOURCES[name]}"
+    return f"{where}:{section}" if section else where
+
+
 def _wrap(where: str, section: str, build: Callable[..., T], **kwargs: Any) -> T:
-    """``build(**kwargs)``, its TypeError or ValueError raised again as a ValueError naming the file and section."""
+    """``build(**kwargs)``, its errors raised again as a ValueError naming the file, table and key."""
     try:
         return build(**kwargs)
+    except InputError as exc:
+        raise exc.at(_source(where, section, exc.name, kwargs)) from None
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}: [{section}] {exc}") from None
+
+
+def _value(where: str, section: str, key: str, check: Callable[[Any], T], value: Any) -> T:
+    """``check(value)`` for the value of ``key`` in ``[section]``, its error naming ``file:section.key``."""
+    try:
+        return check(value)
+    except InputError as exc:
+        raise exc.at(_source(where, section, key, (key,))) from None
+
+
+def _read(path: Path) -> dict[str, Any]:
+    """The TOML document at ``path``, or a ValueError naming the file and why it cannot be read."""
+    where = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ValueError(f"{where}: no such scenario file") from None
+    except IsADirectoryError:
+        raise ValueError(f"{where}: is a directory, not a scenario file (give a .toml file)") from None
+    except PermissionError:
+        raise ValueError(f"{where}: cannot read the scenario file (permission denied)") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{where}: not a text file (UTF-8): {exc.reason} at byte {exc.start}") from None
+    except OSError as exc:
+        raise ValueError(f"{where}: cannot read the scenario file: {exc.strerror or exc}") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{where}: not valid TOML: {exc}") from None
 
 
 def _motor(where: str, table: dict[str, Any], section: str, base: MotorParams) -> MotorParams:
     """The motor of a ``[motor]`` or ``[plant]`` table: ``base`` or a preset, with the given values and scales."""
     values: dict[str, Any] = dict(base.as_dict())
     if "preset" in table:
-        if table["preset"] not in PRESETS:
+        if not isinstance(table["preset"], str) or table["preset"] not in PRESETS:
             raise ValueError(f"{where}: [{section}] preset={table['preset']!r} is unknown; valid: {sorted(PRESETS)}")
         values = PRESETS[table["preset"]].as_dict()
     values.update({k: v for k, v in table.items() if k in MOTOR_KEYS[1:]})
@@ -91,20 +154,20 @@ def _motor(where: str, table: dict[str, Any], section: str, base: MotorParams) -
     scale = table.get("scale", {})
     if not isinstance(scale, dict) or set(scale) - set(MOTOR_KEYS[1:6]):
         raise ValueError(f"{where}: [{section}] scale={scale!r} must be a table of factors on R, L, Km, J, B")
-    return _wrap(where, section, motor.replace, **{k: getattr(motor, k) * float(f) for k, f in scale.items()})
+    factors = {k: _value(where, f"{section}.scale", k, partial(check_quantity, "scale", as_name=k), f)
+               for k, f in scale.items()}
+    return _wrap(where, section, motor.replace, **{k: getattr(motor, k) * f for k, f in factors.items()})
 
 
 def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     """Read a scenario file; returns the :class:`Scenario` and its robustness study (or ``None``)."""
     path = Path(path)
     where = str(path)
-    try:
-        doc = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise ValueError(f"{where}: no such scenario file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{where}: not valid TOML: {exc}") from None
+    doc = _read(path)
     _check_keys(where, doc, "")
+    for key in ("name", "description"):
+        if key in doc and not isinstance(doc[key], str):
+            raise InputError(key, doc[key], f"{where}:{key}: {key}={doc[key]!r} must be a string")
     sec = {name: _check_keys(where, doc.get(name, {}), name) for name in SECTIONS if name}
     motor = _motor(where, sec["motor"], "motor", MotorParams.preset("paper"))
     plant_t = {k: v for k, v in sec["plant"].items() if k not in EFFECT_KEYS}
@@ -112,7 +175,8 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     effects_t = {k: v for k, v in sec["plant"].items() if k in EFFECT_KEYS}
     effects = _wrap(where, "plant", PlantEffects, **effects_t) if effects_t else None
     plan = _wrap(where, "plan", RestToRest, **{**PAPER_PLAN.as_dict(), **sec["plan"]})
-    load = float(sec["load"].get("torque", 0.0))
+    load = _value(where, "load", "torque", lambda v: check_quantity("load", v, as_name="torque"),
+                  sec["load"].get("torque", 0.0))
 
     drive_t = dict(sec["drive"])
     rate = drive_t.pop("control_rate", None)
@@ -121,21 +185,27 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     if rate is None and (drive_t or sec["sensors"] or sec["observer"] or compute_delay):
         raise ValueError(f"{where}: [drive] control_rate is needed for a drive, sensors or an observer "
                          "(without it the law runs in continuous time, as in the paper)")
-    if rate is not None and (not isinstance(rate, (int, float)) or rate <= 0):
-        raise ValueError(f"{where}: [drive] control_rate={rate!r} must be a positive rate in Hz")
+    if rate is not None:
+        rate = _value(where, "drive", "control_rate", lambda v: check_quantity("rate", v, as_name="control_rate"),
+                      rate)
+    compute_delay = _value(where, "drive", "compute_delay", lambda v: check_bool("compute_delay", v), compute_delay)
     period = None if rate is None else 1.0 / rate
     drive = _wrap(where, "drive", Drive, **drive_t) if rate is not None else None
+    offset = sec["sensors"].get("current_offset")
+    if offset is not None and not (isinstance(offset, list) and len(offset) == 2):
+        raise InputError("current_offset", offset, f"{where}:sensors.current_offset: current_offset={offset!r} must "
+                                                   "be two offsets [ia, ib] in A")
     sensors = _wrap(where, "sensors", Sensors, **{**sec["sensors"], **(
-        {"current_offset": tuple(sec["sensors"]["current_offset"])} if "current_offset" in sec["sensors"] else {})}
-    ) if sec["sensors"] else None
+        {"current_offset": tuple(offset)} if offset is not None else {})}) if sec["sensors"] else None
 
     ctrl = dict(sec["controller"])
     controller_type = ctrl.pop("type", "smc")
-    if controller_type not in CONTROLLER_TYPES:
+    if not isinstance(controller_type, str) or controller_type not in CONTROLLER_TYPES:
         raise ValueError(f"{where}: [controller] type={controller_type!r} is unknown; valid: {list(CONTROLLER_TYPES)}")
     bandwidth_scale = ctrl.pop("bandwidth_scale", 1.0)
-    design = ctrl.pop("design", False)
-    uncertainty = ctrl.pop("uncertainty", 0.1)
+    design = _value(where, "controller", "design", lambda v: check_bool("design", v), ctrl.pop("design", False))
+    uncertainty = _value(where, "controller", "uncertainty",
+                         lambda v: check_quantity("relative", v, as_name="uncertainty"), ctrl.pop("uncertainty", 0.1))
     measurement = ctrl.pop("measurement", None)
     observer = None
     if design:
@@ -162,15 +232,5 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     scenario = _wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
                      gains=gains, measurement=measurement, t_end=doc.get("t_end", 0.06), plant=simulated,
                      loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale)
-    robustness = None
-    if "robustness" in doc:
-        r = dict(sec["robustness"])
-        if "parameters" in r:
-            bad = sorted(set(r["parameters"]) - set(MOTOR_KEYS[1:6]))
-            if bad:
-                raise ValueError(f"{where}: [robustness] parameters {bad} are not R, L, Km, J or B")
-            r["parameters"] = tuple(r["parameters"])
-        robustness = _wrap(where, "robustness", Robustness, **r)
-        if not 0 < robustness.relative_error < 0.5:
-            raise ValueError(f"{where}: [robustness] relative_error={robustness.relative_error!r} must be in (0, 0.5)")
+    robustness = _wrap(where, "robustness", Robustness, **sec["robustness"]) if "robustness" in doc else None
     return scenario, robustness
