@@ -35,7 +35,7 @@ from ..loop.observers import Observer
 from ..model.motor import MotorParams
 from ..plan.feasibility import check_feasibility
 from ..plan.rest_to_rest import RestToRest
-from ..validate import check_finite, check_positive
+from ..validate import check_bool, check_count, check_quantity
 from .smc import SMCGains
 
 LAMBDA_TS = 0.3
@@ -92,14 +92,16 @@ def design_gains(motor: MotorParams, plan: RestToRest, *, control_period: float 
     Design
         The gains, the observer and the numbers behind them, with any warnings.
     """
-    Ts = check_positive("control_period", control_period, unit=" s")
-    v_bus = check_positive("v_bus", v_bus, unit=" V")
-    delta = check_finite("uncertainty", uncertainty)
-    if not 0.0 <= delta < 0.5:
+    Ts = check_quantity("period", control_period, as_name="control_period")
+    v_bus = check_quantity("v_bus", v_bus)
+    delta = check_quantity("relative", uncertainty, as_name="uncertainty")
+    if delta >= 0.5:
         raise ValueError(f"uncertainty={delta!r} must be in [0, 0.5) (a relative parameter error)")
-    tau = abs(check_finite("load_torque", load_torque))
-    if current_step < 0 or not math.isfinite(current_step):
-        raise ValueError(f"current_step={current_step!r} A must be finite and >= 0")
+    tau = abs(check_quantity("load", load_torque, as_name="load_torque"))
+    current_step = check_quantity("current_noise", current_step, as_name="current_step")
+    if encoder_counts is not None:
+        encoder_counts = check_count("encoder_counts", encoder_counts)
+    compute_delay = check_bool("compute_delay", compute_delay)
     lam = (LAMBDA_TS_DELAYED if compute_delay else LAMBDA_TS) / Ts
     wn = WN_OVER_LAMBDA * lam
     t = np.linspace(plan.t0, plan.tf, 2001)

@@ -11,6 +11,7 @@ from scipy.optimize import minimize_scalar
 
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
+from ..validate import check_integer, check_quantity
 from .rest_to_rest import RestToRest
 
 
@@ -82,8 +83,15 @@ def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: floa
     voltages against ``v_max`` and phase currents against ``i_max``. The plan is sampled at ``n`` points over
     [t0, tf] and the worst torque margin is refined by a bounded scalar minimisation around the worst sample.
     """
-    if n < 3:
-        raise ValueError(f"n={n!r} samples is too few; use at least 3")
+    if not isinstance(plan, RestToRest) or not isinstance(motor, MotorParams):
+        raise ValueError(f"check_feasibility takes a RestToRest and a MotorParams, got {type(plan).__name__} and "
+                         f"{type(motor).__name__}")
+    n = check_integer("n", n, low=3, high=10_000_000, why="samples of the plan")
+    load_torque = check_quantity("load", load_torque, as_name="load_torque")
+    if v_max is not None:
+        v_max = check_quantity("v_bus", v_max, as_name="v_max")
+    if i_max is not None:
+        i_max = check_quantity("current", i_max, as_name="i_max")
     t = np.linspace(plan.t0, plan.tf, n)
     f = plan.flag(t)
     margin = _torque_margin(plan, motor, load_torque, t)

@@ -16,7 +16,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from ..control.design import design_gains
-from ..control.smc import SMCGains
+from ..control.smc import MEASUREMENTS, SMCGains
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.drive import Drive
 from ..loop.observers import Observer
@@ -25,7 +25,7 @@ from ..loop.sensors import Sensors
 from ..model.motor import PRESETS, MotorParams
 from ..model.plant import Plant, PlantEffects
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
-from ..validate import InputError, check_bool, check_count, check_quantity
+from ..validate import InputError, check_bool, check_choice, check_count, check_quantity
 from .scenario import Scenario
 
 MOTOR_KEYS = ("preset", "R", "L", "Km", "J", "B", "Nr")
@@ -63,8 +63,9 @@ class Robustness:
 
     def __post_init__(self) -> None:
         err = check_quantity("relative", self.relative_error, as_name="relative_error")
-        if err == 0.0:
-            raise InputError("relative_error", err, "relative_error=0.0 must be > 0 (a study of no error is one run)")
+        if not 0.0 < err < 0.5:
+            raise InputError("relative_error", err, f"relative_error={err!r} must be in (0, 0.5): a relative error "
+                                                    "(0 is a study of no error, one run)")
         object.__setattr__(self, "relative_error", err)
         params = self.parameters
         valid = MOTOR_KEYS[1:6]
@@ -91,11 +92,14 @@ def _check_keys(where: str, table: Any, section: str) -> dict[str, Any]:
 
 #: Where a value refused by a constructor was given in a scenario file, when its name is not its key.
 _SOURCES = {"control_period": "drive.control_rate", "t0": "plan.t0", "tf": "plan.tf", "t_end": "t_end",
-            "substeps": "drive.substeps"}
+            "substeps": "drive.substeps", "bandwidth_scale": "controller.bandwidth_scale",
+            "measurement": "controller.measurement", "controller_type": "controller.type"}
 
 
 def _source(where: str, section: str, name: str, keys: Any) -> str:
     """``file:table.key`` of the value ``name`` refused in ``[section]`` (whose keys are ``keys``)."""
+    if section == "scenario" and name in _SOURCES:  # the Scenario's fields come from several tables
+        return f"{where}:{_SOURCES[name]}"
     if name in keys:
         return f"{where}:{section + '.' if section else ''}{name}"
     if name in _SOURCES:
@@ -207,6 +211,9 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     uncertainty = _value(where, "controller", "uncertainty",
                          lambda v: check_quantity("relative", v, as_name="uncertainty"), ctrl.pop("uncertainty", 0.1))
     measurement = ctrl.pop("measurement", None)
+    if measurement is not None:
+        measurement = _value(where, "controller", "measurement", partial(check_choice, "measurement",
+                                                                         valid=MEASUREMENTS), measurement)
     observer = None
     if design:
         if period is None or drive is None:  # no control_rate: neither a period nor a drive

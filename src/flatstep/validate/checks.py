@@ -72,13 +72,14 @@ def check_integer(name: str, value: Any, *, low: int = 1, high: Optional[int] = 
     A float with an integral value (``50.0``, as TOML and JSON may give it) is taken as that integer; ``why`` is
     added to the message in parentheses.
     """
+    given = value
     if isinstance(value, (float, np.floating)) and math.isfinite(value) and float(value).is_integer():
         value = int(value)
     ok = not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, np.integer))
     if not ok or value < low or (high is not None and value > high):
         valid = f"an integer in [{low}, {high}]" if high is not None else (
             "a positive integer" if low == 1 else f"an integer >= {low}")
-        raise InputError(name, value, f"{name}={value!r} must be {valid}" + (f" ({why})" if why else ""))
+        raise InputError(name, given, f"{name}={given!r} must be {valid}" + (f" ({why})" if why else ""))
     return int(value)
 
 

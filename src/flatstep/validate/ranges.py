@@ -12,13 +12,14 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class Quantity:
-    """A range of valid values: ``low < x`` (or ``<=`` when ``low_closed``) and ``x <= high``."""
+    """A range: ``low < x`` (``<=`` when ``low_closed``) and ``x <= high`` (``<`` when ``high_open``)."""
 
     low: float
     high: float
     unit: str
     why: str
     low_closed: bool = False
+    high_open: bool = False
 
     @property
     def unit_suffix(self) -> str:
@@ -28,15 +29,17 @@ class Quantity:
     def contains(self, x: float) -> bool:
         """Whether ``x`` is in the range."""
         above = x >= self.low if self.low_closed else x > self.low
-        return above and x <= self.high
+        return above and (x < self.high if self.high_open else x <= self.high)
 
     def describe(self) -> str:
         """The range in interval notation with its unit, e.g. ``(0, 1e+04] ohm``."""
-        return f"{'[' if self.low_closed else '('}{self.low:g}, {self.high:g}]{self.unit_suffix}"
+        return (f"{'[' if self.low_closed else '('}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+                f"{self.unit_suffix}")
 
 
-def _q(low: float, high: float, unit: str, why: str, low_closed: bool = False) -> Quantity:
-    return Quantity(low, high, unit, why, low_closed)
+def _q(low: float, high: float, unit: str, why: str, low_closed: bool = False, high_open: bool = False) -> Quantity:
+    """A :class:`Quantity`, positionally."""
+    return Quantity(low, high, unit, why, low_closed, high_open)
 
 
 #: Every bounded quantity by name. Integers (teeth, counts, bits, substeps) are bounded in
@@ -62,7 +65,7 @@ QUANTITIES: dict[str, Quantity] = {
     # the controller
     "gain": _q(0.0, 1e12, "", "a gain above 0 and at most 1e12"),
     "damping": _q(0.0, 1e3, "", "a damping ratio above 0"),
-    "relative": _q(0.0, 0.5, "", "a relative parameter error in [0, 0.5)", low_closed=True),
+    "relative": _q(0.0, 0.5, "", "a relative parameter error in [0, 0.5)", low_closed=True, high_open=True),
     "scale": _q(0.0, 1e3, "", "a factor above 0 and at most 1000"),
     # the drive, sensors and observer
     "v_bus": _q(0.0, 1e4, "V", "a bus voltage above 0 and at most 10 kV"),
