@@ -186,7 +186,7 @@ def build_parser() -> argparse.ArgumentParser:
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d,e", help="a: planning, b: closed loop, c: controller step, "
                      "d: batch throughput, e: one engine for every run (default: a,b,c,d,e)")
-    ben.add_argument("--repeat", type=count("samples", "--repeat"), default=None,
+    ben.add_argument("--repeat", type=count("repeat", "--repeat"), default=None,
                      help="rounds per benchmark (default: each one's own)")
     ben.set_defaults(func=cmd_bench)
     return parser

@@ -91,6 +91,7 @@ INTEGER_RANGES: dict[str, tuple[int, int]] = {
     "seed": (0, 2**63 - 1),
     "samples": (0, 10_000_000),
     "load_states": (0, 2),
+    "repeat": (1, 100_000),
 }
 
 #: The largest value of each unbounded-above quantity, for documentation.

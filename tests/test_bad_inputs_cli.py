@@ -1,0 +1,139 @@
+"""Bad input at the command line, through a subprocess: exit code 2, one line naming the flag or key and the value,
+never a traceback.
+
+The cases run concurrently (4 at a time) in one fixture; each parametrized test checks its own case.
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+SIM_FLAGS = ["--theta1", "--theta2", "--rho1", "--rho2", "--t0", "--tf", "--t-end", "--load-torque", "--W1", "--W2",
+             "--eps1", "--eps2", "--xi", "--wn", "--hold-damping"]
+NOT_A_NUMBER = ["nan", "-inf", "abc", "1e400", ""]
+#: (flag, values out of its range)
+SIM_RANGES = [("--rho1", ["0", "-1", "1e300"]), ("--rho2", ["0", "-0.4"]), ("--t0", ["-0.01", "1e300"]),
+              ("--tf", ["1e300", "0.01", "-1"]), ("--t-end", ["0", "-1", "0.03", "1e9"]),
+              ("--load-torque", ["1e300", "-1e300", "1e4"]), ("--theta1", ["1e300"]), ("--theta2", ["-1e300"]),
+              ("--W1", ["0", "-100"]), ("--W2", ["0"]), ("--eps1", ["-1"]), ("--eps2", ["0"]), ("--xi", ["0", "-1"]),
+              ("--wn", ["0"]), ("--hold-damping", ["0", "-0.7"])]
+DESIGN = [("--control-rate", ["0", "-20000", "nan", "abc", "1e12"]), ("--v-bus", ["0", "-24", "inf", "x"]),
+          ("--current-range", ["0", "-2", "nan"]), ("--uncertainty", ["-0.1", "0.5", "nan", "2"]),
+          ("--load-torque", ["nan", "1e300"]), ("--encoder-counts", ["0", "3", "1.5", "abc", "-16384"]),
+          ("--current-bits", ["1", "64", "12.5", "x"])]
+
+
+def _named(flag: str) -> tuple[str, str]:
+    """A flag's error names it as the flag or as its keyword (``--t-end`` or ``t_end``): either will do."""
+    return flag, flag.lstrip("-").replace("-", "_")
+
+
+def _cases(tmp: Path) -> list[tuple[str, list[str], int, list[str]]]:
+    """(id, argv, exit code, strings stderr must contain)."""
+    cases = []
+    for flag in SIM_FLAGS:
+        for v in NOT_A_NUMBER:
+            cases.append((f"simulate {flag}={v!r}", ["simulate", f"{flag}={v}"], 2, [flag]))
+    for flag, values in SIM_RANGES:
+        for v in values:
+            cases.append((f"simulate {flag}={v}", ["simulate", f"{flag}={v}"], 2, [_named(flag)]))
+    cases += [
+        ("t0 after tf", ["simulate", "--t0", "0.05"], 2, ["tf=0.04", "t0=0.05"]),
+        ("t_end before tf", ["simulate", "--tf", "0.05", "--t-end", "0.045"], 2, ["t_end=0.045"]),
+        ("x0 nan", ["simulate", "--x0", "nan", "0", "0", "0"], 2, ["x0=", "nan"]),
+        ("x0 huge", ["simulate", "--x0", "1e300", "0", "0", "0"], 2, ["x0=", "1e+300"]),
+        ("x0 three", ["simulate", "--x0", "0", "0", "0"], 2, ["--x0"]),
+        ("x0 word", ["simulate", "--x0", "a", "0", "0", "0"], 2, ["--x0", "'a'"]),
+        ("measurement", ["simulate", "--measurement", "perfect"], 2, ["'perfect'"]),
+        ("missing file", ["simulate", str(tmp / "missing.toml")], 2, ["missing.toml", "no such"]),
+        ("directory", ["simulate", str(tmp)], 2, [str(tmp), "directory"]),
+        ("binary file", ["simulate", str(tmp / "binary.toml")], 2, ["binary.toml", "UTF-8"]),
+        ("bad toml", ["simulate", str(tmp / "broken.toml")], 2, ["broken.toml", "not valid TOML"]),
+        ("out is a file", ["simulate", "--out", str(tmp / "afile")], 2, ["--out", "afile", "not a directory"]),
+        ("file and flags", ["simulate", str(tmp / "rate10.toml"), "--tf", "0.05"], 2, ["--tf"]),
+        ("slow control", ["simulate", str(tmp / "rate10.toml")], 2, ["rate10.toml:drive.control_rate"]),
+        ("bool rate", ["simulate", str(tmp / "boolrate.toml")], 2, ["drive.control_rate", "True"]),
+        ("string bus", ["simulate", str(tmp / "vbus.toml")], 2, ["drive.v_bus", "'24'"]),
+        ("huge horizon", ["simulate", str(tmp / "long.toml")], 2, ["long.toml:t_end", "1000000000.0"]),
+        ("horizon cost", ["simulate", str(tmp / "costly.toml")], 2, ["integration steps", "MAX_STEPS"]),
+        ("pwm cost", ["simulate", str(tmp / "pwm.toml")], 2, ["PWM periods"]),
+        ("unknown key", ["simulate", str(tmp / "key.toml")], 2, ["key.toml", "'Rx'"]),
+        ("no command", [], 2, ["COMMAND"]),
+        ("unknown command", ["bogus"], 2, ["'bogus'"]),
+        ("unknown flag", ["simulate", "--bogus", "1"], 2, ["--bogus"]),
+        ("bench which", ["bench", "--which", "z"], 2, ["'z'"]),
+        ("bench repeat", ["bench", "--repeat", "0"], 2, ["--repeat"]),
+        ("bench repeat word", ["bench", "--repeat", "x"], 2, ["--repeat", "'x'"]),
+        ("robustness missing", ["robustness", str(tmp / "missing.toml")], 2, ["missing.toml"]),
+        ("robustness samples", ["robustness", str(tmp / "rate10.toml"), "--samples", "-1"], 2, ["--samples"]),
+        ("robustness samples float", ["robustness", str(tmp / "rate10.toml"), "--samples", "1.5"], 2, ["'1.5'"]),
+        ("robustness parameters", ["robustness", str(tmp / "params.toml")], 2, ["robustness.parameters", "'RL'"]),
+        ("robustness negative", ["robustness", str(tmp / "samples.toml")], 2, ["robustness.samples", "-1"]),
+        ("compare no drive", ["compare", str(tmp / "nodrive.toml")], 2, ["control_rate"]),
+        ("compare controllers", ["compare", str(tmp / "drive.toml"), "--controllers", "pid"], 2, ["'pid'"]),
+        ("compare band", ["compare", str(tmp / "drive.toml"), "--band", "-1"], 2, ["--band", "-1"]),
+        ("compare band nan", ["compare", str(tmp / "drive.toml"), "--band", "nan"], 2, ["--band", "nan"]),
+        ("compare scales", ["compare", str(tmp / "drive.toml"), "--scales", "a,b"], 2, ["--scales", "'a,b'"]),
+        ("compare scales zero", ["compare", str(tmp / "drive.toml"), "--scales", "0"], 2, ["--scales"]),
+        ("compare samples", ["compare", str(tmp / "drive.toml"), "--samples", "-3"], 2, ["--samples", "-3"]),
+        ("design no drive", ["design", str(tmp / "nodrive.toml")], 2, ["control_rate"]),
+    ]
+    for flag, values in DESIGN:
+        for v in values:
+            cases.append((f"design {flag}={v}", ["design", f"{flag}={v}"], 2, [_named(flag)]))
+    return cases
+
+
+FILES = {
+    "rate10.toml": "[drive]\ncontrol_rate = 10.0\n",
+    "boolrate.toml": "[drive]\ncontrol_rate = true\n",
+    "vbus.toml": "[drive]\ncontrol_rate = 20000.0\nv_bus = \"24\"\n",
+    "long.toml": "t_end = 1e9\n",
+    "costly.toml": "t_end = 100.0\n[drive]\ncontrol_rate = 1e6\nsubsteps = 10000\n",
+    "pwm.toml": "t_end = 10.0\n[drive]\ncontrol_rate = 20000.0\npwm = \"switched\"\nf_pwm = 1e8\n",
+    "key.toml": "[motor]\nRx = 1.0\n",
+    "params.toml": "[robustness]\nparameters = \"RL\"\n",
+    "samples.toml": "[robustness]\nsamples = -1\n",
+    "nodrive.toml": "[plan]\ntheta2 = 0.02\n",
+    "drive.toml": "[drive]\ncontrol_rate = 20000.0\n",
+    "broken.toml": "t_end = = 1\n",
+    "afile": "not a directory\n",
+}
+
+
+@pytest.fixture(scope="module")
+def outcomes(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("cli")
+    for name, text in FILES.items():
+        (tmp / name).write_text(text)
+    (tmp / "binary.toml").write_bytes(b"\x00\xff\xfe\x80")
+    cases = _cases(tmp)
+
+    def run(argv):
+        return subprocess.run([sys.executable, "-m", "flatstep", *argv], capture_output=True, text=True, timeout=60,
+                              cwd=tmp)
+
+    with ThreadPoolExecutor(4) as pool:
+        done = list(pool.map(lambda c: run(c[1]), cases))
+    return {c[0]: (c, p) for c, p in zip(cases, done, strict=True)}
+
+
+CASE_IDS = [c[0] for c in _cases(Path("/tmp"))]
+
+
+@pytest.mark.parametrize("case_id", CASE_IDS)
+def test_the_command_line_refuses_bad_input(outcomes, case_id):
+    (_, argv, code, needles), proc = outcomes[case_id]
+    err = proc.stderr
+    assert "Traceback" not in err and "internal error" not in err, err
+    assert proc.returncode == code, (argv, proc.returncode, err)
+    assert all(any(a in err for a in n) if isinstance(n, tuple) else n in err for n in needles), (needles, err)
+    assert proc.stdout == "" or "usage" not in proc.stdout, proc.stdout
+
+
+def test_the_table_is_large():
+    assert len(CASE_IDS) >= 150
