@@ -4,7 +4,7 @@ import os
 import pytest
 
 import flatstep as fs
-from flatstep.studies.executors import executor_workers
+from flatstep.studies.executors import as_executor, executor_workers
 
 distributed = pytest.importorskip("distributed")
 
@@ -49,3 +49,14 @@ def test_chunks_follow_the_clusters_workers_not_this_machines_cores(client, monk
     assert len(tasks.data) == 16
     assert [row["index"] for row in rows] == list(range(48))
     assert fs.run_batch(grid, executor=client, workers=1, chunk_size=48, progress=False) == rows
+
+
+def test_a_client_or_its_executor_submits_unhashed_tasks_on_the_workers_it_names(client):
+    """pure=False (no hash of the scenarios per task); an executor held to one worker counts that worker only."""
+    assert as_executor(client)._kwargs == {"pure": False}
+    one = sorted(client.nthreads())[0]
+    held = as_executor(client.get_executor(workers=[one]))
+    assert held._kwargs == {"pure": False, "workers": [one]}
+    assert executor_workers(held) == 1
+    mine = client.get_executor(pure=True)
+    assert as_executor(mine) is mine   # an explicit choice is kept

@@ -23,15 +23,21 @@ class ChunkCancelled(Exception):
 
 
 def as_executor(executor: Any) -> Executor:
-    """``executor`` itself, or ``executor.get_executor()`` for a Dask ``distributed.Client``.
+    """The executor to submit a batch's chunks to: ``executor``, or a Dask client's executor.
 
-    Raises a ValueError for anything else.
+    A Dask ``distributed.Client`` gives ``client.get_executor(pure=False)``, and a client's executor made
+    without ``pure`` is made again with ``pure=False`` (its other options kept): a pure task is keyed by a hash
+    of its arguments, which costs Dask about 20 ms per chunk of 60 scenarios, and a batch never submits the
+    same chunk twice. Raises a ValueError for anything else.
     """
+    client, options = getattr(executor, "_client", None), getattr(executor, "_kwargs", None)
     if isinstance(executor, Executor):
+        if client is not None and isinstance(options, dict) and "pure" not in options:
+            return client.get_executor(pure=False, **options)
         return executor
     get = getattr(executor, "get_executor", None)
     if callable(get):
-        return get()
+        return get(pure=False)
     raise ValueError(f"executor={executor!r} is not a concurrent.futures.Executor (nor a Dask Client, whose "
                      "get_executor() is one)")
 
