@@ -27,8 +27,8 @@ def as_executor(executor: Any) -> Executor:
 
     A Dask ``distributed.Client`` gives ``client.get_executor(pure=False)``, and a client's executor made
     without ``pure`` is made again with ``pure=False`` (its other options kept): a pure task is keyed by a hash
-    of its arguments, which costs Dask about 20 ms per chunk of 60 scenarios, and a batch never submits the
-    same chunk twice. Raises a ValueError for anything else.
+    of its arguments, which costs Dask time for every chunk of scenarios, and a batch never submits the same
+    chunk twice. Raises a ValueError for anything else.
     """
     client, options = getattr(executor, "_client", None), getattr(executor, "_kwargs", None)
     if isinstance(executor, Executor):
