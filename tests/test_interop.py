@@ -142,6 +142,10 @@ def test_nlsys_load_input_adds_to_the_plants_load(motor):
     np.testing.assert_allclose(with_input.dynamics(0.0, x, [*v, 2e-5]), interop.nlsys(both).dynamics(0.0, x, v))
     np.testing.assert_allclose(with_input.output(0.0, x, [*v, 2e-5])[4], both.acceleration(x))
     assert interop.nlsys(motor).output_labels == ["ia", "ib", "omega", "theta", "ddtheta"]
+    varying = interop.nlsys(fs.Plant(motor, load=lambda t: 1e-5 * np.sin(40.0 * t)))   # a load function of time
+    at_t = interop.nlsys(fs.Plant(motor, load=1e-5 * np.sin(40.0 * 0.03)))
+    np.testing.assert_allclose(varying.dynamics(0.03, x, v), at_t.dynamics(0.03, x, v))
+    assert varying.dynamics(0.03, x, v)[2] != interop.nlsys(motor).dynamics(0.03, x, v)[2]
 
 
 def test_flatsys_load_from_params_and_forward_reverse(motor, plan):
