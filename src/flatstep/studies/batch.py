@@ -211,7 +211,8 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     Ctrl-C (KeyboardInterrupt) stops the batch and is raised again; the rows finished before it are in
     ``out``, and a run of the same batch resumes from them. On threads (the C engine's default) the running
     chunks stop within one control period or step (their C runs poll a cancel flag); chunks running in
-    other processes are cancelled if not started, and run on otherwise.
+    other processes are cancelled if not started; running ones are not stopped by the batch (a terminal's
+    Ctrl-C also reaches a local process pool's workers, which then stop themselves).
 
     A row is written with one ``os.write`` of a whole line, and the file is synced (``os.fsync``) after each
     chunk, so a crash loses at most the chunks in flight; a last line cut short is truncated off on the next

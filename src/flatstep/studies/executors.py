@@ -90,7 +90,7 @@ def run_chunks(pool: Executor, run_chunk: Callable[..., Rows], chunks: Sequence[
     not started are cancelled and the exception is raised again. On a ``ThreadPoolExecutor`` the running
     chunks are stopped first: their C runs poll a flag (:func:`flatstep._core_structs.cancel_scope`) that is
     set here, so they end within one control period or integrator step, and the exception is raised once
-    they have. Chunks running in other processes (a process pool, a Dask cluster) run on to their end.
+    they have. Chunks running in other processes (a process pool, a Dask cluster) are not stopped here.
     """
     from .._core_structs import cancel_flag
 
