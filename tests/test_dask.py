@@ -13,8 +13,8 @@ GAINS = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500)   # fl
 
 @pytest.fixture(scope="module")
 def client():
-    """A client of a fresh 2-process LocalCluster (no dashboard), closed after the module's tests."""
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+    """A client of a fresh 2-process LocalCluster (dashboard on a free port), closed after the module's tests."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                                   silence_logs=40) as cluster, distributed.Client(cluster) as c:
         yield c
 
