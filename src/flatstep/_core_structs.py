@@ -6,7 +6,8 @@ row-major ``(n, k)`` on the C side and ``(k, n)`` (components first, as in the P
 from __future__ import annotations
 
 import threading
-from typing import Any, Callable, NamedTuple, Optional, TypeVar
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator, NamedTuple, Optional, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -174,6 +175,35 @@ def _check(rc: int, st: CData, what: str) -> None:
 Result = TypeVar("Result")
 
 
+_scope = threading.local()
+
+
+def cancel_flag() -> CData:
+    """A new cancel flag (a ``uint32_t *`` set to 0) for :func:`cancel_scope`; set ``flag[0] = 1`` to cancel."""
+    return ffi.new("uint32_t *")
+
+
+@contextmanager
+def cancel_scope(flag: CData) -> Iterator[None]:
+    """Within this block, every C run this thread makes through :func:`cancellable` polls ``flag``.
+
+    This is how a batch stops the runs of its worker threads: Python delivers Ctrl-C to the main thread only,
+    which then sets the flag that the workers' C loops poll (:func:`flatstep.studies.batch.run_batch`).
+    """
+    previous = getattr(_scope, "flag", None)
+    _scope.flag = flag
+    try:
+        yield
+    finally:
+        _scope.flag = previous
+
+
+def cancel_requested() -> bool:
+    """Whether the flag of this thread's :func:`cancel_scope` is set (``False`` outside a scope)."""
+    flag = getattr(_scope, "flag", None)
+    return flag is not None and bool(flag[0])
+
+
 def cancellable(call: Callable[[CData], Result]) -> Result:
     """``call(cancel)`` so that Ctrl-C stops the C run it makes within milliseconds.
 
@@ -181,9 +211,11 @@ def cancellable(call: Callable[[CData], Result]) -> Result:
     ``continuous_params.cancel``), which polls it once per control period or step. In the main thread the call
     runs in a helper thread (cffi releases the GIL), so that the main thread stays free to receive the
     KeyboardInterrupt, set the flag, wait for the run to stop and raise the KeyboardInterrupt again. In any
-    other thread the call runs in place: Python delivers Ctrl-C to the main thread only.
+    other thread the call runs in place: Python delivers Ctrl-C to the main thread only, and the flag is the
+    one of the thread's :func:`cancel_scope` (a new one outside a scope), which another thread may set.
     """
-    cancel = ffi.new("uint32_t *")
+    scoped = getattr(_scope, "flag", None)
+    cancel = scoped if scoped is not None else cancel_flag()
     if threading.current_thread() is not threading.main_thread():
         return call(cancel)
     box: dict[str, Any] = {}

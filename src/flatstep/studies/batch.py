@@ -13,7 +13,7 @@ import math
 import os
 import sys
 import time
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from contextlib import ExitStack
 from dataclasses import replace
 from itertools import product
@@ -23,6 +23,7 @@ from typing import Any, Iterable, Optional, Sequence, TextIO
 from ..engine.result import SimResult
 from ..validate import check_integer
 from .batch_file import BatchWriteError, open_batch_file
+from .executors import as_executor, check_cancelled, default_chunk_size, executor_workers, run_chunks
 from .fingerprint import fingerprint
 from .scenario import Scenario
 from .workers import die_with_parent
@@ -45,8 +46,15 @@ def _run_one(index: int, scenario: Scenario, engine: str, keep: Sequence[str]) -
 
 
 def _run_chunk(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[str]) -> list[dict[str, Any]]:
-    """The rows of a chunk of ``(index, scenario)`` pairs, one :func:`_run_one` each."""
-    return [_run_one(i, s, engine, keep) for i, s in chunk]
+    """The rows of a chunk of ``(index, scenario)`` pairs, one :func:`_run_one` each.
+
+    Between runs it stops if its batch was interrupted (:func:`~flatstep.studies.executors.check_cancelled`).
+    """
+    rows = []
+    for i, s in chunk:
+        check_cancelled()
+        rows.append(_run_one(i, s, engine, keep))
+    return rows
 
 
 def summarised_in_c(scenario: Scenario) -> bool:
@@ -88,7 +96,9 @@ def _run_chunk_c(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[
                          n_periods=max(1, math.ceil(s.t_end / loop.control_period - 1e-9)),
                          Ts=loop.control_period, substeps=loop.substeps, drive=loop.drive, sensors=loop.sensors,
                          observer=loop.observer, compute_delay=loop.compute_delay))
-    for (i, s), summary in zip(todo, _core.run_sampled_summaries(runs), strict=True):  # one summary per run
+    summaries = _core.run_sampled_summaries(runs)
+    check_cancelled()  # an interrupted batch: the runs cut short are no results
+    for (i, s), summary in zip(todo, summaries, strict=True):  # one summary per run
         rows[i] = {"index": i, "name": s.name, **summary, "error": None} if summary is not None \
             else _run_one(i, s, engine, keep)
     return [rows[i] for i, _ in chunk]
@@ -142,7 +152,7 @@ def _done_indices(out: Path) -> set[int]:
     return done
 
 
-def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Optional[Executor] = None,
+def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Optional[Any] = None,
               workers: Optional[int] = None, chunk_size: Optional[int] = None, progress: Optional[bool] = None,
               out: str | Path | None = None, keep: Sequence[str] = (), fresh: bool = False) -> list[dict[str, Any]]:
     """Run every scenario and return one summary row per scenario, in input order.
@@ -153,12 +163,16 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
         The runs; build grids with :func:`scenario_grid`.
     engine : str
         ``"c"`` (default) or a reference engine, as for :func:`flatstep.simulate`.
-    executor : concurrent.futures.Executor, optional
-        Any executor (e.g. a Dask ``distributed.Client``'s ``get_executor()``); default: ``workers`` threads on
-        the C engine (its runs release the GIL), a process pool of ``workers`` processes on the reference
-        engines, whose workers end when the calling process dies (:func:`die_with_parent`).
+    executor : concurrent.futures.Executor or distributed.Client, optional
+        Any executor, or a Dask ``distributed.Client`` (its ``get_executor()`` is used; docs/scaling.md);
+        default: ``workers`` threads on the C engine (its runs release the GIL), a process pool of ``workers``
+        processes on the reference engines, whose workers end when the calling process dies
+        (:func:`die_with_parent`).
     workers : int, optional
-        Threads or processes of the default executor (default: all cores).
+        Without ``executor``: the threads or processes of the default executor (default: all cores). With
+        one: how many tasks it runs at once, which sets the chunk size (default: asked of the executor by
+        :func:`~flatstep.studies.executors.executor_workers`: a Dask cluster's worker threads, a pool's
+        ``max_workers``; all cores of this machine if it does not tell).
     chunk_size : int, optional
         Scenarios per task (default: enough for about 8 tasks per worker).
     progress : bool, optional
@@ -196,6 +210,12 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     call per chunk (``_core.run_sampled_summaries``: runs and summaries in C, threads instead of processes,
     since the C call releases the GIL); the rows equal those of one ``Scenario.run`` per scenario.
 
+    Ctrl-C (KeyboardInterrupt) stops the batch and is raised again; the rows finished before it are in
+    ``out``, and a run of the same batch resumes from them. On threads (the C engine's default) the running
+    chunks stop within one control period or step (their C runs poll a cancel flag); chunks running in
+    other processes are cancelled if not started; running ones are not stopped by the batch (a terminal's
+    Ctrl-C also reaches a local process pool's workers, which then stop themselves).
+
     A row is written with one ``os.write`` of a whole line, and the file is synced (``os.fsync``) after each
     chunk, so a crash loses at most the chunks in flight; a last line cut short is truncated off on the next
     run, with a warning. The lock is an ``O_CREAT | O_EXCL`` file holding the writer's pid, removed when the
@@ -224,8 +244,10 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
                                          __version__, fresh, stack)
             rows.update(done)
         todo = [(i, s) for i, s in enumerate(scenarios) if i not in rows]
-        n_workers = workers or os.cpu_count() or 1
-        size = chunk_size or max(1, len(todo) // (8 * n_workers))
+        given = as_executor(executor) if executor is not None else None
+        told = executor_workers(given) if given is not None else None
+        n_workers = workers or told or os.cpu_count() or 1
+        size = chunk_size or default_chunk_size(len(todo), n_workers)
         chunks = [todo[k:k + size] for k in range(0, len(todo), size)]
         bar = _Progress(len(todo), sys.stderr, progress is not False)
 
@@ -237,24 +259,20 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
             bar.update(len(batch))
 
         run_chunk = _run_chunk_c if in_c else _run_chunk
-        if executor is None and (n_workers == 1 or len(chunks) <= 1):
+        if given is None and (n_workers == 1 or len(chunks) <= 1):
             for chunk in chunks:
                 record(run_chunk(chunk, engine, keep))
         else:
-            own = executor is None
             # C runs release the GIL: threads share the work without a process pool's start-up; the Python
             # reference engines hold it and need processes, which end with this process.
-            pool: Executor = executor if executor is not None else (
+            pool: Executor = given if given is not None else (
                 ThreadPoolExecutor(max_workers=n_workers) if engine == "c"
                 else ProcessPoolExecutor(max_workers=n_workers, initializer=die_with_parent,
                                          initargs=(os.getpid(),)))
             try:
-                futures: list[Future[list[dict[str, Any]]]] = [pool.submit(run_chunk, chunk, engine, keep)
-                                                              for chunk in chunks]
-                for fut in as_completed(futures):
-                    record(fut.result())
+                run_chunks(pool, run_chunk, chunks, (engine, keep), record)
             finally:
-                if own:
+                if given is None:
                     pool.shutdown(cancel_futures=True)
     if sink is not None and sink.error is not None:
         raise BatchWriteError(sink.path, sink.error, [rows.get(i) for i in range(len(scenarios))])
