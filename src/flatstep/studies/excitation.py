@@ -4,8 +4,9 @@ One move alone leaves the rotor at rest most of the time, where only the resista
 moves the rotor back and forth, one move per ``segment`` (80 ms by default): each move has a random length
 between ``steps`` full steps (1 to 12, either direction), a random duration, lengthened (or the move shortened)
 until the plan is feasible with a torque margin (:data:`TORQUE_MARGIN`) and its feedforward voltages stay within
-:data:`VOLTAGE_MARGIN` of the bus, and a random current norm between ``rho_range`` times the scenario's end current norm, so
-that the current changes while the rotor rests too. Accelerations show the inertia, speeds the friction and
+:data:`VOLTAGE_MARGIN` of the bus, and a random current norm between ``rho_range`` times the scenario's end
+current norm, so that the current changes while the rotor rests too. Accelerations show the inertia, speeds
+the friction and
 the back-emf, current changes the inductance, and currents at rest the resistance.
 
 Each move is one run of the scenario's own controller, loop (drive, sensors, observer) and simulated plant,

@@ -110,7 +110,7 @@ def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool,
 
 def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = False, coulomb: bool = False,
              offsets: bool = True, bandwidth: tuple[float, float] = (200.0, 100.0), detent_harmonic: int = 4,
-             coulomb_speed: float = 0.05, confidence: float = 0.95) -> Identification:
+             coulomb_speed: float = 0.3, confidence: float = 0.95) -> Identification:
     r"""Estimate the motor's parameters from a recording (module docstring for the method).
 
     Parameters
@@ -130,7 +130,8 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
     detent_harmonic : int
         :math:`h`, detent periods per electrical period (4 for a two-phase motor).
     coulomb_speed : float
-        :math:`\omega_s` [rad/s] of the Coulomb term's smooth sign.
+        :math:`\omega_s` [rad/s] of the Coulomb term's smooth sign: 0.3 rad/s, a few times the resolution of
+        the filtered speed; the split between Coulomb and viscous friction depends on it (docs/identification.md).
     confidence : float
         Level of the intervals, in (0, 1).
 

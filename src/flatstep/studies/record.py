@@ -60,7 +60,7 @@ class Recording:
                                  f"one value per row ({n} rows)")
             bad = np.flatnonzero(~np.isfinite(values))
             if bad.size:
-                raise ValueError(f"{self.source}: column {name!r} has a non-finite value {values[bad[0]]!r} in "
+                raise ValueError(f"{self.source}: column {name!r} has a non-finite value {float(values[bad[0]])!r} in "
                                  f"data row {bad[0] + 1} ({bad.size} in all); every value must be a finite number "
                                  f"[{UNITS[name]}]")
             object.__setattr__(self, name, values)
