@@ -14,7 +14,7 @@ from flatstep.studies.excitation import excite
 from flatstep.studies.identify import identify
 from flatstep.studies.identify_accuracy import TARGETS, accuracy, accuracy_table, meets_targets, preset_plant
 from flatstep.studies.identify_ls import fit
-from flatstep.studies.record import COLUMNS, Recording, read_recording, write_recording
+from flatstep.studies.record import COLUMNS, Recording, read_recording, recording_from_result, write_recording
 from flatstep.studies.scenario_file import load_scenario
 
 if sys.version_info >= (3, 11):
@@ -77,6 +77,14 @@ def test_a_rotor_at_rest_is_not_exciting_enough():
     rec = Recording(t=t, va=8.4 * ia, vb=np.zeros_like(t), ia=ia, ib=np.zeros_like(t), theta=np.zeros_like(t),
                     source="rest.csv")
     with pytest.raises(ValueError, match=r"rest.csv: the recording does not excite \['Km'\].*not exciting enough"):
+        identify(rec)
+
+
+def test_one_move_is_not_exciting_enough():
+    sc = replace(scenario("nema17"), t_end=1.0)  # one 25 ms move, then rest
+    rec = recording_from_result(sc.run(), source="one-move.csv")
+    with pytest.raises(ValueError, match=r"one-move.csv: the rotor moves .* during only 0.0025 s of the recording; "
+                                         r"\['J', 'B', 'load_torque'\] need at least 0.075 s of motion"):
         identify(rec)
 
 

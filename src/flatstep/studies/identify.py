@@ -51,6 +51,8 @@ CORE = ("R", "L", "Km", "J", "B")
 MAX_REL_HALF_WIDTH = 0.5
 #: The mechanical fit keeps the rows where the filtered speed exceeds this many encoder counts per cutoff period.
 MOVING_COUNTS = 2.0
+#: The fewest (thinned) rows per estimated parameter a fit accepts.
+ROWS_PER_PARAMETER = 10
 HINT = ("record a run that moves the rotor back and forth and changes the current norm, such as the move sequence "
         "of 'flatstep identify --excite SCENARIO --record DATA.csv' (docs/identification.md)")
 
@@ -105,6 +107,12 @@ def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool,
     steps = np.abs(np.diff(rec.theta))
     q = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
     moving = np.abs(omega[rows]) >= MOVING_COUNTS * q * fc
+    if np.count_nonzero(moving) < ROWS_PER_PARAMETER * X.shape[1]:
+        row_time = (rows.step or 1) * rec.period
+        need, moved = ROWS_PER_PARAMETER * X.shape[1] * row_time, np.count_nonzero(moving) * row_time
+        raise ValueError(f"{rec.source}: the rotor moves (faster than {MOVING_COUNTS:g} encoder counts per "
+                         f"{1e3 / fc:.3g} ms) during only {moved:.3g} s of the recording; {list(terms)} need at least "
+                         f"{need:.3g} s of motion: not exciting enough; {HINT}")
     return fit([(X[moving], f[0][rows][moving])], list(terms), lags=8, source=rec.source, hint=HINT)
 
 

@@ -75,10 +75,8 @@ class Identification:
         lines = [head + ("      error" if truth is not None else "")]
         for name, value in self.estimates.items():
             lo, hi = self.interval(name)
-            w = self.relative_half_width(name)
-            row = (f"{name:<15}{value:>13.6g}  [{lo:>12.6g}, {hi:>12.6g}]{w:>9.2%}  {UNITS[name]:<10}"
-                   if math.isfinite(w) else f"{name:<15}{value:>13.6g}  [{lo:>12.6g}, {hi:>12.6g}]{'-':>9}  "
-                   f"{UNITS[name]:<10}")
+            w = f"{self.relative_half_width(name):.2%}" if lo > 0 or hi < 0 else "-"  # relative to a non-zero value
+            row = f"{name:<15}{value:>13.6g}  [{lo:>12.6g}, {hi:>12.6g}]{w:>9}  {UNITS[name]:<10}"
             if truth is not None and name in MOTOR_KEYS:
                 row += f"{self.estimates[name] / getattr(truth, name) - 1.0:>+10.2%}"
             lines.append(row)
