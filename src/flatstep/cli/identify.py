@@ -85,10 +85,20 @@ def cmd_identify(args: argparse.Namespace) -> int:
     return _identify(args, args.data)
 
 
+DESCRIPTION = """Estimate R, L, Km, J, B (and detent and Coulomb friction) from a recording (docs/identification.md).
+
+  flatstep identify DATA.csv [--out motor.toml]
+      the estimates with their intervals, and a [motor] table for a scenario file
+  flatstep identify --excite SCENARIO --record DATA.csv
+      record the suggested excitation (a move sequence) on the scenario's drive, then identify it
+  flatstep identify --accuracy SCENARIO ... --seeds 10
+      excite and identify over seeds; the worst errors against the targets"""
+
+
 def add_identify_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``flatstep identify`` to the subcommands ``sub``."""
     ide = sub.add_parser("identify", help="estimate R, L, Km, J, B from a recording (docs/identification.md)",
-                         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                         description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     ide.add_argument("data", nargs="?", default=None,
                      help="a recording: CSV with the columns t, va, vb, ia, ib, theta (docs/identification.md)")
     ide.add_argument("--nr", type=int, default=None, help="rotor teeth (default 50, or the scenario's)")
