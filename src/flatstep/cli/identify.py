@@ -23,7 +23,8 @@ from .status import EXIT_REFUSED
 def _identify(args: argparse.Namespace, data: Any, truth: Optional[MotorParams] = None) -> int:
     """Identify ``data``, print the table (or JSON) and write ``--out``."""
     result: Identification = identify(data, Nr=args.nr if args.nr is not None else (truth.Nr if truth else 50),
-                                      detent=args.detent, coulomb=args.coulomb, offsets=not args.no_offsets,
+                                      detent=args.detent, coulomb=args.coulomb, coulomb_speed=args.coulomb_speed,
+                                      offsets=not args.no_offsets,
                                       bandwidth=(args.bandwidth[0], args.bandwidth[1]), confidence=args.confidence)
     if args.json:
         out = result.as_dict()
@@ -104,6 +105,8 @@ def add_identify_command(sub: argparse._SubParsersAction[argparse.ArgumentParser
     ide.add_argument("--nr", type=int, default=None, help="rotor teeth (default 50, or the scenario's)")
     ide.add_argument("--detent", action="store_true", help="also estimate the detent torque's amplitude and phase")
     ide.add_argument("--coulomb", action="store_true", help="also estimate the Coulomb friction")
+    ide.add_argument("--coulomb-speed", type=float, default=0.3,
+                     help="omega_s [rad/s] of the Coulomb term's smooth sign tanh(omega/omega_s) (default 0.3)")
     ide.add_argument("--no-offsets", action="store_true", help="do not estimate a voltage offset per phase")
     ide.add_argument("--bandwidth", type=float, nargs=2, default=(200.0, 100.0), metavar=("ELEC", "MECH"),
                      help="filter cutoffs [Hz] of the electrical and mechanical equations (default 200 100)")
