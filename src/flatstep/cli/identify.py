@@ -13,16 +13,15 @@ from pathlib import Path
 from typing import Any, Optional
 
 from ..model.motor import MotorParams
-from ..studies.identify import identify
-from ..studies.identify_result import Identification
-from ..studies.record import write_recording
 from ..studies.scenario_file import load_scenario
 from .status import EXIT_REFUSED
 
 
 def _identify(args: argparse.Namespace, data: Any, truth: Optional[MotorParams] = None) -> int:
     """Identify ``data``, print the table (or JSON) and write ``--out``."""
-    result: Identification = identify(data, Nr=args.nr if args.nr is not None else (truth.Nr if truth else 50),
+    from ..studies.identify import identify  # scipy.signal: imported when used, so that other commands start fast
+
+    result = identify(data, Nr=args.nr if args.nr is not None else (truth.Nr if truth else 50),
                                       detent=args.detent, coulomb=args.coulomb, coulomb_speed=args.coulomb_speed,
                                       offsets=not args.no_offsets,
                                       bandwidth=(args.bandwidth[0], args.bandwidth[1]), confidence=args.confidence)
@@ -70,6 +69,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         return _accuracy(args)
     if args.excite:
         from ..studies.excitation import excite
+        from ..studies.record import write_recording
 
         if not args.record:
             raise ValueError("--excite needs --record DATA.csv: the file the recording is written to")

@@ -35,11 +35,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from statistics import NormalDist
 from typing import Union
 
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
-from scipy.stats import norm
 
 from ..validate import check_integer, check_positive
 from .identify_ls import Fit, fit
@@ -173,7 +173,7 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
         sub = cov_phys[np.ix_([ia_, ib_], [ia_, ib_])]
         values.update(detent_torque=amp, detent_phase=math.atan2(b, a))
         var.update(detent_torque=float(grad_amp @ sub @ grad_amp), detent_phase=float(grad_phase @ sub @ grad_phase))
-    z = float(norm.ppf(0.5 + 0.5 * confidence))
+    z = NormalDist().inv_cdf(0.5 + 0.5 * confidence)
     std = {k: math.sqrt(max(v, 0.0)) for k, v in var.items()}
     result = Identification(estimates={k: float(v) for k, v in values.items()}, std=std, z=z, confidence=confidence,
                             Nr=Nr, residual_rms={"electrical": elec.residual_rms, "mechanical": km * mech.residual_rms},
