@@ -114,6 +114,25 @@ def test_covariance_allows_for_correlated_residuals():
     assert abs(robust.values[0] - 2) < 4 * math.sqrt(robust.covariance[0, 0])
 
 
+def test_bias_compensation_removes_the_attenuation_of_a_noisy_regressor():
+    rng = np.random.default_rng(2)
+    x = rng.standard_normal(20000)
+    X = (x + 0.5 * rng.standard_normal(x.size))[:, None]  # the regressor measured with noise of variance 0.25
+    plain = fit([(X, 2 * x)], ["k"], lags=0, source="s", hint="h")
+    compensated = fit([(X, 2 * x)], ["k"], lags=0, source="s", hint="h", noise_gram=np.array([[x.size * 0.25]]))
+    assert plain.values[0] == pytest.approx(2 / 1.25, rel=0.03)  # attenuated by var(x) / (var(x) + 0.25)
+    assert compensated.values[0] == pytest.approx(2.0, rel=0.03)
+
+
+def test_noise_compensation_on_a_noisy_drive():
+    # 20 mA rms ADC noise on the paper's drive: plain least squares lowers L and raises Km
+    sc = scenario("paper")
+    recs = [excite(sc, seed=seed, current_noise=0.02) for seed in range(6)]
+    plain = np.mean([identify(r, noise_compensation=False).errors(sc.motor)["Km"] for r in recs])
+    compensated = np.mean([identify(r).errors(sc.motor)["Km"] for r in recs])
+    assert plain > 0.01 and abs(compensated) < plain / 2
+
+
 def test_exact_sensors_show_the_method_without_noise():
     sc = scenario("nema17")
     exact = replace(sc, loop=replace(sc.loop, sensors=replace(sc.loop.sensors, encoder_counts=None,

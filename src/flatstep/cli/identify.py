@@ -23,7 +23,7 @@ def _identify(args: argparse.Namespace, data: Any, truth: Optional[MotorParams] 
 
     result = identify(data, Nr=args.nr if args.nr is not None else (truth.Nr if truth else 50),
                                       detent=args.detent, coulomb=args.coulomb, coulomb_speed=args.coulomb_speed,
-                                      offsets=not args.no_offsets,
+                                      offsets=not args.no_offsets, noise_compensation=not args.no_noise_compensation,
                                       bandwidth=(args.bandwidth[0], args.bandwidth[1]), confidence=args.confidence)
     if args.json:
         out = result.as_dict()
@@ -48,7 +48,8 @@ def _accuracy(args: argparse.Namespace) -> int:
     scenarios = [load_scenario(path)[0] for path in args.accuracy]
     if args.preset_plant:
         scenarios = [preset_plant(s) for s in scenarios]
-    rows = accuracy(scenarios, range(args.seeds), current_noise=args.noise, duration=args.duration)
+    rows = accuracy(scenarios, range(args.seeds), current_noise=args.noise, duration=args.duration,
+                    noise_compensation=not args.no_noise_compensation)
     if args.json:
         print(json.dumps(rows, indent=2))
     else:
@@ -108,6 +109,8 @@ def add_identify_command(sub: argparse._SubParsersAction[argparse.ArgumentParser
     ide.add_argument("--coulomb-speed", type=float, default=0.3,
                      help="omega_s [rad/s] of the Coulomb term's smooth sign tanh(omega/omega_s) (default 0.3)")
     ide.add_argument("--no-offsets", action="store_true", help="do not estimate a voltage offset per phase")
+    ide.add_argument("--no-noise-compensation", action="store_true",
+                     help="plain least squares: do not remove the current noise's bias from the electrical fit")
     ide.add_argument("--bandwidth", type=float, nargs=2, default=(200.0, 100.0), metavar=("ELEC", "MECH"),
                      help="filter cutoffs [Hz] of the electrical and mechanical equations (default 200 100)")
     ide.add_argument("--confidence", type=float, default=0.95, help="level of the intervals (default 0.95)")

@@ -26,7 +26,7 @@ def preset_plant(scenario: Scenario) -> Scenario:
 
 
 def accuracy(scenarios: Iterable[Scenario], seeds: Iterable[int], *, current_noise: Optional[float] = 0.005,
-             duration: float = 1.0) -> list[dict[str, Any]]:
+             duration: float = 1.0, **options: Any) -> list[dict[str, Any]]:
     """Excite, record and identify each scenario's plant once per seed.
 
     Parameters
@@ -39,6 +39,8 @@ def accuracy(scenarios: Iterable[Scenario], seeds: Iterable[int], *, current_noi
         The ADC noise [A rms] (``None``: the scenarios' own sensors).
     duration : float
         Length of each recording [s].
+    **options
+        Keywords of :func:`~flatstep.studies.identify.identify`.
 
     Returns
     -------
@@ -56,7 +58,7 @@ def accuracy(scenarios: Iterable[Scenario], seeds: Iterable[int], *, current_noi
                 path = Path(tmp) / "recording.csv"
                 write_recording(path, rec)
                 start = time.perf_counter()
-                result = identify(path, Nr=truth.Nr)
+                result = identify(path, **{"Nr": truth.Nr, **options})
                 seconds = time.perf_counter() - start
             covered = {k: bool(result.interval(k)[0] <= getattr(truth, k) <= result.interval(k)[1])
                        for k in MOTOR_KEYS}

@@ -13,7 +13,7 @@ summed over independent blocks of rows (the two phases of the electrical equatio
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,7 +51,7 @@ def _cond_or_refuse(X: Array, names: Sequence[str], source: str, hint: str) -> f
 
 
 def fit(blocks: Sequence[tuple[Array, Array]], names: Sequence[str], *, lags: int, source: str,
-        hint: str) -> Fit:
+        hint: str, noise_gram: Optional[Array] = None) -> Fit:
     """Fit ``y = X p`` over the stacked ``(X, y)`` blocks; refuse ill-conditioned regressors.
 
     Parameters
@@ -67,6 +67,9 @@ def fit(blocks: Sequence[tuple[Array, Array]], names: Sequence[str], *, lags: in
         The recording's name, for messages.
     hint : str
         What to do about a recording that is not exciting enough, for messages.
+    noise_gram : ndarray, optional
+        The part of :math:`X^TX` that noise in the regressors adds, :math:`E[N^TN]`, removed from it (bias-compensated
+        least squares: the noise in a regressor biases its estimate towards zero).
 
     Returns
     -------
@@ -76,8 +79,9 @@ def fit(blocks: Sequence[tuple[Array, Array]], names: Sequence[str], *, lags: in
     X = np.concatenate([b[0] for b in blocks])
     y = np.concatenate([b[1] for b in blocks])
     cond = _cond_or_refuse(X, names, source, hint)
-    p, *_ = np.linalg.lstsq(X, y, rcond=None)
-    XtX_inv = np.linalg.inv(X.T @ X)
+    XtX = X.T @ X if noise_gram is None else X.T @ X - noise_gram
+    XtX_inv = np.linalg.inv(XtX)
+    p = XtX_inv @ (X.T @ y)
     meat = np.zeros((len(names), len(names)))
     for Xb, yb in blocks:
         g = Xb * (yb - Xb @ p)[:, None]  # the score of each row
