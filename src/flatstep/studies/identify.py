@@ -188,6 +188,8 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
     coulomb_speed = check_positive("coulomb_speed", coulomb_speed, unit=" rad/s")
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence={confidence!r} must be in (0, 1), e.g. 0.95")
+    if len(bandwidth) != 2:
+        raise ValueError(f"bandwidth={bandwidth!r} must be two cutoffs [Hz]: (electrical, mechanical)")
     fc_e, fc_m = (check_positive("bandwidth", b, unit=" Hz") for b in bandwidth)
     elec = _electrical(rec, Nr, fc_e, offsets, noise_compensation)
     mech = _mechanical(rec, Nr, fc_m, detent, coulomb, harmonic, coulomb_speed)

@@ -20,6 +20,7 @@ strictly increasing with a constant step (to 1e-6 of it).
 from __future__ import annotations
 
 import csv
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -141,7 +142,9 @@ def read_recording(path: str | Path) -> Recording:
     try:
         with open(path, newline="") as fh:
             header = [h.strip() for h in next(csv.reader([fh.readline()]), [])]
-            data = np.loadtxt(fh, delimiter=",", ndmin=2) if header else np.empty((0, 0))
+            with warnings.catch_warnings():  # a header alone is refused below as too short, not warned about
+                warnings.simplefilter("ignore", UserWarning)
+                data = np.loadtxt(fh, delimiter=",", ndmin=2) if header else np.empty((0, 0))
     except FileNotFoundError:
         raise ValueError(f"{where}: no such recording file") from None
     except (UnicodeDecodeError, csv.Error, ValueError) as exc:
