@@ -31,6 +31,7 @@ from ..studies.scenario_file import load_scenario
 from .compare import add_compare_command
 from .design import add_design_command
 from .flags import count, out_dir, quantity
+from .identify import add_identify_command
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
 
@@ -103,6 +104,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         result = simulate(scenario.simulated_plant, scenario.plan, scenario.controller(), loop=scenario.loop,
                           solver=scenario.solver, t_end=scenario.t_end, x0=args.x0)
     summary = result.summary()
+    if args.record:
+        from ..studies.record import recording_from_result, write_recording
+
+        write_recording(args.record, recording_from_result(result, source=scenario.name))
     if args.out:
         out = out_dir(args.out)
         plan = scenario.plan
@@ -126,8 +131,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 DESCRIPTION = """Plan and control stepping motors by differential flatness and sliding modes.
 
 Commands: reproduce (the paper's figures), simulate (one move), design (gains for a drive), robustness (a
-scenario under parameter errors), compare (every controller on one scenario), bench (benchmarks).
-'flatstep COMMAND --help' lists a command's flags.
+scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
+from a recording), bench (benchmarks). 'flatstep COMMAND --help' lists a command's flags.
 
 Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
 move; 4 a controller faulted; 5 a run stopped before its end (non-finite state, or the continuous law
@@ -177,11 +182,14 @@ def build_parser() -> argparse.ArgumentParser:
                      help="initial plant state (default: the plan's start equilibrium)")
     sim.add_argument("--out", default=None, help="write run.png, run.csv and summary.json here")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
+    sim.add_argument("--record", metavar="DATA.csv", default=None, help="write what the drive measured (t, va, vb, ia, "
+                     "ib, theta) for 'flatstep identify' (docs/identification.md); needs a sampled drive")
     sim.set_defaults(func=cmd_simulate)
 
     add_design_command(sub)
     add_robustness_command(sub)
     add_compare_command(sub)
+    add_identify_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d,e", help="a: planning, b: closed loop, c: controller step, "

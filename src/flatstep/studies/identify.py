@@ -1,0 +1,226 @@
+r"""Motor identification: R, L, Km, J, B (and detent, Coulomb friction) from a recording, by linear least squares.
+
+**Electrical equations.** Eq. (1) per phase, with the back-emf written as an exact time derivative
+(:math:`K_m\omega\sin N_r\theta = -\frac{K_m}{N_r}\frac{d}{dt}\cos N_r\theta`) so that no speed is needed, and
+integrated over each sampling period under the held voltage :math:`v_k` (trapezoid on the current):
+
+.. math::
+    R\,\frac{i_{a,k} + i_{a,k+1}}{2} + L\,\frac{i_{a,k+1} - i_{a,k}}{T_s}
+    + \frac{K_m}{N_r}\,\frac{\cos N_r\theta_{k+1} - \cos N_r\theta_k}{T_s} + o_a = v_{a,k}
+
+and the same for phase b with :math:`\sin N_r\theta`; :math:`o_a, o_b` absorb constant voltage (or current
+sensor) offsets. Linear in :math:`(R, L, K_m, o_a, o_b)`.
+
+**Mechanical equation.** With :math:`i_q = i_b\cos N_r\theta - i_a\sin N_r\theta` from the measured
+currents,
+
+.. math::
+    K_m i_q = J\ddot\theta + B\dot\theta + \tau + T_d\sin(hN_r\theta + \varphi_d) + T_c\tanh(\dot\theta/\omega_s),
+
+linear in :math:`(J, B, \tau, T_d\cos\varphi_d, T_d\sin\varphi_d, T_c)/K_m` (the last three on request, with
+:math:`h` = ``detent_harmonic``, the plant's :class:`~flatstep.model.plant.PlantEffects` form).
+
+**Filtering without bias.** Every term of an equation is passed through the same zero-phase low-pass filter
+(4th-order Butterworth, forward and backward, :func:`scipy.signal.sosfiltfilt`): the equations are linear in the
+parameters, so they hold for the filtered terms as they do for the raw ones, while the ADC noise, the encoder's
+quantization and the differences' noise are removed above the cutoff. :math:`\dot\theta, \ddot\theta` are the
+derivatives of the filtered angle. At rest, an encoder that toggles between two counts makes a motion that is
+not there, of which the filtered derivatives make speeds and accelerations: the mechanical fit keeps only the rows
+where the filtered speed exceeds :data:`MOVING_COUNTS` counts per cutoff period (a choice on a regressor, which
+does not bias least squares). The filter's start-up is cut off at both ends, the rows are thinned to four
+per cutoff period, and the covariance allows for the residuals' correlation (:mod:`.identify_ls`). The
+mechanical estimates carry the uncertainty of :math:`K_m` too (delta method).
+
+**Current noise.** Noise in a regressor biases its estimate towards zero (errors in variables): the ADC noise in
+the current differences lowers L, and Km, correlated with L through the q-axis, rises. The electrical fit removes
+the noise's expected share :math:`E[N^TN]` from :math:`X^TX` (bias-compensated least squares), the noise variance
+estimated from the high-pass part of the raw equations' residual in the periods without an encoder step (median
+absolute deviation), in :data:`NOISE_ITERATIONS` rounds. In closed loop the controller's feedback also correlates
+the noise with the true currents, which this does not model: docs/identification.md shows what it gains and where
+it over-corrects.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from statistics import NormalDist
+from typing import Union
+
+import numpy as np
+from scipy.signal import butter, sosfiltfilt
+
+from ..validate import check_integer, check_positive
+from .identify_ls import Fit, fit
+from .identify_result import Identification
+from .record import Recording, read_recording
+
+#: A recording is refused when one of these is known to no better than +-this fraction (at the confidence level).
+CORE = ("R", "L", "Km", "J", "B")
+MAX_REL_HALF_WIDTH = 0.5
+#: The mechanical fit keeps the rows where the filtered speed exceeds this many encoder counts per cutoff period.
+MOVING_COUNTS = 2.0
+#: The fewest (thinned) rows per estimated parameter a fit accepts.
+ROWS_PER_PARAMETER = 10
+#: Rounds of the electrical fit's noise-bias compensation (module docstring).
+NOISE_ITERATIONS = 2
+HINT = ("record a run that moves the rotor back and forth and changes the current norm, such as the move sequence "
+        "of 'flatstep identify --excite SCENARIO --record DATA.csv' (docs/identification.md)")
+
+
+def _filtered(rec: Recording, fc: float) -> tuple[np.ndarray, slice]:
+    """The filter's ``sos`` at ``fc`` and the rows kept: the start-up cut off, four rows per cutoff period."""
+    fs = 1.0 / rec.period
+    if not fc < 0.25 * fs:
+        raise ValueError(f"{rec.source}: bandwidth {fc!r} Hz must be below a quarter of the sampling rate "
+                         f"({fs:.6g} Hz)")
+    cut, step = math.ceil(3.0 * fs / fc), max(1, int(fs / (4.0 * fc)))
+    need = 2 * cut + 40 * step
+    if rec.t.size < need:
+        raise ValueError(f"{rec.source}: {rec.duration:.4g} s ({rec.t.size} rows) is too short for a {fc:g} Hz "
+                         f"bandwidth: at least {need * rec.period:.4g} s ({need} rows) at this sampling rate")
+    return butter(4, fc, fs=fs, output="sos"), slice(cut, rec.t.size - 1 - cut, step)
+
+
+def _unit_noise_gram(sos: np.ndarray, Ts: float, cut: int) -> np.ndarray:
+    """Covariance of the filtered (R, L) columns' noise per row for a unit-variance white current noise."""
+    impulse = np.zeros(8 * cut + 1)
+    impulse[4 * cut] = 1.0
+    g = sosfiltfilt(sos, np.array([0.5 * (impulse[1:] + impulse[:-1]), np.diff(impulse) / Ts]), axis=-1)
+    return g @ g.T
+
+
+def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool) -> Fit:
+    """The electrical fit of (R, L, Km[, va_offset, vb_offset]) (module docstring), with the noise bias removed."""
+    sos, rows = _filtered(rec, fc)
+    Ts, blocks, raw = rec.period, [], []
+    for i, c, v in ((rec.ia, np.cos(Nr * rec.theta), rec.va), (rec.ib, np.sin(Nr * rec.theta), rec.vb)):
+        terms = np.array([0.5 * (i[1:] + i[:-1]), np.diff(i) / Ts, np.diff(c) / (Ts * Nr), v[:-1]])
+        f = sosfiltfilt(sos, terms, axis=-1)[:, rows]
+        blocks.append((f[:3].T, f[3]))
+        raw.append(terms)
+    names = ["R", "L", "Km"]
+    if offsets:
+        names += ["va_offset", "vb_offset"]
+        ones = np.ones((blocks[0][1].size, 1))
+        blocks = [(np.hstack([X, ones * (k == 0), ones * (k == 1)]), y) for k, (X, y) in enumerate(blocks)]
+    result = fit(blocks, names, lags=8, source=rec.source, hint=HINT)
+    unit = _unit_noise_gram(sos, Ts, rows.start)
+    still = np.diff(rec.theta) == 0  # periods without an encoder step: no quantization step in the back-emf term
+    for _ in range(NOISE_ITERATIONS if compensate else 0):
+        R, L, Km = result.values[:3]
+        gram = np.zeros((len(names), len(names)))
+        for k, terms in enumerate(raw):
+            offset = result.values[3 + k] if offsets else 0.0
+            r = terms[3] - R * terms[0] - L * terms[1] - Km * terms[2] - offset  # the raw equation's residual
+            r = (r - sosfiltfilt(sos, r))[still if np.count_nonzero(still) > 100 else slice(None)]  # noise alone
+            mad = 1.4826 * float(np.median(np.abs(r - np.median(r))))  # robust to what is left of the rest
+            gram[:2, :2] += blocks[k][1].size * mad**2 / (2.0 * L**2 / Ts**2 + 0.5 * R**2) * unit
+        result = fit(blocks, names, lags=8, source=rec.source, hint=HINT, noise_gram=gram)
+    return result
+
+
+def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool, harmonic: int,
+                coulomb_speed: float) -> Fit:
+    """The mechanical fit, in units of Km: (J, B, load_torque[, detent a, b][, coulomb_torque]) / Km."""
+    sos, rows = _filtered(rec, fc)
+    th = rec.theta
+    th_f = sosfiltfilt(sos, th)
+    iq = rec.ib * np.cos(Nr * th) - rec.ia * np.sin(Nr * th)
+    omega = np.gradient(th_f, rec.period)
+    terms = {"J": np.gradient(omega, rec.period), "B": omega, "load_torque": np.ones_like(th)}
+    raw = {"iq": iq}
+    if detent:
+        raw.update(detent_a=np.sin(harmonic * Nr * th), detent_b=np.cos(harmonic * Nr * th))
+    if coulomb:
+        raw["coulomb_torque"] = np.tanh(omega / coulomb_speed)
+    f = sosfiltfilt(sos, np.array(list(raw.values())), axis=-1)
+    terms.update({k: f[j] for j, k in enumerate(raw) if k != "iq"})
+    X = np.column_stack([v[rows] for v in terms.values()])
+    steps = np.abs(np.diff(rec.theta))
+    q = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
+    moving = np.abs(omega[rows]) >= MOVING_COUNTS * q * fc
+    if np.count_nonzero(moving) < ROWS_PER_PARAMETER * X.shape[1]:
+        row_time = (rows.step or 1) * rec.period
+        need, moved = ROWS_PER_PARAMETER * X.shape[1] * row_time, np.count_nonzero(moving) * row_time
+        raise ValueError(f"{rec.source}: the rotor moves (faster than {MOVING_COUNTS:g} encoder counts per "
+                         f"{1e3 / fc:.3g} ms) during only {moved:.3g} s of the recording; {list(terms)} need at least "
+                         f"{need:.3g} s of motion: not exciting enough; {HINT}")
+    return fit([(X[moving], f[0][rows][moving])], list(terms), lags=8, source=rec.source, hint=HINT)
+
+
+def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = False, coulomb: bool = False,
+             offsets: bool = True, bandwidth: tuple[float, float] = (200.0, 100.0), detent_harmonic: int = 4,
+             coulomb_speed: float = 0.3, confidence: float = 0.95, noise_compensation: bool = True) -> Identification:
+    r"""Estimate the motor's parameters from a recording (module docstring for the method).
+
+    Parameters
+    ----------
+    data : Recording or path
+        The recording, or its CSV file (:mod:`flatstep.studies.record` for the format).
+    Nr : int
+        The number of rotor teeth (50 for a 1.8-degree motor); not estimated.
+    detent : bool
+        Also estimate the detent torque's amplitude [N m] and phase [rad], :math:`T_d\sin(hN_r\theta + \varphi)`.
+    coulomb : bool
+        Also estimate the Coulomb friction [N m], :math:`T_c\tanh(\dot\theta/\omega_s)`.
+    offsets : bool
+        Estimate a constant voltage offset per phase.
+    bandwidth : (float, float)
+        Cutoffs [Hz] of the electrical and the mechanical equations' filters.
+    detent_harmonic : int
+        :math:`h`, detent periods per electrical period (4 for a two-phase motor).
+    coulomb_speed : float
+        :math:`\omega_s` [rad/s] of the Coulomb term's smooth sign: 0.3 rad/s, a few times the resolution of
+        the filtered speed; the split between Coulomb and viscous friction depends on it (docs/identification.md).
+    confidence : float
+        Level of the intervals, in (0, 1).
+    noise_compensation : bool
+        Remove the bias the current noise puts on the electrical estimates (module docstring).
+
+    Returns
+    -------
+    Identification
+        Estimates, intervals, residuals and the [motor] table.
+    """
+    rec = data if isinstance(data, Recording) else read_recording(data)
+    Nr = check_integer("Nr", Nr, why="the number of rotor teeth")
+    harmonic = check_integer("detent_harmonic", detent_harmonic)
+    coulomb_speed = check_positive("coulomb_speed", coulomb_speed, unit=" rad/s")
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence={confidence!r} must be in (0, 1), e.g. 0.95")
+    if len(bandwidth) != 2:
+        raise ValueError(f"bandwidth={bandwidth!r} must be two cutoffs [Hz]: (electrical, mechanical)")
+    fc_e, fc_m = (check_positive("bandwidth", b, unit=" Hz") for b in bandwidth)
+    elec = _electrical(rec, Nr, fc_e, offsets, noise_compensation)
+    mech = _mechanical(rec, Nr, fc_m, detent, coulomb, harmonic, coulomb_speed)
+    km, var_km = elec.values[2], elec.covariance[2, 2]
+    values = dict(zip(elec.names, elec.values, strict=True))
+    var = dict(zip(elec.names, np.diag(elec.covariance), strict=True))
+    p, cov = mech.values, mech.covariance
+    cov_phys = km**2 * cov + np.outer(p, p) * var_km  # q = Km p, with Km's variance (delta method)
+    values.update(zip(mech.names, km * p, strict=True))
+    var.update(zip(mech.names, np.diag(cov_phys), strict=True))
+    if detent:
+        ia_, ib_ = mech.names.index("detent_a"), mech.names.index("detent_b")
+        a, b = values.pop("detent_a"), values.pop("detent_b")
+        del var["detent_a"], var["detent_b"]
+        amp = math.hypot(a, b)
+        grad_amp, grad_phase = np.array([a, b]) / amp, np.array([-b, a]) / amp**2
+        sub = cov_phys[np.ix_([ia_, ib_], [ia_, ib_])]
+        values.update(detent_torque=amp, detent_phase=math.atan2(b, a))
+        var.update(detent_torque=float(grad_amp @ sub @ grad_amp), detent_phase=float(grad_phase @ sub @ grad_phase))
+    z = NormalDist().inv_cdf(0.5 + 0.5 * confidence)
+    std = {k: math.sqrt(max(v, 0.0)) for k, v in var.items()}
+    result = Identification(estimates={k: float(v) for k, v in values.items()}, std=std, z=z, confidence=confidence,
+                            Nr=Nr, residual_rms={"electrical": elec.residual_rms, "mechanical": km * mech.residual_rms},
+                            condition={"electrical": elec.condition, "mechanical": mech.condition}, source=rec.source,
+                            settings={"bandwidth": [fc_e, fc_m], "offsets": offsets,
+                                      "noise_compensation": noise_compensation, "detent_harmonic": harmonic,
+                                      "coulomb_speed": coulomb_speed, "samples": int(rec.t.size),
+                                      "period": rec.period})
+    wide = {k: result.relative_half_width(k) for k in CORE if not result.relative_half_width(k) <= MAX_REL_HALF_WIDTH}
+    if wide:
+        shown = ", ".join(f"{k} +-{w:.0%}" for k, w in wide.items())
+        raise ValueError(f"{rec.source}: not exciting enough: the {confidence:.0%} intervals are {shown} (at most "
+                         f"+-{MAX_REL_HALF_WIDTH:.0%} accepted); {HINT}")
+    return result
