@@ -101,6 +101,15 @@ def test_version_negative_values_and_no_traceback(capsys, monkeypatch):
     assert "Traceback" in capsys.readouterr().err
 
 
+def _cpu_seconds(pid: int) -> float:
+    """CPU time [s] a process has used, from /proc (Linux)."""
+    import os
+
+    fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+@pytest.mark.skipif(not __import__("os").path.exists("/proc/self/stat"), reason="reads CPU time from /proc")
 def test_ctrl_c_stops_a_long_c_run_quickly(tmp_path):
     """SIGINT during a long C run (10 s of 20 kHz control): the run stops within a second, exit code 130."""
     import signal
@@ -113,7 +122,11 @@ def test_ctrl_c_stops_a_long_c_run_quickly(tmp_path):
                     "measurement = \"model\"\n")
     proc = subprocess.Popen([sys.executable, "-m", "flatstep", "simulate", str(path)], stderr=subprocess.PIPE,
                             stdout=subprocess.PIPE, text=True)
-    time.sleep(4.0)  # imports done, the C run under way (on a loaded machine too)
+    # wait until the process has used 2 s of CPU: its imports take under 1 s, so the C run is under way (a fixed
+    # sleep is not enough on a loaded machine)
+    deadline = time.monotonic() + 60.0
+    while _cpu_seconds(proc.pid) < 2.0 and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.1)
     assert proc.poll() is None, proc.communicate()
     start = time.perf_counter()
     proc.send_signal(signal.SIGINT)

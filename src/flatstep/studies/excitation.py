@@ -25,6 +25,7 @@ from ..engine.simulate import simulate
 from ..plan.feasibility import check_feasibility
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_nonnegative, check_positive
+from ..validate.limits import MIN_PERIODS_PER_MOVE
 from .record import Recording, recording_from_result
 from .scenario import Scenario
 
@@ -106,10 +107,15 @@ def excite(scenario: Scenario, *, duration: float = 1.0, seed: int = 0, segment:
     parts: list[dict[str, np.ndarray]] = []
     elapsed = 0.0
     for k in range(math.ceil(duration / segment - 1e-9)):
+        remaining = duration - elapsed
+        if remaining < MIN_PERIODS_PER_MOVE * loop.control_period:  # too short a tail for a sampled controller
+            break
         plan = _move(rng, scenario, theta, rho, segment, steps, rho_range)
+        if plan.tf > remaining:  # the last, shorter segment: hold where the rotor is
+            plan = RestToRest(theta, theta, rho, rho, t0=0.0, tf=remaining)
         run_loop = replace(loop, sensors=replace(sensors, seed=seed * 100_003 + k)) if sensors is not None else loop
         run = replace(scenario, plan=plan, loop=run_loop)
-        result = simulate(plant, plan, run.controller(), loop=run_loop, t_end=min(segment, duration - elapsed), x0=x)
+        result = simulate(plant, plan, run.controller(), loop=run_loop, t_end=min(segment, remaining), x0=x)
         part = recording_from_result(result, source=f"{scenario.name} excitation").columns()
         part["t"] = part["t"] + elapsed
         parts.append({c: v[:-1] for c, v in part.items()})  # the last sample is the next run's first
