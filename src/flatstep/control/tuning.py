@@ -22,19 +22,22 @@ from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
 from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
+from .dq_smc import DQFlatnessSMC
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .smc import FlatnessSMC, SMCGains
 
 #: The controllers a scenario can name (``[controller] type``), the paper's first.
-CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization")
+CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
-          "exact_linearization": "exact linearization"}
+          "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC"}
+#: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
+SMC_TYPES = ("smc", "dq_smc")
 #: The sliding controller's default gains, the paper's.
 _PAPER_SMC_GAINS = SMCGains()
 #: What :func:`make_controller` returns.
-AnyController = Union[FlatnessSMC, Microstepping, CascadeFOC, ExactLinearization]
+AnyController = Union[FlatnessSMC, DQFlatnessSMC, Microstepping, CascadeFOC, ExactLinearization]
 
 
 def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
@@ -52,13 +55,16 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
                     bandwidth_scale: float = 1.0, compute_delay: bool = False) -> AnyController:
     """The controller ``kind`` (one of :data:`CONTROLLER_TYPES`) for this motor model, plan and drive.
 
-    ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` with ``smc_gains`` (the scenario's, designed or
-    given); the baselines are tuned by the rules above and need ``control_period``.
+    ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` and ``dq_smc``
+    :class:`~flatstep.control.dq_smc.DQFlatnessSMC`, both with ``smc_gains`` (the scenario's, designed or given);
+    the baselines are tuned by the rules above and need ``control_period``.
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
     if kind == "smc":
         return FlatnessSMC(motor, plan, smc_gains, measurement)
+    if kind == "dq_smc":
+        return DQFlatnessSMC(motor, plan, smc_gains, measurement)
     if control_period is None:
         raise ValueError(f"controller type {kind!r} is tuned from the control period (lambda = 0.3/Ts): give one "
                          "([drive] control_rate); only 'smc' has gains of its own for continuous time")
