@@ -16,12 +16,14 @@
 #endif
 
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
-// v_limit = 1e3 V and rho_min = 1e-6 A.
+// v_limit = 1e3 V, rho_min = 1e-6 A and no torque model.
 void smc_params_default(struct smc_params *p)
 {
     struct motor_params m = {FS_C(8.4), FS_C(0.010), FS_C(0.05), FS_C(3.6e-6), FS_C(1e-4), 50};
     struct plan pl = {0, FS_C(0.02), FS_C(0.4), FS_C(0.4), FS_C(0.02), FS_C(0.04)};
     struct smc_gains g = {100, 100, FS_C(0.005), FS_C(0.005), FS_C(0.8), 10, 0};
+    struct torque_model none = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
+    p->torques = none;
     p->motor = m;
     p->plan = pl;
     p->gains = g;
@@ -53,6 +55,8 @@ int smc_init(struct smc *s, const struct smc_params *p)
         return SMC_EMEASUREMENT;
     if (!positive(p->v_limit) || p->v_limit < FS_C(1e-3) || !positive(p->rho_min))
         return SMC_ELIMITS;
+    if (!torque_model_valid(&p->torques))
+        return SMC_ETORQUES;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
@@ -101,7 +105,7 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
 {
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
-    fs_real own[PLAN_FLAG_LEN], *ref = w ? w->flag : own, rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2;
+    fs_real own[PLAN_FLAG_LEN], *ref = w ? w->flag : own, rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2, E;
     struct flat_angles a;
     int flat;
     plan_flag(&s->plan, t, ref);
@@ -123,8 +127,9 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     }
     a.sdelta = sN * a.cphi + cN * a.sphi;
     a.cdelta = cN * a.cphi - sN * a.sphi;
-    // theta'' measured, or from the zero-load model in motor_acceleration's operation order.
-    acc = s->p.measurement == SMC_IDEAL ? y[4] : (m->Km * (y[1] * cN - y[0] * sN) - m->B * y[2]) / m->J;
+    // theta'' measured, or from the model under the known torques E in motor_acceleration's operation order.
+    E = torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]);
+    acc = s->p.measurement == SMC_IDEAL ? y[4] : (m->Km * (y[1] * cN - y[0] * sN) - m->B * y[2] - E) / m->J;
     e = y[3] - ref[PLAN_THETA];
     de = y[2] - ref[PLAN_DTHETA];
     dde = acc - ref[PLAN_DDTHETA];
@@ -136,7 +141,9 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     } else {
         gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
         gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
-        flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2], v);
+        // The known torques: A = J theta'' + B theta' + E, and E' joins the jerk's torque as gamma2 + E' / J.
+        gamma2 = gamma2 + torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc) / m->J;
+        flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2] + E, v);
     }
     if (w) {
         w->rho = rho;
