@@ -28,7 +28,8 @@ def loop(Ts=TS, substeps=10, **parts):
 @pytest.mark.parametrize("kind", CONTROLLER_TYPES)
 def test_every_controller_tracks_a_slow_move_with_exact_sensors(motor, kind):
     ctrl = make_controller(kind, motor, SLOW, control_period=TS, measurement="ideal", v_limit=24.0,
-                           smc_gains=fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500))
+                           smc_gains=fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500),
+                           torques=fs.TorqueModel(load=0.0))
     r = fs.simulate(motor, SLOW, ctrl, loop=loop(substeps=4), t_end=0.05)
     assert r.meta["controller"] == type(ctrl).__name__ and r.meta["engine"] == "c"
     err = np.max(np.abs(r.theta_error[r.t >= SLOW.t0]))

@@ -1,4 +1,6 @@
 """The d-q flatness + sliding-mode law: its sliding dynamics, its C twin (step and closed loop), its registration."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -11,6 +13,7 @@ from flatstep.loop.sensors import Sensors
 from flatstep.model.flat_dq import DQFlag, dq_to_state, park, state_to_dq
 from flatstep.model.plant import PlantEffects
 from flatstep.model.torque_model import TorqueModel
+from flatstep.studies.compare import scenario_kinds
 from flatstep.studies.scenario_file import load_scenario
 
 TS = 5e-5
@@ -158,3 +161,33 @@ def test_registered_and_runnable_from_a_scenario_file(motor, plan, tmp_path):
     r = scenario.run()
     assert isinstance(scenario.controller(), fs.DQFlatnessSMC) and r.status == "ok"
     assert r.summary()["max_abs_theta_error_move"] < 2 * COUNT
+
+
+def test_the_feedforward_types_need_a_torque_model(motor, plan):
+    with pytest.raises(ValueError, match="controller type 'dq_smc_ff' needs the torques"):
+        make_controller("dq_smc_ff", motor, plan, control_period=TS, measurement="ideal", smc_gains=DESIGNED)
+    known = make_controller("smc_ff", motor, plan, control_period=TS, measurement="ideal", torques=TORQUES)
+    plain = make_controller("smc", motor, plan, control_period=TS, measurement="ideal", torques=TORQUES)
+    assert known.torques == TORQUES and plain.torques == TorqueModel()
+    assert all(LABELS[k].startswith("flatness") for k in ("dq_smc", "smc_ff", "dq_smc_ff"))
+
+
+def test_a_feedforward_table_feeds_the_ff_types(tmp_path):
+    body = ('[controller]\ntype = "dq_smc_ff"\ndesign = true\n[drive]\ncontrol_rate = 20000.0\n'
+            '[sensors]\nencoder_counts = 16384\n[plant]\ndetent_torque = 2e-3\n[load]\ntorque = 1e-5\n')
+    path = tmp_path / "ff.toml"
+    path.write_text(body + "[feedforward]\ndetent_torque = 2e-3\nload = 1e-5\ncoulomb_speed = 0.1\n")
+    scenario, _ = load_scenario(path)
+    assert scenario.torques == TorqueModel(detent_torque=2e-3, load=1e-5, coulomb_speed=0.1)
+    assert scenario.controller().torques == scenario.torques and "dq_smc_ff" in scenario_kinds(scenario)
+    known = scenario.run().summary()["max_abs_theta_error_move"]
+    plain = replace(scenario, controller_type="dq_smc").run().summary()["max_abs_theta_error_move"]
+    assert known < plain
+    path.write_text(body)
+    with pytest.raises(ValueError, match="'dq_smc_ff' needs the torques"):
+        load_scenario(path)
+    path.write_text(body.replace("dq_smc_ff", "dq_smc"))
+    assert "dq_smc_ff" not in scenario_kinds(load_scenario(path)[0])
+    path.write_text(body + "[feedforward]\ndetent_amplitude = 1e-3\n")
+    with pytest.raises(ValueError, match=r"ff.toml: unknown key\(s\) \['detent_amplitude'\] in \[feedforward\]"):
+        load_scenario(path)

@@ -9,8 +9,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal, Optional
 
-from ..control.tuning import CONTROLLER_TYPES, LABELS
-from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band
+from ..control.tuning import CONTROLLER_TYPES, LABELS, SMC_TYPES
+from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band, scenario_kinds
 from ..studies.robustness import encoder_count
 from ..studies.scenario_file import load_scenario
 from .status import exit_code, warn
@@ -73,7 +73,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None)
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
-    kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else CONTROLLER_TYPES
+    kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else scenario_kinds(scenario)
     band = args.band if args.band is not None else default_band(scenario)
     count = encoder_count(scenario)
     log = _Log(enabled=not args.quiet)
@@ -95,7 +95,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                               "statuses": v["statuses"]} for k, v in worst.items()}}
     if args.scales:
         scales = [float(x) for x in args.scales.split(",")]
-        baselines = [k for k in kinds if k != "smc"]
+        baselines = [k for k in kinds if k not in SMC_TYPES]
         sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,
                                 engine=args.engine, progress=not args.quiet, log=log)
         report["bandwidth_sweep"] = {str(s): v for s, v in sweep.items()}

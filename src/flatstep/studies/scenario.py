@@ -14,6 +14,7 @@ from ..engine.simulate import simulate
 from ..loop.reference import DriveLoop
 from ..model.motor import MotorParams
 from ..model.plant import Plant
+from ..model.torque_model import TorqueModel
 from ..plan.feasibility import FeasibilityReport, check_feasibility
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..validate import check_positive
@@ -47,6 +48,8 @@ class Scenario:
     loop : DriveLoop, optional
         Sampled control in a drive (period, substeps, drive, sensors, observer, delay); ``None``:
         continuous-time control, as in the paper.
+    torques : TorqueModel, optional
+        The torques the ``_ff`` controller types know beyond eq. (1) (the feedforward; other types ignore it).
     solver : Continuous, optional
         How continuous-time control is solved (``None``: the defaults of
         :class:`~flatstep.engine.settings.Continuous`); only without a loop.
@@ -65,11 +68,12 @@ class Scenario:
     loop: Optional[DriveLoop] = None
     solver: Optional[Continuous] = None
     t_end: float = 0.06
+    torques: Optional[TorqueModel] = None
 
     def __post_init__(self) -> None:
         check_positive("t_end", self.t_end, unit=" s")
         for name, kind in (("motor", MotorParams), ("plan", RestToRest), ("gains", SMCGains), ("plant", Plant),
-                           ("loop", DriveLoop), ("solver", Continuous)):
+                           ("loop", DriveLoop), ("solver", Continuous), ("torques", TorqueModel)):
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Scenario.{name}={value!r} is not a {kind.__name__}")
@@ -94,7 +98,8 @@ class Scenario:
         return make_controller(self.controller_type, self.motor, self.plan, control_period=self.control_period,
                                measurement=self.measurement, smc_gains=self.gains, v_limit=v_bus,
                                bandwidth_scale=self.bandwidth_scale,
-                               compute_delay=loop.compute_delay if loop is not None else False)
+                               compute_delay=loop.compute_delay if loop is not None else False,
+                               torques=self.torques)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""

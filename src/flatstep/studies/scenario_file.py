@@ -23,6 +23,7 @@ from ..loop.reference import DriveLoop
 from ..loop.sensors import Sensors
 from ..model.motor import PRESETS, MotorParams
 from ..model.plant import Plant, PlantEffects
+from ..model.torque_model import TorqueModel
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from .scenario import Scenario
 
@@ -31,7 +32,7 @@ EFFECT_KEYS = ("detent_torque", "coulomb_torque", "coulomb_speed", "magnetizing_
 T = TypeVar("T")
 SECTIONS: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "t_end", "motor", "plant", "plan", "controller", "drive", "sensors", "observer",
-         "load", "robustness"),
+         "load", "feedforward", "robustness"),
     "motor": MOTOR_KEYS,
     "plant": MOTOR_KEYS + ("scale",) + EFFECT_KEYS,
     "plan": ("theta1", "theta2", "rho1", "rho2", "t0", "tf"),
@@ -42,6 +43,8 @@ SECTIONS: dict[str, tuple[str, ...]] = {
                 "current_noise", "delay", "seed"),
     "observer": ("bandwidth", "load_states"),
     "load": ("torque",),
+    "feedforward": ("detent_torque", "detent_harmonic", "detent_phase", "coulomb_torque", "coulomb_speed", "load",
+                    "load_step", "load_t0", "load_tf"),
     "robustness": ("relative_error", "parameters", "samples", "seed"),
 }
 
@@ -158,10 +161,11 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     loop = None if period is None else _wrap(where, "drive", DriveLoop, control_period=period, substeps=substeps,
                                              compute_delay=compute_delay, drive=drive, sensors=sensors,
                                              observer=observer)
+    torques = _wrap(where, "feedforward", TorqueModel, **sec["feedforward"]) if "feedforward" in doc else None
     simulated = _wrap(where, "plant", Plant, motor=plant if plant is not None else motor, effects=effects, load=load)
     scenario = _wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
                      gains=gains, measurement=measurement, t_end=doc.get("t_end", 0.06), plant=simulated,
-                     loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale)
+                     loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale, torques=torques)
     robustness = None
     if "robustness" in doc:
         r = dict(sec["robustness"])
