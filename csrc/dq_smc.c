@@ -12,7 +12,7 @@ static bool positive(fs_real x)
 void dq_smc_params_default(struct dq_smc_params *p)
 {
     struct smc_params sp;
-    struct dq_smc_current none = {0, 0, 0, 1};
+    struct dq_smc_current none = {0, 0, 0, 1, 0, 0};
     struct torque_model tm = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
     smc_params_default(&sp);
     p->motor = sp.motor;
@@ -33,7 +33,8 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
         return DQ_SMC_EMOTOR;
     if (!plan_valid(&p->plan)
         || !(fs_isfinite(c->i_d1) && fs_isfinite(c->i_d2) && fs_isfinite(c->t0) && fs_isfinite(c->tf)
-             && (c->i_d2 == c->i_d1 || c->tf > c->t0)))
+             && (c->i_d2 == c->i_d1 || c->tf > c->t0) && fs_isfinite(c->weakening) && c->weakening >= 0
+             && fs_isfinite(c->weakening_speed) && c->weakening_speed >= 0))
         return DQ_SMC_EPLAN;
     if (!(positive(g->W1) && positive(g->W2) && positive(g->eps1) && positive(g->eps2) && positive(g->xi)
           && positive(g->wn) && g->hold_damping == 0))
@@ -60,17 +61,22 @@ void dq_smc_reset(struct dq_smc *s)
     s->status_seen = CTRL_OK;
 }
 
-// Returns nothing; writes the planned d current and its rate at time t.
-static void dq_smc_current_ref(const struct dq_smc_current *c, fs_real t, fs_real *i_d, fs_real *di_d)
+// Returns nothing; writes the planned d current and its rate at time t, for the planned speed w and acceleration a.
+static void dq_smc_current_ref(const struct dq_smc_current *c, fs_real t, fs_real w, fs_real a, fs_real *i_d,
+                               fs_real *di_d)
 {
     fs_real span = c->i_d2 - c->i_d1;
     if (span == 0) {
         *i_d = c->i_d1;
         *di_d = 0;
-        return;
+    } else {
+        *i_d = c->i_d1 + plan_psi(t, c->t0, c->tf, 0) * span;
+        *di_d = plan_psi(t, c->t0, c->tf, 1) * span;
     }
-    *i_d = c->i_d1 + plan_psi(t, c->t0, c->tf, 0) * span;
-    *di_d = plan_psi(t, c->t0, c->tf, 1) * span;
+    if (c->weakening != 0 && fs_fabs(w) > c->weakening_speed) {
+        *i_d = *i_d - c->weakening * (fs_fabs(w) - c->weakening_speed);
+        *di_d = *di_d - c->weakening * (w > 0 ? a : -a);
+    }
 }
 
 // Returns ctrl_status bits; writes the law's voltages (dq_smc.h) and scales them into v_limit.
@@ -92,7 +98,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
         return CTRL_NONFINITE;
     }
     plan_flag(&s->plan, t, ref);
-    dq_smc_current_ref(&s->p.current, t, &id_ref, &did_ref);
+    dq_smc_current_ref(&s->p.current, t, ref[PLAN_DTHETA], ref[PLAN_DDTHETA], &id_ref, &did_ref);
     // Park transform by Nr theta: i_d = ia c + ib s, i_q = -ia s + ib c.
     fs_sincos(m->Nr * y[3], &sn, &cs);
     i_d = y[0] * cs + y[1] * sn;

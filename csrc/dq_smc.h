@@ -22,10 +22,13 @@ enum dq_smc_param_error {
     DQ_SMC_ETORQUES,      // torque_model_valid fails
 };
 
-// The planned d current i_d*(t) = i_d1 + psi(t, t0, tf) (i_d2 - i_d1), the paper's psi of eq. (17).
+// The planned d current i_d*(t) = i_d1 + psi(t, t0, tf) (i_d2 - i_d1) - weakening max(|theta*'| - weakening_speed, 0),
+// with the paper's psi of eq. (17) and the planned speed theta*' (flatstep.plan.d_current).
 struct dq_smc_current {
-    fs_real i_d1, i_d2;  // start and end d current [A]
-    fs_real t0, tf;      // start and end of the change [s]; read only when i_d2 != i_d1
+    fs_real i_d1, i_d2;       // start and end d current [A]
+    fs_real t0, tf;           // start and end of the change [s]; read only when i_d2 != i_d1
+    fs_real weakening;        // k_w >= 0 [A s/rad]: field weakening per rad/s above weakening_speed
+    fs_real weakening_speed;  // >= 0 [rad/s]
 };
 
 struct dq_smc_params {

@@ -29,6 +29,23 @@ def true_acc(x, motor, torques, t):
     return (motor.Km * i_q - motor.B * x[2] - torques.torque(t, x[3], x[2], motor.Nr)) / motor.J
 
 
+def test_the_d_current_plan_and_its_rate(plan):
+    """i_d*' is the time derivative of i_d* (central differences), weakening included; weakening acts at speed."""
+    d_current = fs.DCurrentPlan(0.1, -0.2, 0.01, 0.05, weakening=0.05, weakening_speed=0.8)
+    t = np.linspace(0.0, 0.06, 60001)
+    ref = plan.flag(t)
+    i_d, di_d = d_current.flag(t, ref.dtheta, ref.ddtheta)
+    fast = ref.dtheta > 0.8
+    # away from the kinks (the speed crossing 0.8 rad/s, the ends of the change), where i_d*' jumps
+    smooth = np.convolve(np.diff(fast.astype(int), prepend=0) != 0, np.ones(5), "same") == 0
+    smooth &= (np.abs(t - 0.01) > 1e-5) & (np.abs(t - 0.05) > 1e-5)
+    np.testing.assert_allclose(np.gradient(i_d, t)[smooth], di_d[smooth], rtol=0, atol=1e-3 * np.max(np.abs(di_d)))
+    plain = fs.DCurrentPlan(0.1, -0.2, 0.01, 0.05).flag(t)[0]
+    assert np.all(i_d[~fast] == plain[~fast]) and np.all(i_d[fast] < plain[fast]) and fast.sum() > 1000
+    with pytest.raises(ValueError, match="weakening=-0.1 A s/rad must be >= 0"):
+        fs.DCurrentPlan(weakening=-0.1)
+
+
 def test_refuses_what_it_cannot_do(motor, plan):
     with pytest.raises(ValueError, match="measurement='perfect'"):
         fs.DQFlatnessSMC(motor, plan, measurement="perfect")
@@ -47,8 +64,8 @@ def test_refuses_what_it_cannot_do(motor, plan):
 def test_on_the_plan_the_law_is_the_feedforward(motor, plan, measurement, torques):
     t = np.linspace(0.0, 0.06, 121)
     ref = plan.flag(t)
-    d_current = fs.DCurrentPlan(0.0, -0.2, 0.02, 0.04)
-    i_d, di_d = d_current.flag(t)
+    d_current = fs.DCurrentPlan(0.0, -0.2, 0.02, 0.04, weakening=0.05, weakening_speed=0.8)
+    i_d, di_d = d_current.flag(t, ref.dtheta, ref.ddtheta)
     x, v_ff = dq_to_state(DQFlag(ref.theta, ref.dtheta, ref.ddtheta, ref.dddtheta, i_d, di_d), motor, torques, t)
     ctrl = fs.DQFlatnessSMC(motor, plan, measurement=measurement, d_current=d_current, torques=torques)
     np.testing.assert_allclose(ctrl.voltages(t, x, true_acc(x, motor, torques, t)), v_ff, rtol=1e-11, atol=1e-11)
@@ -85,8 +102,8 @@ def test_c_step_matches_python(motor, plan, measurement):
     t = rng.uniform(0.0, 0.06, n)
     y = np.array([rng.normal(0, 0.4, n), rng.normal(0, 0.4, n), rng.normal(0, 3, n), rng.normal(0, 0.02, n),
                   rng.normal(0, 500, n)])
-    ctrl = fs.DQFlatnessSMC(motor, plan, DESIGNED, measurement, d_current=fs.DCurrentPlan(0.1, -0.2, 0.01, 0.05),
-                            torques=TORQUES)
+    d_current = fs.DCurrentPlan(0.1, -0.2, 0.01, 0.05, weakening=0.05, weakening_speed=0.8)
+    ctrl = fs.DQFlatnessSMC(motor, plan, DESIGNED, measurement, d_current=d_current, torques=TORQUES)
     bound = controller_struct(ctrl)
     v_c, v = np.empty(2), np.empty((2, n))
     for k in range(n):
@@ -161,6 +178,12 @@ def test_registered_and_runnable_from_a_scenario_file(motor, plan, tmp_path):
     r = scenario.run()
     assert isinstance(scenario.controller(), fs.DQFlatnessSMC) and r.status == "ok"
     assert r.summary()["max_abs_theta_error_move"] < 2 * COUNT
+    path.write_text(path.read_text().replace("design = true\n", "design = true\nweakening = 0.05\n"
+                                                                 "weakening_speed = 1.0\n"))
+    weak = load_scenario(path)[0]
+    assert weak.controller().d_current == fs.DCurrentPlan(weakening=0.05, weakening_speed=1.0)
+    r = weak.run()
+    assert np.min(park(r.ia, r.ib, motor.Nr * r.theta)[0]) < -0.03  # the field is weakened at speed
 
 
 def test_the_feedforward_types_need_a_torque_model(motor, plan):

@@ -103,7 +103,7 @@ class DQFlatnessSMC:
         i_d, _ = self.dq_currents(x)
         acc = self.acceleration(t, x, ddtheta)
         g = self.gains
-        return (i_d - self.d_current.flag(t)[0],
+        return (i_d - self.d_current.flag(t, ref.dtheta, ref.ddtheta)[0],
                 acc - ref.ddtheta + g.alpha2 * (omega - ref.dtheta) + g.alpha1 * (theta - ref.theta))
 
     def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> Array:
@@ -111,7 +111,7 @@ class DQFlatnessSMC:
         _, _, omega, theta = np.asarray(x, dtype=float)
         m, g = self.motor, self.gains
         ref = self.plan.flag(t)
-        id_ref, did_ref = self.d_current.flag(t)
+        id_ref, did_ref = self.d_current.flag(t, ref.dtheta, ref.ddtheta)
         i_d, i_q = self.dq_currents(x)
         acc = self.acceleration(t, x, ddtheta)
         e, de, dde = theta - ref.theta, omega - ref.dtheta, acc - ref.ddtheta

@@ -19,6 +19,7 @@ from typing import Optional, Union
 
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
@@ -59,13 +60,15 @@ def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[floa
 def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_period: float | None,
                     measurement: str, smc_gains: SMCGains = _PAPER_SMC_GAINS, v_limit: float = math.inf,
                     bandwidth_scale: float = 1.0, compute_delay: bool = False,
-                    torques: Optional[TorqueModel] = None) -> AnyController:
+                    torques: Optional[TorqueModel] = None,
+                    d_current: DCurrentPlan = ZERO_D_CURRENT) -> AnyController:
     """The controller ``kind`` (one of :data:`CONTROLLER_TYPES`) for this motor model, plan and drive.
 
     ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` and ``dq_smc``
     :class:`~flatstep.control.dq_smc.DQFlatnessSMC`, both with ``smc_gains`` (the scenario's, designed or given);
     the baselines are tuned by the rules above and need ``control_period``. ``smc_ff`` and ``dq_smc_ff`` are the
-    same laws with the known ``torques`` (required for them, read by no other type).
+    same laws with the known ``torques`` (required for them, read by no other type); the d-q types track the planned
+    ``d_current``.
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
@@ -76,7 +79,7 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     if kind in ("smc", "smc_ff"):
         return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known)
     if kind in ("dq_smc", "dq_smc_ff"):
-        return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known)
+        return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:
         raise ValueError(f"controller type {kind!r} is tuned from the control period (lambda = 0.3/Ts): give one "
                          f"([drive] control_rate); only the flatness types {SMC_TYPES} have gains of their own for "

@@ -15,6 +15,7 @@ from ..loop.reference import DriveLoop
 from ..model.motor import MotorParams
 from ..model.plant import Plant
 from ..model.torque_model import TorqueModel
+from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.feasibility import FeasibilityReport, check_feasibility
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..validate import check_positive
@@ -50,6 +51,8 @@ class Scenario:
         continuous-time control, as in the paper.
     torques : TorqueModel, optional
         The torques the ``_ff`` controller types know beyond eq. (1) (the feedforward; other types ignore it).
+    d_current : DCurrentPlan
+        The d current the d-q flatness types track (default 0; other types ignore it).
     solver : Continuous, optional
         How continuous-time control is solved (``None``: the defaults of
         :class:`~flatstep.engine.settings.Continuous`); only without a loop.
@@ -69,11 +72,13 @@ class Scenario:
     solver: Optional[Continuous] = None
     t_end: float = 0.06
     torques: Optional[TorqueModel] = None
+    d_current: DCurrentPlan = ZERO_D_CURRENT
 
     def __post_init__(self) -> None:
         check_positive("t_end", self.t_end, unit=" s")
         for name, kind in (("motor", MotorParams), ("plan", RestToRest), ("gains", SMCGains), ("plant", Plant),
-                           ("loop", DriveLoop), ("solver", Continuous), ("torques", TorqueModel)):
+                           ("loop", DriveLoop), ("solver", Continuous), ("torques", TorqueModel),
+                           ("d_current", DCurrentPlan)):
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Scenario.{name}={value!r} is not a {kind.__name__}")
@@ -99,7 +104,7 @@ class Scenario:
                                measurement=self.measurement, smc_gains=self.gains, v_limit=v_bus,
                                bandwidth_scale=self.bandwidth_scale,
                                compute_delay=loop.compute_delay if loop is not None else False,
-                               torques=self.torques)
+                               torques=self.torques, d_current=self.d_current)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""
