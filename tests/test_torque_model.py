@@ -111,3 +111,33 @@ def test_knowing_the_torques_cuts_the_error(motor, plan, law):
     blind, known = (run(law, motor, plan, t, "observer", effects).summary()["max_abs_theta_error_move"]
                     for t in (TorqueModel(load=1e-5), tm))
     assert known < 0.7 * blind, (known, blind)
+
+
+def test_cascade_anti_cogging_on_both_engines(motor, plan):
+    """The cascade's iq* carries E / Km: C and Python agree, torques off are the plain cascade bit for bit, and the
+    known detent cuts its error."""
+    effects = PlantEffects(detent_torque=5e-3, coulomb_torque=2e-4, coulomb_speed=0.5)
+    plant = fs.Plant(motor, effects=effects, load=1e-5)
+    # no quantization: at rest the cascade hunts across the sensors' steps, where the engines' last-bit
+    # differences would read different counts
+    loop = fs.DriveLoop(TS, sensors=Sensors(encoder_counts=None, current_bits=None, current_noise=5e-3, seed=2),
+                        observer=Observer(1500.0, 2), drive=Drive(v_bus=24.0))
+    off = TorqueModel(detent_harmonic=2, detent_phase=0.3, coulomb_speed=2.0)
+
+    def run_cascade(torques, engine="c", kind="cascade_ff"):
+        ctrl = fs.make_controller(kind, motor, plan, control_period=TS, measurement="observer", v_limit=24.0,
+                                  torques=torques)
+        return fs.simulate(plant, plan, ctrl, loop=loop, engine=engine)
+    known = TorqueModel.of_plant(plant)
+    for kind in ("cascade_ff", "cascade_model"):
+        c, py = run_cascade(known, kind=kind), run_cascade(known, "python", kind)
+        np.testing.assert_allclose(c.theta, py.theta, rtol=0, atol=1e-12)
+        np.testing.assert_allclose([c.va, c.vb], [py.va, py.vb], rtol=0, atol=1e-9)
+    model = run_cascade(known, kind="cascade_model")
+    c = run_cascade(known)
+    assert np.max(np.abs(model.theta - c.theta)) > 1e-7  # the observer that knows the torques changes the run
+    plain = fs.simulate(plant, plan, fs.make_controller("cascade", motor, plan, control_period=TS,
+                                                        measurement="observer", v_limit=24.0), loop=loop)
+    assert np.array_equal(run_cascade(off).theta, plain.theta)
+    err = [r.summary()["max_abs_theta_error_move"] for r in (c, plain)]
+    assert err[0] < 0.7 * err[1], err

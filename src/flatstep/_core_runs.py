@@ -266,7 +266,7 @@ def run_sampled(controller: Controller, motor: MotorParams, load: float, x0: Arr
     n1 = n_periods + 1
     noise_rows = _noise(sensors, n1, noise)
     fields = _loop_fields(controller.motor, Ts, substeps, drive, sensors, observer, compute_delay,
-                          getattr(controller, "torques", None))
+                          getattr(controller, "observer_torques", None))
     bound = controller_struct(controller)
     x0v = _vec(x0)
     X, V, Y = np.empty((n1, 4)), np.empty((n1, 2)), np.empty((n1, 5))
@@ -324,7 +324,7 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         c.ctrl = bound.iface[0]
         c.plant = _plant_fields(r["motor"], r["load"], r.get("effects"))
         c.loop = _loop_fields(ctrl.motor, r["Ts"], r["substeps"], r.get("drive"), r.get("sensors"),
-                              r.get("observer"), r.get("compute_delay", False), getattr(ctrl, "torques", None))
+                              r.get("observer"), r.get("compute_delay", False), getattr(ctrl, "observer_torques", None))
         c.reference = ctrl.plan.as_dict()
         c.n_periods = r["n_periods"]
         c.x0 = [float(v) for v in r["x0"]]

@@ -123,6 +123,11 @@ class DQFlatnessSMC:
         v_d, v_q = dq_voltages(m, i_d, i_q, omega, acc, gamma1, gamma2, dE)
         return np.array(inverse_park(v_d, v_q, m.Nr * theta))
 
+    @property
+    def observer_torques(self) -> TorqueModel:
+        """The torques the drive loop's observer predicts with: the law's own (the observer shares its model)."""
+        return self.torques
+
     def initial_state(self) -> None:
         """Return ``None``: the law is static, no state between steps."""
         return None

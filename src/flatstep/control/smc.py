@@ -183,6 +183,11 @@ class FlatnessSMC:
         return np.array([m.R * ia_ref + m.L * lam * (ia_ref - ia) - emf * np.sin(Nr_theta),
                          m.R * ib_ref + m.L * lam * (ib_ref - ib) + emf * np.cos(Nr_theta)])
 
+    @property
+    def observer_torques(self) -> TorqueModel:
+        """The torques the drive loop's observer predicts with: the law's own (the observer shares its model)."""
+        return self.torques
+
     def initial_state(self) -> None:
         """Return ``None``: the law is static, no state between steps."""
         return None

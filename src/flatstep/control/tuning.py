@@ -30,17 +30,19 @@ from .microstep import MicrostepGains, Microstepping
 from .smc import FlatnessSMC, SMCGains
 
 #: The controllers a scenario can name (``[controller] type``), the paper's first. The ``_ff`` types are the
-#: flatness laws with the scenario's torque model (``[feedforward]``, a
-#: :class:`~flatstep.model.torque_model.TorqueModel`).
-CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_ff", "dq_smc_ff")
+#: flatness laws and the cascade with the scenario's torque model (``[feedforward]``, a
+#: :class:`~flatstep.model.torque_model.TorqueModel`): the flatness laws' feedforward, the cascade's anti-cogging.
+CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_ff", "dq_smc_ff",
+                    "cascade_ff", "cascade_model")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
-          "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q + SMC + ff"}
+          "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q + SMC + ff",
+          "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs."}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
 SMC_TYPES = ("smc", "dq_smc", "smc_ff", "dq_smc_ff")
 #: The types that need a torque model.
-FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff")
+FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "cascade_ff", "cascade_model")
 #: The sliding controller's default gains, the paper's.
 _PAPER_SMC_GAINS = SMCGains()
 #: What :func:`make_controller` returns.
@@ -66,9 +68,10 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
 
     ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` and ``dq_smc``
     :class:`~flatstep.control.dq_smc.DQFlatnessSMC`, both with ``smc_gains`` (the scenario's, designed or given);
-    the baselines are tuned by the rules above and need ``control_period``. ``smc_ff`` and ``dq_smc_ff`` are the
-    same laws with the known ``torques`` (required for them, read by no other type); the d-q types track the planned
-    ``d_current``.
+    the baselines are tuned by the rules above and need ``control_period``. ``smc_ff``, ``dq_smc_ff`` and ``cascade_ff``
+    are the same laws with the known ``torques`` (required for them, read by no other type), whose observer shares
+    them except the cascade's (anti-cogging as firmware does it); ``cascade_model`` gives them to its observer too.
+    The d-q flatness types track the planned ``d_current``.
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
@@ -89,8 +92,9 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     if kind == "microstep":
         return Microstepping(motor, plan, MicrostepGains(lam), control_period=control_period,
                              measurement=measurement, v_limit=v_limit)
-    if kind == "cascade":
+    if kind in ("cascade", "cascade_ff", "cascade_model"):
         return CascadeFOC(motor, plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn),
-                          control_period=control_period, measurement=measurement, v_limit=v_limit)
+                          control_period=control_period, measurement=measurement, v_limit=v_limit, torques=known,
+                          model_observer=kind == "cascade_model")
     return ExactLinearization(motor, plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam),
                               control_period=control_period, measurement=measurement, v_limit=v_limit)

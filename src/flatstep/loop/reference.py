@@ -12,7 +12,7 @@ One control period k, at ``t_k = k Ts``:
 5. the plant (eq. (1) plus any :class:`~flatstep.model.plant.PlantEffects`: detent, Coulomb friction, iron loss)
    is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
 6. the observer predicts the next angle, speed and load from the torque of the measured currents, less the
-   torques the controller's model knows beyond eq. (1) (its ``torques``, a
+   torques the controller's model knows beyond eq. (1) (its ``observer_torques``, a
    :class:`~flatstep.model.torque_model.TorqueModel`, if it has one).
 
 This loop runs in Python, one period at a time: it is the specification the C engine is tested against,
@@ -131,7 +131,7 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
         times at which the law faulted (``faults``; the drive then applied 0 V for that period).
     """
     Ts, model = loop.control_period, controller.motor
-    torques: Optional[TorqueModel] = getattr(controller, "torques", None)  # what the observer also knows
+    torques: Optional[TorqueModel] = getattr(controller, "observer_torques", None)  # what the observer also knows
     sensors, drive, observer = loop.sensors, loop.drive, loop.observer
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
     if observer is not None:
