@@ -81,8 +81,8 @@ class _Log:
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
     scenario, study = load_scenario(args.scenario)
-    if args.clean:  # the plant equal to the model: no load, no effects
-        scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None)
+    if args.clean:  # the plant equal to the model: no load, no effects, so nothing to feed forward
+        scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None)
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
     kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else scenario_kinds(scenario)
@@ -171,7 +171,7 @@ def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]
                       help=f"comma-separated controller types (default: all of {','.join(CONTROLLER_TYPES)})")
     cmp_.add_argument("--band", type=float, default=None, help="settling band [rad] (default: one encoder count)")
     cmp_.add_argument("--clean", action="store_true", help="no load, no plant effects, the plant equal to the "
-                      "model (the file's drive, sensors and gains otherwise)")
+                      "model, no [feedforward] (the file's drive, sensors and gains otherwise)")
     cmp_.add_argument("--no-robustness", action="store_true", help="skip the file's [robustness] study")
     cmp_.add_argument("--samples", type=int, default=None, help="random plants instead of all sign combinations")
     cmp_.add_argument("--scales", default=None, help="also run the baselines with every bandwidth scaled by these "
