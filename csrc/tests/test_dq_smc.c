@@ -168,6 +168,41 @@ static int closed_loop_checks(void)
     return 0;
 }
 
+// Returns 0; for every combination of extreme inputs (0, +-1e-300, +-1, +-1e10, +-1e300, NaN, infinity) the step
+// returns finite voltages within v_limit, and 0 V exactly on a fault.
+static int contract_checks(void)
+{
+    static const double values[] = {0, 1e-300, -1e-300, 1, -1, 1e10, -1e10, 1e300, -1e300, NAN, INFINITY};
+    const int n = (int)(sizeof values / sizeof values[0]);
+    struct dq_smc_params p;
+    struct dq_smc s;
+    double y[5], v[2], t;
+    uint32_t st;
+    int i, k, m, bad = 0, faults = 0;
+    dq_smc_params_default(&p);
+    p.torques = TORQUES;
+    p.current = (struct dq_smc_current){0.1, -0.2, 0.01, 0.05, 0.05, 0.8};
+    for (m = 0; m < 2; m++) {
+        p.measurement = m ? SMC_MODEL : SMC_IDEAL;
+        dq_smc_init(&s, &p);
+        for (i = 0; i < n * n * n; i++) {
+            // t, and one input at a time set to each extreme over a nominal measurement
+            t = i % 3 == 0 ? 0.03 : values[(i / 3) % n];
+            y[0] = 0.1, y[1] = 0.3, y[2] = 1.0, y[3] = 0.01, y[4] = 100;
+            k = i % 5;
+            y[k] = values[(i / (3 * n)) % n];
+            st = dq_smc_step(&s, t, y, v);
+            faults += (st & CTRL_FAULTS) != 0;
+            if (!(isfinite(v[0]) && isfinite(v[1]) && hypot(v[0], v[1]) <= p.v_limit * (1 + 1e-15))
+                || ((st & CTRL_FAULTS) && (v[0] != 0 || v[1] != 0)))
+                bad++;
+        }
+    }
+    CHECK(bad == 0, "%d steps broke the contract", bad);
+    CHECK(faults > 100, "the extremes do fault (%d steps)", faults);
+    return 0;
+}
+
 // Returns 0 after running every check of the d-q law.
 int test_dq_smc(void)
 {
@@ -175,5 +210,6 @@ int test_dq_smc(void)
     torque_model_checks();
     law_checks();
     closed_loop_checks();
+    contract_checks();
     return 0;
 }
