@@ -23,7 +23,9 @@ void smc_params_default(struct smc_params *p)
     struct plan pl = {0, FS_C(0.02), FS_C(0.4), FS_C(0.4), FS_C(0.02), FS_C(0.04)};
     struct smc_gains g = {100, 100, FS_C(0.005), FS_C(0.005), FS_C(0.8), 10, 0};
     struct torque_model none = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
+    struct smc_loss_aware plan_rho = {0, 0};
     p->torques = none;
+    p->loss_aware = plan_rho;
     p->motor = m;
     p->plan = pl;
     p->gains = g;
@@ -57,6 +59,9 @@ int smc_init(struct smc *s, const struct smc_params *p)
         return SMC_ELIMITS;
     if (!torque_model_valid(&p->torques))
         return SMC_ETORQUES;
+    if (!(fs_isfinite(p->loss_aware.rho_hold) && p->loss_aware.rho_hold >= 0 && fs_isfinite(p->loss_aware.margin)
+          && p->loss_aware.margin >= 0 && p->loss_aware.margin < FS_C(1.5707963267948966)))
+        return SMC_EPLAN;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
@@ -98,6 +103,18 @@ SMC_INLINE void smc_hold(const struct smc *s, const fs_real y[5], fs_real sN, fs
     v[1] = m->R * ib + m->L * s->hold_lambda * (ib - y[1]) + emf * cN;
 }
 
+// Returns nothing; replaces rho and rho' of the flag ref at time t by the loss-aware rho*(t) (smc.h).
+static void smc_loss_aware_rho(const struct smc *s, fs_real t, fs_real ref[PLAN_FLAG_LEN])
+{
+    const struct motor_params *m = &s->p.motor;
+    fs_real th = ref[PLAN_THETA], w = ref[PLAN_DTHETA], a = ref[PLAN_DDTHETA], A, dA, c, h = s->p.loss_aware.rho_hold;
+    A = m->J * a + m->B * w + torque_model_torque(&s->p.torques, m->Nr, t, th, w);
+    dA = m->J * ref[PLAN_DDDTHETA] + m->B * a + torque_model_rate(&s->p.torques, m->Nr, t, th, w, a);
+    c = m->Km * fs_cos(s->p.loss_aware.margin);
+    ref[PLAN_RHO] = fs_sqrt(h * h + (A / c) * (A / c));
+    ref[PLAN_DRHO] = A * dA / (c * c) / ref[PLAN_RHO];
+}
+
 // Returns the status bits of the unguarded law; writes its voltages (0 V on a fault) and, when w is not NULL,
 // its intermediate values (nr_trig: NULL, or the caller's sin and cos of Nr theta).
 SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig, fs_real v[2],
@@ -109,6 +126,8 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     struct flat_angles a;
     int flat;
     plan_flag(&s->plan, t, ref);
+    if (s->p.loss_aware.rho_hold > 0)
+        smc_loss_aware_rho(s, t, ref);
     if (w)
         w->have = SMC_HAVE_FLAG;
     // rho = hypot(ia, ib); the square root of the sum of squares is as accurate unless it over- or underflows.

@@ -47,14 +47,22 @@ struct smc_gains {
                            // damping ratio (smc_step)
 };
 
+// The loss-aware rho*(t) = sqrt(rho_hold^2 + (A* / (Km cos margin))^2), A* = J theta*'' + B theta*' + E at the
+// planned angle (flatstep.plan.loss_aware); rho_hold = 0: the plan's rho.
+struct smc_loss_aware {
+    fs_real margin;    // [rad], in [0, pi/2)
+    fs_real rho_hold;  // [A], >= 0
+};
+
 struct smc_params {
     struct motor_params motor;  // the controller's model of the motor
     struct plan plan;           // the planned flat outputs
     struct smc_gains gains;
-    int measurement;              // enum smc_measurement
-    fs_real v_limit;              // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
-    fs_real rho_min;              // smallest current magnitude the law acts on [A], > 0
-    struct torque_model torques;  // torques the law knows beyond eq. (1); all zero: the paper's law bit for bit
+    int measurement;                   // enum smc_measurement
+    fs_real v_limit;                   // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
+    fs_real rho_min;                   // smallest current magnitude the law acts on [A], > 0
+    struct torque_model torques;       // torques the law knows beyond eq. (1); all zero: the paper's law bit for bit
+    struct smc_loss_aware loss_aware;  // rho_hold > 0: track the loss-aware rho*(t) instead of the plan's rho
 };
 
 struct smc {

@@ -203,6 +203,30 @@ static int contract_checks(void)
     return 0;
 }
 
+// Returns 0; smc_init takes the loss-aware rho*(t) and refuses a margin out of [0, pi/2) or a negative hold, and
+// its step tracks rho* = sqrt(rho_hold^2 + (A* / (Km cos margin))^2) (at rest with no torques: rho_hold).
+static int loss_aware_checks(void)
+{
+    struct smc_params p, q;
+    struct smc s;
+    struct smc_terms w;
+    double y[5] = {0.2, 0, 0, 0, 0}, v[2];
+    smc_params_default(&p);
+    p.loss_aware = (struct smc_loss_aware){0.7854, 0.2};
+    CHECK(smc_init(&s, &p) == SMC_PARAMS_OK, "loss-aware rho*");
+    q = p, q.loss_aware.margin = 1.5707963267948966;
+    CHECK(smc_init(&s, &q) == SMC_EPLAN, "margin = pi/2");
+    q = p, q.loss_aware.rho_hold = -1;
+    CHECK(smc_init(&s, &q) == SMC_EPLAN, "rho_hold < 0");
+    smc_init(&s, &p);
+    CHECK(smc_step_terms(&s, 0.0, y, NULL, v, &w) == CTRL_OK, "step at rest");
+    CHECK(w.flag[PLAN_RHO] == 0.2 && w.flag[PLAN_DRHO] == 0 && w.s1 == 0, "at rest rho* = rho_hold: %g %g %g",
+          w.flag[PLAN_RHO], w.flag[PLAN_DRHO], w.s1);
+    smc_step_terms(&s, 0.03, y, NULL, v, &w);
+    CHECK(w.flag[PLAN_RHO] > 0.2 && w.flag[PLAN_DRHO] != 0, "in the move rho* rises: %g", w.flag[PLAN_RHO]);
+    return 0;
+}
+
 // Returns 0 after running every check of the d-q law.
 int test_dq_smc(void)
 {
@@ -211,5 +235,6 @@ int test_dq_smc(void)
     law_checks();
     closed_loop_checks();
     contract_checks();
+    loss_aware_checks();
     return 0;
 }

@@ -40,10 +40,11 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..model.flat import flat_voltages, polar
+from ..model.flat import FlatFlag, flat_voltages, polar
 from ..model.motor import MotorParams
 from ..model.motor import acceleration as motor_acceleration
 from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_finite, check_positive
 
@@ -106,6 +107,8 @@ class FlatnessSMC:
         :class:`~flatstep.loop.observers.Observer`, passed by the simulator like the ideal one.
     torques : TorqueModel
         The torques the law knows beyond eq. (1) (module docstring; default none).
+    loss_aware : LossAwareRho, optional
+        Track the loss-aware ``rho*(t)`` (:mod:`flatstep.plan.loss_aware`) instead of the plan's ``rho``.
     """
 
     #: The C twin: csrc/smc.h (``struct smc``, ``smc_init``, ``smc_controller``).
@@ -114,13 +117,24 @@ class FlatnessSMC:
     c_v_limit, c_rho_min = 1e3, 1e-6
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = SMCGains(),
-                 measurement: str = "ideal", *, torques: TorqueModel = NO_TORQUES) -> None:
+                 measurement: str = "ideal", *, torques: TorqueModel = NO_TORQUES,
+                 loss_aware: Optional[LossAwareRho] = None) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
         if not isinstance(torques, TorqueModel):
             raise ValueError(f"torques={torques!r} is not a TorqueModel")
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
-        self.torques = torques
+        if loss_aware is not None and not isinstance(loss_aware, LossAwareRho):
+            raise ValueError(f"loss_aware={loss_aware!r} is not a LossAwareRho (or None)")
+        self.torques, self.loss_aware = torques, loss_aware
+
+    def reference(self, t: ArrayLike) -> FlatFlag:
+        """The flat flag the law tracks at times ``t``: the plan's, with the loss-aware ``rho*`` if chosen."""
+        ref = self.plan.flag(t)
+        if self.loss_aware is None:
+            return ref
+        rho, drho = self.loss_aware.reference(ref, t, self.motor, self.torques)
+        return ref._replace(rho=rho, drho=drho)
 
     def acceleration(self, x: ArrayLike, ddtheta: Optional[ArrayLike] = None,
                      t: ArrayLike = 0.0) -> NDArray[np.float64]:
@@ -141,7 +155,7 @@ class FlatnessSMC:
                           ddtheta: Optional[ArrayLike] = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Return ``(s1, s2)`` of eq. (12) at times ``t`` for states ``x`` (vectorized)."""
         ia, ib, omega, theta = np.asarray(x, dtype=float)
-        ref = self.plan.flag(t)
+        ref = self.reference(t)
         acc = self.acceleration(x, ddtheta, t)
         g = self.gains
         return (np.hypot(ia, ib) - ref.rho,
@@ -151,7 +165,7 @@ class FlatnessSMC:
         """Phase voltages (va, vb) of eqs. (13)-(14), vectorized over time."""
         ia, ib, omega, theta = np.asarray(x, dtype=float)
         m, g = self.motor, self.gains
-        ref = self.plan.flag(t)
+        ref = self.reference(t)
         rho, phi = polar(ia, ib)
         acc = self.acceleration(x, ddtheta, t)
         e, de, dde = theta - ref.theta, omega - ref.dtheta, acc - ref.ddtheta
@@ -208,4 +222,5 @@ class FlatnessSMC:
                                hold_damping=g.hold_damping or 0.0),
                     # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state
                     measurement=1 if self.measurement == "model" else 0, torques=self.torques.as_dict(),
+                    loss_aware=self.loss_aware.as_dict() if self.loss_aware else dict(margin=0.0, rho_hold=0.0),
                     v_limit=self.c_v_limit, rho_min=self.c_rho_min)

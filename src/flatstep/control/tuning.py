@@ -20,6 +20,7 @@ from typing import Optional, Union
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
+from ..plan.loss_aware import DEFAULT_LOSS_AWARE, LossAwareRho
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
@@ -32,17 +33,18 @@ from .smc import FlatnessSMC, SMCGains
 #: The controllers a scenario can name (``[controller] type``), the paper's first. The ``_ff`` types are the
 #: flatness laws and the cascade with the scenario's torque model (``[feedforward]``, a
 #: :class:`~flatstep.model.torque_model.TorqueModel`): the flatness laws' feedforward, the cascade's anti-cogging.
-CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_ff", "dq_smc_ff",
-                    "cascade_ff", "cascade_model")
+CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff",
+                    "smc_la_ff", "cascade_ff", "cascade_model")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
           "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q + SMC + ff",
-          "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs."}
+          "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
+          "smc_la": "flatness + SMC, rho*(t)", "smc_la_ff": "flatness + SMC, rho*(t) + ff"}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
-SMC_TYPES = ("smc", "dq_smc", "smc_ff", "dq_smc_ff")
+SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff")
 #: The types that need a torque model.
-FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "cascade_ff", "cascade_model")
+FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model")
 #: The sliding controller's default gains, the paper's.
 _PAPER_SMC_GAINS = SMCGains()
 #: What :func:`make_controller` returns.
@@ -63,7 +65,8 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
                     measurement: str, smc_gains: SMCGains = _PAPER_SMC_GAINS, v_limit: float = math.inf,
                     bandwidth_scale: float = 1.0, compute_delay: bool = False,
                     torques: Optional[TorqueModel] = None,
-                    d_current: DCurrentPlan = ZERO_D_CURRENT) -> AnyController:
+                    d_current: DCurrentPlan = ZERO_D_CURRENT,
+                    loss_aware: LossAwareRho = DEFAULT_LOSS_AWARE) -> AnyController:
     """The controller ``kind`` (one of :data:`CONTROLLER_TYPES`) for this motor model, plan and drive.
 
     ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` and ``dq_smc``
@@ -71,7 +74,8 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     the baselines are tuned by the rules above and need ``control_period``. ``smc_ff``, ``dq_smc_ff`` and ``cascade_ff``
     are the same laws with the known ``torques`` (required for them, read by no other type), whose observer shares
     them except the cascade's (anti-cogging as firmware does it); ``cascade_model`` gives them to its observer too.
-    The d-q flatness types track the planned ``d_current``.
+    The d-q flatness types track the planned ``d_current``; ``smc_la`` and ``smc_la_ff`` are the paper's law on the
+    ``loss_aware`` rho*(t) (:mod:`flatstep.plan.loss_aware`).
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
@@ -79,8 +83,9 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
         raise ValueError(f"controller type {kind!r} needs the torques it knows beyond eq. (1): give a TorqueModel "
                          "(a [feedforward] table in a scenario file), or use the type without '_ff'")
     known = torques if kind in FEEDFORWARD_TYPES and torques is not None else NO_TORQUES
-    if kind in ("smc", "smc_ff"):
-        return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known)
+    if kind in ("smc", "smc_ff", "smc_la", "smc_la_ff"):
+        return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known,
+                           loss_aware=loss_aware if kind in ("smc_la", "smc_la_ff") else None)
     if kind in ("dq_smc", "dq_smc_ff"):
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:

@@ -17,6 +17,7 @@ from ..model.plant import Plant
 from ..model.torque_model import TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.feasibility import FeasibilityReport, check_feasibility
+from ..plan.loss_aware import DEFAULT_LOSS_AWARE, LossAwareRho
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..validate import check_positive
 
@@ -53,6 +54,8 @@ class Scenario:
         The torques the ``_ff`` controller types know beyond eq. (1) (the feedforward; other types ignore it).
     d_current : DCurrentPlan
         The d current the d-q flatness types track (default 0; other types ignore it).
+    loss_aware : LossAwareRho
+        The loss-aware rho*(t) of the ``smc_la`` types (other types ignore it).
     solver : Continuous, optional
         How continuous-time control is solved (``None``: the defaults of
         :class:`~flatstep.engine.settings.Continuous`); only without a loop.
@@ -73,12 +76,13 @@ class Scenario:
     t_end: float = 0.06
     torques: Optional[TorqueModel] = None
     d_current: DCurrentPlan = ZERO_D_CURRENT
+    loss_aware: LossAwareRho = DEFAULT_LOSS_AWARE
 
     def __post_init__(self) -> None:
         check_positive("t_end", self.t_end, unit=" s")
         for name, kind in (("motor", MotorParams), ("plan", RestToRest), ("gains", SMCGains), ("plant", Plant),
                            ("loop", DriveLoop), ("solver", Continuous), ("torques", TorqueModel),
-                           ("d_current", DCurrentPlan)):
+                           ("d_current", DCurrentPlan), ("loss_aware", LossAwareRho)):
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Scenario.{name}={value!r} is not a {kind.__name__}")
@@ -104,7 +108,7 @@ class Scenario:
                                measurement=self.measurement, smc_gains=self.gains, v_limit=v_bus,
                                bandwidth_scale=self.bandwidth_scale,
                                compute_delay=loop.compute_delay if loop is not None else False,
-                               torques=self.torques, d_current=self.d_current)
+                               torques=self.torques, d_current=self.d_current, loss_aware=self.loss_aware)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""

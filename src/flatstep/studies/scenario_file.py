@@ -25,6 +25,7 @@ from ..model.motor import PRESETS, MotorParams
 from ..model.plant import Plant, PlantEffects
 from ..model.torque_model import TorqueModel
 from ..plan.d_current import DCurrentPlan
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from .scenario import Scenario
 
@@ -38,7 +39,7 @@ SECTIONS: dict[str, tuple[str, ...]] = {
     "plant": MOTOR_KEYS + ("scale",) + EFFECT_KEYS,
     "plan": ("theta1", "theta2", "rho1", "rho2", "t0", "tf"),
     "controller": ("type", "bandwidth_scale", "measurement", "W1", "W2", "eps1", "eps2", "xi", "wn", "hold_damping",
-                   "design", "uncertainty", "weakening", "weakening_speed"),
+                   "design", "uncertainty", "weakening", "weakening_speed", "rho_margin", "rho_hold"),
     "drive": ("control_rate", "substeps", "compute_delay", "v_bus", "pwm", "f_pwm", "dead_time"),
     "sensors": ("encoder_counts", "encoder_offset", "current_bits", "current_range", "current_offset",
                 "current_noise", "delay", "seed"),
@@ -143,6 +144,8 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     measurement = ctrl.pop("measurement", None)
     weakening = {k: ctrl.pop(k) for k in ("weakening", "weakening_speed") if k in ctrl}
     d_current = _wrap(where, "controller", DCurrentPlan, **weakening)
+    rho_keys = {"rho_margin": "margin", "rho_hold": "rho_hold"}
+    loss_aware = _wrap(where, "controller", LossAwareRho, **{rho_keys[k]: ctrl.pop(k) for k in rho_keys if k in ctrl})
     observer = None
     if design:
         if period is None or drive is None:  # no control_rate: neither a period nor a drive
@@ -169,7 +172,7 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     scenario = _wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
                      gains=gains, measurement=measurement, t_end=doc.get("t_end", 0.06), plant=simulated,
                      loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale, torques=torques,
-                     d_current=d_current)
+                     d_current=d_current, loss_aware=loss_aware)
     robustness = None
     if "robustness" in doc:
         r = dict(sec["robustness"])
