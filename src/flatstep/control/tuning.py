@@ -38,9 +38,9 @@ CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_sm
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
-          "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q + SMC + ff",
+          "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q SMC + ff",
           "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
-          "smc_la": "flatness + SMC, rho*(t)", "smc_la_ff": "flatness + SMC, rho*(t) + ff"}
+          "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff"}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
 SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff")
 #: The types that need a torque model.
