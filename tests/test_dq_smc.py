@@ -1,4 +1,5 @@
 """The d-q flatness + sliding-mode law: its sliding dynamics, its C twin (step and closed loop), its registration."""
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -214,3 +215,23 @@ def test_a_feedforward_table_feeds_the_ff_types(tmp_path):
     path.write_text(body + "[feedforward]\ndetent_amplitude = 1e-3\n")
     with pytest.raises(ValueError, match=r"ff.toml: unknown key\(s\) \['detent_amplitude'\] in \[feedforward\]"):
         load_scenario(path)
+
+
+def test_compare_prints_the_new_rows_in_the_same_json_shape(tmp_path, capsys):
+    from flatstep.cli.main import main
+
+    path = tmp_path / "cmp.toml"
+    path.write_text('t_end = 0.05\n[controller]\ndesign = true\n[drive]\ncontrol_rate = 20000.0\n'
+                    '[sensors]\nencoder_counts = 16384\n[plant]\ndetent_torque = 1e-3\n[load]\ntorque = 1e-5\n'
+                    '[feedforward]\ndetent_torque = 1e-3\nload = 1e-5\n'
+                    '[robustness]\nrelative_error = 0.1\nsamples = 2\n')
+    kinds = "cascade,dq_smc,dq_smc_ff,smc_la_ff,cascade_ff"
+    assert main(["compare", str(path), "--controllers", kinds, "--json", "--quiet"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    for kind in kinds.split(","):
+        assert report["controllers"][kind]["label"] == LABELS[kind]
+        worst = report["robustness"]["worst"][kind]["metrics"]
+        assert all(worst[k] > 0 for k in ("move_max", "copper_loss", "peak_voltage"))
+    # the d-q law holds no d current: a fraction of the cascade's copper
+    assert report["controllers"]["dq_smc"]["metrics"]["copper_loss"] < report["controllers"]["cascade"]["metrics"][
+        "copper_loss"]

@@ -18,8 +18,8 @@ TORQUES = TorqueModel(detent_torque=1e-3, coulomb_torque=2e-4, coulomb_speed=0.5
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(margin=math.pi / 2), "margin=1.57.* must be in \\[0, pi/2\\)"),
-    (dict(margin=-0.1), "margin=-0.1"),
+    (dict(margin=math.pi / 2, rho_hold=0.1), "margin=1.57.* must be in \\[0, pi/2\\)"),
+    (dict(margin=-0.1, rho_hold=0.1), "margin=-0.1"),
     (dict(rho_hold=0.0), "rho_hold=0.0 A must be > 0"),
 ])
 def test_bad_values(kwargs, match):
@@ -72,7 +72,9 @@ def test_scenario_keys(tmp_path):
     path.write_text('[controller]\ntype = "smc_la"\ndesign = true\nrho_margin = 0.7\nrho_hold = 0.2\n'
                     '[drive]\ncontrol_rate = 20000.0\n')
     scenario, _ = load_scenario(path)
-    assert scenario.controller().loss_aware == LossAwareRho(0.7, 0.2)
+    assert scenario.controller().loss_aware == LossAwareRho(rho_hold=0.2, margin=0.7)
+    assert fs.make_controller("smc_la", scenario.motor, scenario.plan, control_period=TS,
+                              measurement="ideal").loss_aware == LossAwareRho(rho_hold=0.2, margin=math.pi / 4)
     assert fs.make_controller("smc", scenario.motor, scenario.plan, control_period=TS,
                               measurement="ideal").loss_aware is None
     path.write_text('[controller]\ntype = "smc_la"\nrho_hold = -1.0\n')

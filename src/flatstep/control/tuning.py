@@ -20,7 +20,7 @@ from typing import Optional, Union
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
-from ..plan.loss_aware import DEFAULT_LOSS_AWARE, LossAwareRho
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
@@ -66,7 +66,7 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
                     bandwidth_scale: float = 1.0, compute_delay: bool = False,
                     torques: Optional[TorqueModel] = None,
                     d_current: DCurrentPlan = ZERO_D_CURRENT,
-                    loss_aware: LossAwareRho = DEFAULT_LOSS_AWARE) -> AnyController:
+                    loss_aware: Optional[LossAwareRho] = None) -> AnyController:
     """The controller ``kind`` (one of :data:`CONTROLLER_TYPES`) for this motor model, plan and drive.
 
     ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` and ``dq_smc``
@@ -75,7 +75,7 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     are the same laws with the known ``torques`` (required for them, read by no other type), whose observer shares
     them except the cascade's (anti-cogging as firmware does it); ``cascade_model`` gives them to its observer too.
     The d-q flatness types track the planned ``d_current``; ``smc_la`` and ``smc_la_ff`` are the paper's law on the
-    ``loss_aware`` rho*(t) (:mod:`flatstep.plan.loss_aware`).
+    ``loss_aware`` rho*(t) (:mod:`flatstep.plan.loss_aware`; default ``LossAwareRho.for_plan(plan)``).
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
@@ -85,7 +85,8 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     known = torques if kind in FEEDFORWARD_TYPES and torques is not None else NO_TORQUES
     if kind in ("smc", "smc_ff", "smc_la", "smc_la_ff"):
         return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known,
-                           loss_aware=loss_aware if kind in ("smc_la", "smc_la_ff") else None)
+                           loss_aware=(loss_aware or LossAwareRho.for_plan(plan)) if kind in ("smc_la", "smc_la_ff")
+                           else None)
     if kind in ("dq_smc", "dq_smc_ff"):
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:

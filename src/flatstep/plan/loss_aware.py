@@ -26,14 +26,15 @@ from ..model.flat import FlatFlag
 from ..model.motor import MotorParams
 from ..model.torque_model import TorqueModel
 from ..validate import check_finite, check_positive
+from .rest_to_rest import RestToRest
 
 
 @dataclass(frozen=True)
 class LossAwareRho:
-    r"""The margin :math:`\delta_m` [rad], in [0, pi/2), and the holding current :math:`\rho_h` [A], > 0."""
+    r"""The holding current :math:`\rho_h` [A], > 0, and the margin :math:`\delta_m` [rad], in [0, pi/2)."""
 
-    margin: float = math.pi / 6
-    rho_hold: float = 0.1
+    rho_hold: float
+    margin: float = math.pi / 4
 
     def __post_init__(self) -> None:
         margin = check_finite("margin", self.margin)
@@ -58,6 +59,7 @@ class LossAwareRho:
         """The fields by name (``margin``, ``rho_hold``)."""
         return asdict(self)
 
-
-#: A 30 degree margin and 0.1 A held at rest.
-DEFAULT_LOSS_AWARE = LossAwareRho()
+    @classmethod
+    def for_plan(cls, plan: RestToRest, margin: float = math.pi / 4) -> "LossAwareRho":
+        """Half the plan's smaller end current held (the default of :func:`flatstep.control.make_controller`)."""
+        return cls(rho_hold=0.5 * min(plan.rho1, plan.rho2), margin=margin)

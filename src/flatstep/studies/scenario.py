@@ -17,7 +17,7 @@ from ..model.plant import Plant
 from ..model.torque_model import TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.feasibility import FeasibilityReport, check_feasibility
-from ..plan.loss_aware import DEFAULT_LOSS_AWARE, LossAwareRho
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..validate import check_positive
 
@@ -55,7 +55,8 @@ class Scenario:
     d_current : DCurrentPlan
         The d current the d-q flatness types track (default 0; other types ignore it).
     loss_aware : LossAwareRho
-        The loss-aware rho*(t) of the ``smc_la`` types (other types ignore it).
+        The loss-aware rho*(t) of the ``smc_la`` types (``None``: ``LossAwareRho.for_plan(plan)``; other types
+        ignore it).
     solver : Continuous, optional
         How continuous-time control is solved (``None``: the defaults of
         :class:`~flatstep.engine.settings.Continuous`); only without a loop.
@@ -76,7 +77,7 @@ class Scenario:
     t_end: float = 0.06
     torques: Optional[TorqueModel] = None
     d_current: DCurrentPlan = ZERO_D_CURRENT
-    loss_aware: LossAwareRho = DEFAULT_LOSS_AWARE
+    loss_aware: Optional[LossAwareRho] = None
 
     def __post_init__(self) -> None:
         check_positive("t_end", self.t_end, unit=" s")

@@ -145,7 +145,9 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     weakening = {k: ctrl.pop(k) for k in ("weakening", "weakening_speed") if k in ctrl}
     d_current = _wrap(where, "controller", DCurrentPlan, **weakening)
     rho_keys = {"rho_margin": "margin", "rho_hold": "rho_hold"}
-    loss_aware = _wrap(where, "controller", LossAwareRho, **{rho_keys[k]: ctrl.pop(k) for k in rho_keys if k in ctrl})
+    given = {rho_keys[k]: ctrl.pop(k) for k in rho_keys if k in ctrl}
+    loss_aware = _wrap(where, "controller", LossAwareRho, **{"rho_hold": 0.5 * min(plan.rho1, plan.rho2), **given}
+                       ) if given else None
     observer = None
     if design:
         if period is None or drive is None:  # no control_rate: neither a period nor a drive
