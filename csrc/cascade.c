@@ -34,6 +34,8 @@ int cascade_init(struct cascade *s, const struct cascade_params *p)
         return CASCADE_EPERIOD;
     if (!(p->v_limit > 0))
         return CASCADE_ELIMITS;
+    if (!torque_model_valid(&p->torques))
+        return CASCADE_ETORQUES;
     plan_init(&s->plan, &p->plan);
     cascade_reset(s);
     return CASCADE_PARAMS_OK;
@@ -48,7 +50,7 @@ void cascade_reset(struct cascade *s)
 // Returns ctrl_status bits; writes the command v and advances the integrals (cascade.h).
 uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v)
 {
-    // e_w = theta*' + k_theta (theta* - theta) - omega; iq* = (J theta*'' + B theta*' + J (k_omega e_w + I0)) / Km;
+    // e_w = theta*' + k_theta (theta* - theta) - omega; iq* = (J theta*'' + B theta*' + J (k_omega e_w + I0) + E) / Km;
     // v_dq = kp (i_dq* - i_dq) + I12 [+ decoupling]; v = inverse Park; I += ki Ts e unless max|v| > v_limit.
     const struct motor_params *m = &s->p.motor;
     const fs_real *I = s->integral;
@@ -63,7 +65,9 @@ uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v
     plan_flag(&s->plan, t, ref);
     e_w = ref[PLAN_DTHETA] + s->k_theta * (ref[PLAN_THETA] - y[3]) - y[2];
     accel = s->k_omega * e_w + I[0];
-    iq_ref = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA] + m->J * accel) / m->Km;
+    iq_ref = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA] + m->J * accel
+              + torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]))
+             / m->Km;
     // Park transform by Nr theta: id = ia c + ib s, iq = -ia s + ib c.
     fs_sincos(m->Nr * y[3], &sn, &cs);
     id = y[0] * cs + y[1] * sn;

@@ -8,16 +8,18 @@
 #include "fs_real.h"
 #include "motor.h"
 #include "plan.h"
+#include "torque_model.h"
 
 // cffi:begin
 // Errors of cascade_init: which group of parameters is invalid.
 enum cascade_param_error {
     CASCADE_PARAMS_OK = 0,
-    CASCADE_EMOTOR,   // motor_params_valid fails
-    CASCADE_EPLAN,    // plan_valid fails
-    CASCADE_EGAINS,   // a bandwidth not finite and > 0, or a gain derived from it overflows
-    CASCADE_EPERIOD,  // Ts not finite and > 0, or ki Ts overflows
-    CASCADE_ELIMITS,  // v_limit not > 0 (INFINITY is allowed: no limit)
+    CASCADE_EMOTOR,    // motor_params_valid fails
+    CASCADE_EPLAN,     // plan_valid fails
+    CASCADE_EGAINS,    // a bandwidth not finite and > 0, or a gain derived from it overflows
+    CASCADE_EPERIOD,   // Ts not finite and > 0, or ki Ts overflows
+    CASCADE_ELIMITS,   // v_limit not > 0 (INFINITY is allowed: no limit)
+    CASCADE_ETORQUES,  // torque_model_valid fails
 };
 
 // As flatstep.CascadeGains: k_theta = w / 3, k_omega = 2.25 w, ki_omega = 0.75 w^2 for w = position_bandwidth.
@@ -31,8 +33,9 @@ struct cascade_params {
     struct motor_params motor;  // the controller's nominal model
     struct plan plan;           // the move
     struct cascade_gains gains;
-    fs_real Ts;       // control period [s] of the integrators, > 0
-    fs_real v_limit;  // the bus its anti-windup knows [V], > 0; INFINITY: no limit
+    fs_real Ts;                   // control period [s] of the integrators, > 0
+    fs_real v_limit;              // the bus its anti-windup knows [V], > 0; INFINITY: no limit
+    struct torque_model torques;  // anti-cogging: the known torques E join iq* as E / Km (all zero: none)
 };
 
 // Caller-owned state of the cascade.
@@ -53,7 +56,7 @@ int cascade_init(struct cascade *s, const struct cascade_params *p);
 void cascade_reset(struct cascade *s);
 
 // Returns ctrl_status bits; writes the cascade's command v = (va, vb) for time t and y = (ia, ib, omega, theta,
-// theta'') (y[4] is not read) and advances the integrals by one period Ts, as CascadeFOC.step. v is not limited:
+// theta'') (y[4] is not read; iq* carries E(t, theta, omega) / Km of the torque model) and advances the integrals by one period Ts, as CascadeFOC.step. v is not limited:
 // CTRL_SATURATED says max(|va|, |vb|) > v_limit, and the integrals then hold (anti-windup). On a fault
 // (CTRL_NONFINITE: t, y[0..3] or an integral not finite; CTRL_OVERFLOW: v or an integral would not be finite)
 // v = (0, 0) and the state is left unchanged.

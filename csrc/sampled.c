@@ -27,7 +27,8 @@ static bool finite4(const fs_real x[4])
 int sampled_init(struct sampled *s, const struct sampled_params *p)
 {
     const fs_real zero[2] = {0, 0};
-    if (!(p->Ts > 0) || !fs_isfinite(p->Ts) || p->substeps < 1 || !motor_params_valid(&p->model))
+    if (!(p->Ts > 0) || !fs_isfinite(p->Ts) || p->substeps < 1 || !motor_params_valid(&p->model)
+        || !torque_model_valid(&p->torques))
         return SIM_EARGS;
     if (p->sensed && sensors_init(&s->sensors, &p->sensors) != 0)
         return SIM_EARGS;
@@ -43,15 +44,16 @@ int sampled_init(struct sampled *s, const struct sampled_params *p)
     s->sensed = p->sensed;
     s->observed = p->observed;
     s->model = p->model;
+    s->torques = p->torques;
     s->have_prev = false;
     s->theta_prev = 0;
     s->cancel = p->cancel;
     return SIM_OK;
 }
 
-// Returns nothing; writes what the controller sees at state x, y = (ia, ib, omega, theta, theta''), and the
-// torque of the measured currents at the estimated angle (for the observer's prediction).
-static void measure(struct sampled *s, const struct plant *plant, const fs_real x[4], const fs_real noise[2],
+// Returns nothing; writes what the controller sees at state x and time t, y = (ia, ib, omega, theta, theta''),
+// and the torque of the measured currents at the estimated angle less the known torques (for the observer).
+static void measure(struct sampled *s, const struct plant *plant, fs_real t, const fs_real x[4], const fs_real noise[2],
                     fs_real y[5], fs_real *torque)
 {
     fs_real r[3] = {x[3], x[0], x[1]}, z[4];  // (theta_m, ia_m, ib_m)
@@ -62,7 +64,8 @@ static void measure(struct sampled *s, const struct plant *plant, const fs_real 
     if (s->observed) {
         observer_correct(&s->observer, r[0]);
         z[0] = r[1], z[1] = r[2], z[2] = 0, z[3] = s->observer.x[0];
-        *torque = motor_torque(&s->model, z);
+        *torque = motor_torque(&s->model, z)
+                  - torque_model_torque(&s->torques, s->model.Nr, t, s->observer.x[0], s->observer.x[1]);
         y[2] = s->observer.x[1];
         y[3] = s->observer.x[0];
         y[4] = (*torque - s->model.B * s->observer.x[1] - observer_load(&s->observer)) / s->model.J;
@@ -138,7 +141,7 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
         t = (fs_real)k * s->Ts;
         for (m = 0; m < 4; m++)
             x_out[4 * k + m] = x[m];
-        measure(s, plant, x, noise ? &noise[2 * k] : quiet, y, &torque);
+        measure(s, plant, t, x, noise ? &noise[2 * k] : quiet, y, &torque);
         status = ctrl->step(ctrl->self, t, y, v);  // 0 V on a fault: the drive de-energises for this period
         st->controller_status |= status;
         if (status & CTRL_FAULTS && st->fault_periods++ == 0)

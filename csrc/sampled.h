@@ -12,6 +12,7 @@
 #include "observer.h"
 #include "plant.h"
 #include "sensors.h"
+#include "torque_model.h"
 #include "sim.h"
 
 // cffi:begin
@@ -29,6 +30,8 @@ struct sampled_params {
     struct motor_params model;        // the controller's nominal model: the observer's torque, the bridge's
                                       // start voltage R x0 (the start equilibrium)
     const volatile uint32_t *cancel;  // NULL, or a flag another thread sets to stop the run (SIM_ECANCELLED)
+    struct torque_model torques;      // the torques the controller knows beyond eq. (1); the observer predicts
+                                      // with the motor torque less them (all zero: none)
 };
 
 // Caller-owned state of a run: the parts' states and the previous encoder angle.
@@ -41,6 +44,7 @@ struct sampled {
     struct observer observer;
     struct drive drive;
     struct motor_params model;
+    struct torque_model torques;
     fs_real theta_prev;  // last angle the controller saw (backward difference)
     bool have_prev;
     const volatile uint32_t *cancel;
@@ -51,7 +55,7 @@ int sampled_init(struct sampled *s, const struct sampled_params *p);
 
 // Returns SIM_OK or an error sim_status; resets the parts and the controller and runs n_periods periods from
 // x0 at t_k = k Ts. Period k: read the sensors with noise sample k (noise: (n_periods + 1) x 2, or NULL for
-// none), correct the observer, step the controller (0 V on a fault), saturate and delay in the drive,
+// none), correct the observer (its acceleration and prediction use the motor torque less the known torques), step the controller (0 V on a fault), saturate and delay in the drive,
 // integrate the plant (plant_rhs: eq. (1), load and effects) by RK4 substeps under the applied voltage (switched
 // PWM: one RK4 step per PWM segment, drive_pwm_period of the applied voltage and the currents at t_k, repeated
 // for each PWM period), predict the observer. Writes, at every t_k, k = 0..n_periods, the plant state into x_out

@@ -16,12 +16,16 @@
 #endif
 
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
-// v_limit = 1e3 V and rho_min = 1e-6 A.
+// v_limit = 1e3 V, rho_min = 1e-6 A and no torque model.
 void smc_params_default(struct smc_params *p)
 {
     struct motor_params m = {FS_C(8.4), FS_C(0.010), FS_C(0.05), FS_C(3.6e-6), FS_C(1e-4), 50};
     struct plan pl = {0, FS_C(0.02), FS_C(0.4), FS_C(0.4), FS_C(0.02), FS_C(0.04)};
     struct smc_gains g = {100, 100, FS_C(0.005), FS_C(0.005), FS_C(0.8), 10, 0};
+    struct torque_model none = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
+    struct smc_loss_aware plan_rho = {0, 0};
+    p->torques = none;
+    p->loss_aware = plan_rho;
     p->motor = m;
     p->plan = pl;
     p->gains = g;
@@ -53,6 +57,11 @@ int smc_init(struct smc *s, const struct smc_params *p)
         return SMC_EMEASUREMENT;
     if (!positive(p->v_limit) || p->v_limit < FS_C(1e-3) || !positive(p->rho_min))
         return SMC_ELIMITS;
+    if (!torque_model_valid(&p->torques))
+        return SMC_ETORQUES;
+    if (!(fs_isfinite(p->loss_aware.rho_hold) && p->loss_aware.rho_hold >= 0 && fs_isfinite(p->loss_aware.margin)
+          && p->loss_aware.margin >= 0 && p->loss_aware.margin < FS_C(1.5707963267948966)))
+        return SMC_EPLAN;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
@@ -94,6 +103,18 @@ SMC_INLINE void smc_hold(const struct smc *s, const fs_real y[5], fs_real sN, fs
     v[1] = m->R * ib + m->L * s->hold_lambda * (ib - y[1]) + emf * cN;
 }
 
+// Returns nothing; replaces rho and rho' of the flag ref at time t by the loss-aware rho*(t) (smc.h).
+static void smc_loss_aware_rho(const struct smc *s, fs_real t, fs_real ref[PLAN_FLAG_LEN])
+{
+    const struct motor_params *m = &s->p.motor;
+    fs_real th = ref[PLAN_THETA], w = ref[PLAN_DTHETA], a = ref[PLAN_DDTHETA], A, dA, c, h = s->p.loss_aware.rho_hold;
+    A = m->J * a + m->B * w + torque_model_torque(&s->p.torques, m->Nr, t, th, w);
+    dA = m->J * ref[PLAN_DDDTHETA] + m->B * a + torque_model_rate(&s->p.torques, m->Nr, t, th, w, a);
+    c = m->Km * fs_cos(s->p.loss_aware.margin);
+    ref[PLAN_RHO] = fs_sqrt(h * h + (A / c) * (A / c));
+    ref[PLAN_DRHO] = A * dA / (c * c) / ref[PLAN_RHO];
+}
+
 // Returns the status bits of the unguarded law; writes its voltages (0 V on a fault) and, when w is not NULL,
 // its intermediate values (nr_trig: NULL, or the caller's sin and cos of Nr theta).
 SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], const fs_real *nr_trig, fs_real v[2],
@@ -101,10 +122,12 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
 {
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
-    fs_real own[PLAN_FLAG_LEN], *ref = w ? w->flag : own, rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2;
+    fs_real own[PLAN_FLAG_LEN], *ref = w ? w->flag : own, rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2, E;
     struct flat_angles a;
     int flat;
     plan_flag(&s->plan, t, ref);
+    if (s->p.loss_aware.rho_hold > 0)
+        smc_loss_aware_rho(s, t, ref);
     if (w)
         w->have = SMC_HAVE_FLAG;
     // rho = hypot(ia, ib); the square root of the sum of squares is as accurate unless it over- or underflows.
@@ -123,8 +146,9 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     }
     a.sdelta = sN * a.cphi + cN * a.sphi;
     a.cdelta = cN * a.cphi - sN * a.sphi;
-    // theta'' measured, or from the zero-load model in motor_acceleration's operation order.
-    acc = s->p.measurement == SMC_IDEAL ? y[4] : (m->Km * (y[1] * cN - y[0] * sN) - m->B * y[2]) / m->J;
+    // theta'' measured, or from the model under the known torques E in motor_acceleration's operation order.
+    E = torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]);
+    acc = s->p.measurement == SMC_IDEAL ? y[4] : (m->Km * (y[1] * cN - y[0] * sN) - m->B * y[2] - E) / m->J;
     e = y[3] - ref[PLAN_THETA];
     de = y[2] - ref[PLAN_DTHETA];
     dde = acc - ref[PLAN_DDTHETA];
@@ -136,7 +160,9 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     } else {
         gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
         gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
-        flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2], v);
+        // The known torques: A = J theta'' + B theta' + E, and E' joins the jerk's torque as gamma2 + E' / J.
+        gamma2 = gamma2 + torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc) / m->J;
+        flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2] + E, v);
     }
     if (w) {
         w->rho = rho;

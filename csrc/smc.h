@@ -7,6 +7,7 @@
 #include "fs_real.h"
 #include "motor.h"
 #include "plan.h"
+#include "torque_model.h"
 
 // cffi:begin
 
@@ -27,7 +28,15 @@ enum smc_status {
 };
 
 // Errors of smc_init: which group of parameters is invalid.
-enum smc_param_error { SMC_PARAMS_OK = 0, SMC_EMOTOR, SMC_EPLAN, SMC_EGAINS, SMC_EMEASUREMENT, SMC_ELIMITS };
+enum smc_param_error {
+    SMC_PARAMS_OK = 0,
+    SMC_EMOTOR,
+    SMC_EPLAN,
+    SMC_EGAINS,
+    SMC_EMEASUREMENT,
+    SMC_ELIMITS,
+    SMC_ETORQUES,  // torque_model_valid fails
+};
 
 // Design constants; the paper's are W1 = W2 = 100, eps1 = eps2 = 0.005, xi = 0.8, wn = 10.
 struct smc_gains {
@@ -38,13 +47,22 @@ struct smc_gains {
                            // damping ratio (smc_step)
 };
 
+// The loss-aware rho*(t) = sqrt(rho_hold^2 + (A* / (Km cos margin))^2), A* = J theta*'' + B theta*' + E at the
+// planned angle (flatstep.plan.loss_aware); rho_hold = 0: the plan's rho.
+struct smc_loss_aware {
+    fs_real margin;    // [rad], in [0, pi/2)
+    fs_real rho_hold;  // [A], >= 0
+};
+
 struct smc_params {
     struct motor_params motor;  // the controller's model of the motor
     struct plan plan;           // the planned flat outputs
     struct smc_gains gains;
-    int measurement;  // enum smc_measurement
-    fs_real v_limit;  // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
-    fs_real rho_min;  // smallest current magnitude the law acts on [A], > 0
+    int measurement;                   // enum smc_measurement
+    fs_real v_limit;                   // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
+    fs_real rho_min;                   // smallest current magnitude the law acts on [A], > 0
+    struct torque_model torques;       // torques the law knows beyond eq. (1); all zero: the paper's law bit for bit
+    struct smc_loss_aware loss_aware;  // rho_hold > 0: track the loss-aware rho*(t) instead of the plan's rho
 };
 
 struct smc {
@@ -70,13 +88,13 @@ struct smc_terms {
     fs_real rho;                  // sqrt(ia^2 + ib^2) (hypot where the squares would over- or underflow)
     fs_real sphi, cphi;           // sin phi = ia / rho, cos phi = ib / rho (phi = atan2(ia, ib))
     fs_real snr, cnr;             // sin and cos of Nr theta
-    fs_real acc;                  // the theta'' the law used: y[4], or the zero-load model's
+    fs_real acc;                  // the theta'' the law used: y[4], or the model's under the known torques
     fs_real s1, s2;               // the sliding variables of eq. (12)
     uint32_t have;                // SMC_HAVE_* bits; the other fields are unset
 };
 
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
-// v_limit = 1e3 V and rho_min = 1e-6 A.
+// v_limit = 1e3 V, rho_min = 1e-6 A and no torque model.
 void smc_params_default(struct smc_params *p);
 
 // Returns SMC_PARAMS_OK, or the smc_param_error naming the invalid group (s is then left unusable).

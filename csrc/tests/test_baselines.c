@@ -33,6 +33,7 @@ static void cascade_defaults(struct cascade_params *p)
     p->gains.decoupling = true;
     p->Ts = TS;
     p->v_limit = INFINITY;
+    p->torques = (struct torque_model){0, 4, 0, 0, 0.01, 0, 0, 0, 1};
 }
 
 // Returns nothing; fills p with the paper's motor and move, the design rule's poles, the zero-load model.

@@ -276,8 +276,16 @@ static double max_error(const struct smc *s, const double *x, int k0, int k1)
 // Returns 0 after the sampled-loop checks.
 static int loop_checks(void)
 {
-    struct sampled_params p = {
-        5e-5, 4, false, false, drive_sensors(), {0}, {INFINITY, false, DRIVE_AVERAGED, 0, 0}, {0, 0, 0, 0, 0, 0}, NULL};
+    struct sampled_params p = {5e-5,
+                               4,
+                               false,
+                               false,
+                               drive_sensors(),
+                               {0},
+                               {INFINITY, false, DRIVE_AVERAGED, 0, 0},
+                               {0, 0, 0, 0, 0, 0},
+                               NULL,
+                               {0, 0, 0, 0, 0, 0, 0, 0, 0}};
     struct plant plant;
     struct sim_stats st;
     struct sampled s;

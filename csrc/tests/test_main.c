@@ -22,8 +22,10 @@ int main(int argc, char **argv)
         test_drive();
     else if (strcmp(suite, "baselines") == 0)
         test_baselines();
+    else if (strcmp(suite, "dq_smc") == 0)
+        test_dq_smc();
     else {
-        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines\n", argv[0]);
+        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines | dq_smc\n", argv[0]);
         return 2;
     }
     printf("%s: %d checks, %d failed\n", suite, check_count, check_failures);

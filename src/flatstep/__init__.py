@@ -8,6 +8,7 @@ from .control import (
     CascadeFOC,
     CascadeGains,
     Controller,
+    DQFlatnessSMC,
     ExactLinearization,
     FlatnessSMC,
     LinearizationGains,
@@ -25,8 +26,11 @@ from .loop.reference import DriveLoop
 from .loop.sensors import Sensors
 from .model.equilibria import CriticalPoint, equilibrium_currents, rest_positions, stable_angle
 from .model.flat import FlatFlag, cartesian, flat_to_state, polar, polar_rhs, state_to_flat
+from .model.flat_dq import DQFlag, dq_to_state, state_to_dq
 from .model.motor import PRESETS, MotorParams, rhs
 from .model.plant import Plant, PlantEffects
+from .model.torque_model import TorqueModel
+from .plan.d_current import DCurrentPlan
 from .plan.feasibility import FeasibilityReport, InfeasiblePlanError, check_feasibility
 from .plan.rest_to_rest import PAPER_PLAN, RestToRest, point_to_point, psi
 from .studies.batch import run_batch, scenario_grid
@@ -36,13 +40,14 @@ from .studies.scenario import PAPER_SCENARIOS, Scenario
 __version__ = "0.1.0"
 
 __all__ = [
-    "MotorParams", "PRESETS", "rhs", "Plant", "PlantEffects",
+    "MotorParams", "PRESETS", "rhs", "Plant", "PlantEffects", "TorqueModel",
     "CriticalPoint", "rest_positions", "stable_angle", "equilibrium_currents",
     "FlatFlag", "polar", "cartesian", "polar_rhs", "flat_to_state", "state_to_flat",
-    "RestToRest", "PAPER_PLAN", "point_to_point", "psi",
+    "DQFlag", "dq_to_state", "state_to_dq",
+    "RestToRest", "PAPER_PLAN", "point_to_point", "psi", "DCurrentPlan",
     "FeasibilityReport", "InfeasiblePlanError", "check_feasibility",
-    "Controller", "FlatnessSMC", "SMCGains", "Microstepping", "MicrostepGains", "CascadeFOC", "CascadeGains",
-    "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "make_controller",
+    "Controller", "FlatnessSMC", "SMCGains", "DQFlatnessSMC", "Microstepping", "MicrostepGains", "CascadeFOC",
+    "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "make_controller",
     "Drive", "Sensors", "Observer", "DriveLoop", "Continuous",
     "simulate", "SimResult",
     "Scenario", "PAPER_SCENARIOS", "run_batch", "scenario_grid", "BatchWriteError",

@@ -42,6 +42,7 @@ from .loop.observers import Observer
 from .loop.sensors import Sensors
 from .model.motor import MotorParams
 from .model.plant import PlantEffects
+from .model.torque_model import TorqueModel
 
 #: Names of the columns of :func:`result_columns`, in the order of ``RES_*`` in csrc/arrays.h.
 RESULT_COLUMNS = ("va", "vb", "acc", "rho", "phi", "theta_ref", "omega_ref", "rho_ref", "ia_ref", "ib_ref",
@@ -180,13 +181,17 @@ def drive_unsupported(drive: Optional[Drive] = None, sensors: Optional[Sensors] 
 
 
 def _loop_fields(model: MotorParams, Ts: float, substeps: int, drive: Optional[Drive], sensors: Optional[Sensors],
-                 observer: Optional[Observer], compute_delay: bool) -> dict[str, Any]:
-    """The fields of a ``struct sampled_params``: the parts of the drive loop (``None``: ideal)."""
+                 observer: Optional[Observer], compute_delay: bool,
+                 torques: Optional[TorqueModel] = None) -> dict[str, Any]:
+    """The fields of a ``struct sampled_params``: the parts of the drive loop (``None``: ideal).
+
+    ``torques``: the controller's known torques, which the observer predicts with (``None``: none).
+    """
     why = drive_unsupported(drive, sensors)
     if why is not None:
         raise ValueError(f"the C sampled loop does not model {why}; use engine='python'")
     p: dict[str, Any] = dict(Ts=Ts, substeps=substeps, sensed=sensors is not None, observed=observer is not None,
-                             model=_motor(model),
+                             model=_motor(model), torques=torques.as_dict() if torques is not None else {},
                              drive=dict(v_bus=drive.v_bus if drive is not None else np.inf,
                                         compute_delay=bool(compute_delay)))
     if drive is not None and drive.pwm == "switched":
@@ -260,7 +265,8 @@ def run_sampled(controller: Controller, motor: MotorParams, load: float, x0: Arr
     """
     n1 = n_periods + 1
     noise_rows = _noise(sensors, n1, noise)
-    fields = _loop_fields(controller.motor, Ts, substeps, drive, sensors, observer, compute_delay)
+    fields = _loop_fields(controller.motor, Ts, substeps, drive, sensors, observer, compute_delay,
+                          getattr(controller, "observer_torques", None))
     bound = controller_struct(controller)
     x0v = _vec(x0)
     X, V, Y = np.empty((n1, 4)), np.empty((n1, 2)), np.empty((n1, 5))
@@ -318,7 +324,7 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         c.ctrl = bound.iface[0]
         c.plant = _plant_fields(r["motor"], r["load"], r.get("effects"))
         c.loop = _loop_fields(ctrl.motor, r["Ts"], r["substeps"], r.get("drive"), r.get("sensors"),
-                              r.get("observer"), r.get("compute_delay", False))
+                              r.get("observer"), r.get("compute_delay", False), getattr(ctrl, "observer_torques", None))
         c.reference = ctrl.plan.as_dict()
         c.n_periods = r["n_periods"]
         c.x0 = [float(v) for v in r["x0"]]

@@ -23,6 +23,11 @@ fastest such set with a double pole at :math:`w` is :math:`\{w, w, w/4\}` (the i
 of the bandwidth, the usual rule): :math:`k_\omega = 2.25w`, :math:`k_\theta = w/3`,
 :math:`k_{i\omega} = 0.75w^2`, with :math:`w = \omega_n = \lambda/4`, the sliding controller's error
 bandwidth. Anti-windup: every integrator holds while the bus limits.
+
+**Anti-cogging** (``torques``, a :class:`~flatstep.model.torque_model.TorqueModel`, as servo firmwares calibrate
+it): the known torques :math:`E(t, \hat\theta, \hat\omega)` (detent, friction, load) join the q-current command,
+:math:`i_q^* \mathrel{+}= E/K_m`, tracked through the current loop; none by default. As in firmware the drive's
+observer does not know them; ``model_observer=True`` gives them to the observer too, as the flatness laws do.
 """
 from __future__ import annotations
 
@@ -34,6 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
+from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, pi_integrate, pi_output
@@ -89,6 +95,10 @@ class CascadeFOC(BaselineController[CascadeGains]):
         ``"ideal"``), as for :class:`~flatstep.control.smc.FlatnessSMC`; the acceleration is not used.
     v_limit : float
         The bus voltage its anti-windup knows [V].
+    torques : TorqueModel
+        The anti-cogging: the known torques that join the q-current command (default none).
+    model_observer : bool
+        Give ``torques`` to the drive loop's observer as well (default: no, as firmware does).
     """
 
     #: The C twin: csrc/cascade.h.
@@ -97,11 +107,20 @@ class CascadeFOC(BaselineController[CascadeGains]):
     control_period: float
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: CascadeGains, *, control_period: float,
-                 measurement: str = "observer", v_limit: float = math.inf) -> None:
+                 measurement: str = "observer", v_limit: float = math.inf, torques: TorqueModel = NO_TORQUES,
+                 model_observer: bool = False) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
                          v_limit=v_limit)
+        if not isinstance(torques, TorqueModel):
+            raise ValueError(f"torques={torques!r} is not a TorqueModel")
+        self.torques, self.model_observer = torques, bool(model_observer)
         self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
         self.pi_omega = PIGains(gains.k_omega, gains.ki_omega)
+
+    @property
+    def observer_torques(self) -> Optional[TorqueModel]:
+        """The torques the drive loop's observer predicts with: ``torques`` with ``model_observer``, else none."""
+        return self.torques if self.model_observer else None
 
     def initial_state(self) -> NDArray[np.float64]:
         """Integrals (velocity loop [rad/s^2], d and q current loops [V]), all zero.
@@ -119,7 +138,8 @@ class CascadeFOC(BaselineController[CascadeGains]):
         ref = self.plan.flag(t)
         e_omega = float(ref.dtheta + g.k_theta * (ref.theta - theta) - omega)
         accel = pi_output(self.pi_omega, e_omega, integral[0])
-        iq_ref = (m.J * ref.ddtheta + m.B * ref.dtheta + m.J * accel) / m.Km
+        known = float(self.torques.torque(t, theta, omega, m.Nr))  # the anti-cogging (and friction, load) torque
+        iq_ref = (m.J * ref.ddtheta + m.B * ref.dtheta + m.J * accel + known) / m.Km
         p = m.Nr * theta
         i_d, i_q = park(ia, ib, p)
         e_i = np.array([0.0 - i_d, iq_ref - i_q], dtype=float)
@@ -137,5 +157,5 @@ class CascadeFOC(BaselineController[CascadeGains]):
         g = self.gains
         return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
                     gains=dict(current_bandwidth=g.current_bandwidth, position_bandwidth=g.position_bandwidth,
-                               decoupling=g.decoupling),
+                               decoupling=g.decoupling), torques=self.torques.as_dict(),
                     Ts=self.control_period, v_limit=self.v_limit)

@@ -8,6 +8,13 @@ r"""The paper's flatness + sliding-mode law, eqs. (12)-(14), corrected, with the
 and the voltages are the flat inverse (eq. 9) with :math:`\dot\rho \to \Gamma_1`,
 :math:`\theta^{(3)} \to \Gamma_2`, evaluated at the measured state (:func:`flatstep.model.flat.flat_voltages`).
 
+**Known torques** (``torques``, a :class:`~flatstep.model.torque_model.TorqueModel`, not in the paper). The
+torques :math:`E` it knows beyond eq. (1) (detent, Coulomb friction, a known load) enter the flat inverse as
+:math:`A = J\ddot\theta + B\dot\theta + E` and :math:`J\theta^{(3)} + B\ddot\theta \to J\Gamma_2 + B\ddot\theta +
+\dot E`, and the ``model`` acceleration as :math:`J\ddot\theta = K_m(i_b\cos N_r\theta - i_a\sin N_r\theta) -
+B\dot\theta - E`: the law then cancels them before they show as an error. With no torques (the default) the law is
+eqs. (12)-(14) bit for bit.
+
 **Hold** (``SMCGains.hold_damping``, not in the paper). On a quantized encoder the law above, fed by an
 observer, hunts across a count edge at rest (docs/drive.md, "Standstill"). With ``hold_damping`` = zeta, from
 ``plan.tf`` on the law pins the current vector at the electrical angle of the target, the magnetic detent of
@@ -33,9 +40,11 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..model.flat import flat_voltages, polar
+from ..model.flat import FlatFlag, flat_voltages, polar
 from ..model.motor import MotorParams
 from ..model.motor import acceleration as motor_acceleration
+from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_finite, check_quantity
 
@@ -97,6 +106,10 @@ class FlatnessSMC:
         assumption); ``"model"``: computed from the measured state by the zero-load model,
         ``J theta'' = Km (ib cos Nr theta - ia sin Nr theta) - B omega``; ``"observer"``: the estimate of a
         :class:`~flatstep.loop.observers.Observer`, passed by the simulator like the ideal one.
+    torques : TorqueModel
+        The torques the law knows beyond eq. (1) (module docstring; default none).
+    loss_aware : LossAwareRho, optional
+        Track the loss-aware ``rho*(t)`` (:mod:`flatstep.plan.loss_aware`) instead of the plan's ``rho``.
     """
 
     #: The C twin: csrc/smc.h (``struct smc``, ``smc_init``, ``smc_controller``).
@@ -105,30 +118,46 @@ class FlatnessSMC:
     c_v_limit, c_rho_min = 1e3, 1e-6
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = SMCGains(),
-                 measurement: str = "ideal") -> None:
+                 measurement: str = "ideal", *, torques: TorqueModel = NO_TORQUES,
+                 loss_aware: Optional[LossAwareRho] = None) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
+        if not isinstance(torques, TorqueModel):
+            raise ValueError(f"torques={torques!r} is not a TorqueModel")
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
+        if loss_aware is not None and not isinstance(loss_aware, LossAwareRho):
+            raise ValueError(f"loss_aware={loss_aware!r} is not a LossAwareRho (or None)")
+        self.torques, self.loss_aware = torques, loss_aware
 
-    def acceleration(self, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> NDArray[np.float64]:
+    def reference(self, t: ArrayLike) -> FlatFlag:
+        """The flat flag the law tracks at times ``t``: the plan's, with the loss-aware ``rho*`` if chosen."""
+        ref = self.plan.flag(t)
+        if self.loss_aware is None:
+            return ref
+        rho, drho = self.loss_aware.reference(ref, t, self.motor, self.torques)
+        return ref._replace(rho=rho, drho=drho)
+
+    def acceleration(self, x: ArrayLike, ddtheta: Optional[ArrayLike] = None,
+                     t: ArrayLike = 0.0) -> NDArray[np.float64]:
         """The acceleration theta'' as the controller sees it.
 
-        The given ``ddtheta`` in ``ideal`` and ``observer`` mode; in ``model`` mode the zero-load model of the
-        measured state, :func:`flatstep.model.motor.acceleration`.
+        The given ``ddtheta`` in ``ideal`` and ``observer`` mode; in ``model`` mode the model of the measured state
+        under the known torques at time ``t``, :func:`flatstep.model.motor.acceleration` with load ``E``.
         """
         if self.measurement != "model":
             if ddtheta is None:
                 raise ValueError(f"measurement={self.measurement!r} needs the acceleration ddtheta; "
                                  "use measurement='model' to compute it from the state")
             return np.asarray(ddtheta, dtype=float)
-        return motor_acceleration(x, self.motor)
+        _, _, omega, theta = np.asarray(x, dtype=float)
+        return motor_acceleration(x, self.motor, self.torques.torque(t, theta, omega, self.motor.Nr))
 
     def sliding_variables(self, t: ArrayLike, x: ArrayLike,
                           ddtheta: Optional[ArrayLike] = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Return ``(s1, s2)`` of eq. (12) at times ``t`` for states ``x`` (vectorized)."""
         ia, ib, omega, theta = np.asarray(x, dtype=float)
-        ref = self.plan.flag(t)
-        acc = self.acceleration(x, ddtheta)
+        ref = self.reference(t)
+        acc = self.acceleration(x, ddtheta, t)
         g = self.gains
         return (np.hypot(ia, ib) - ref.rho,
                 acc - ref.ddtheta + g.alpha2 * (omega - ref.dtheta) + g.alpha1 * (theta - ref.theta))
@@ -137,15 +166,16 @@ class FlatnessSMC:
         """Phase voltages (va, vb) of eqs. (13)-(14), vectorized over time."""
         ia, ib, omega, theta = np.asarray(x, dtype=float)
         m, g = self.motor, self.gains
-        ref = self.plan.flag(t)
+        ref = self.reference(t)
         rho, phi = polar(ia, ib)
-        acc = self.acceleration(x, ddtheta)
+        acc = self.acceleration(x, ddtheta, t)
         e, de, dde = theta - ref.theta, omega - ref.dtheta, acc - ref.ddtheta
         s1 = rho - ref.rho
         s2 = dde + g.alpha2 * de + g.alpha1 * e
         gamma1 = ref.drho - g.W1 * s1 / (np.abs(s1) + g.eps1)
         gamma2 = ref.dddtheta - g.alpha2 * dde - g.alpha1 * de - g.W2 * s2 / (np.abs(s2) + g.eps2)
-        v = flat_voltages(m, rho, gamma1, theta, omega, acc, gamma2, phi, m.J * acc + m.B * omega)
+        E, dE = self.torques.torque(t, theta, omega, m.Nr), self.torques.torque_rate(t, theta, omega, acc, m.Nr)
+        v = flat_voltages(m, rho, gamma1, theta, omega, acc, gamma2 + dE / m.J, phi, m.J * acc + m.B * omega + E)
         if g.hold_damping is None:
             return v
         return np.where(np.asarray(t) >= self.plan.tf, self.hold_voltages(ia, ib, omega, theta), v)
@@ -168,6 +198,11 @@ class FlatnessSMC:
         return np.array([m.R * ia_ref + m.L * lam * (ia_ref - ia) - emf * np.sin(Nr_theta),
                          m.R * ib_ref + m.L * lam * (ib_ref - ib) + emf * np.cos(Nr_theta)])
 
+    @property
+    def observer_torques(self) -> TorqueModel:
+        """The torques the drive loop's observer predicts with: the law's own (the observer shares its model)."""
+        return self.torques
+
     def initial_state(self) -> None:
         """Return ``None``: the law is static, no state between steps."""
         return None
@@ -187,5 +222,6 @@ class FlatnessSMC:
                     gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn,
                                hold_damping=g.hold_damping or 0.0),
                     # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state
-                    measurement=1 if self.measurement == "model" else 0,
+                    measurement=1 if self.measurement == "model" else 0, torques=self.torques.as_dict(),
+                    loss_aware=self.loss_aware.as_dict() if self.loss_aware else dict(margin=0.0, rho_hold=0.0),
                     v_limit=self.c_v_limit, rho_min=self.c_rho_min)

@@ -15,26 +15,40 @@ that none of them is crippled by the rule (halving or doubling does not make it 
 from __future__ import annotations
 
 import math
-from typing import Union
+from typing import Optional, Union
 
 from ..model.motor import MotorParams
+from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
 from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
+from .dq_smc import DQFlatnessSMC
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .smc import FlatnessSMC, SMCGains
 
-#: The controllers a scenario can name (``[controller] type``), the paper's first.
-CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization")
+#: The controllers a scenario can name (``[controller] type``), the paper's first. The ``_ff`` types are the
+#: flatness laws and the cascade with the scenario's torque model (``[feedforward]``, a
+#: :class:`~flatstep.model.torque_model.TorqueModel`): the flatness laws' feedforward, the cascade's anti-cogging.
+CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff",
+                    "smc_la_ff", "cascade_ff", "cascade_model")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
-          "exact_linearization": "exact linearization"}
+          "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
+          "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q SMC + ff",
+          "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
+          "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff"}
+#: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
+SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff")
+#: The types that need a torque model.
+FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model")
 #: The sliding controller's default gains, the paper's.
 _PAPER_SMC_GAINS = SMCGains()
 #: What :func:`make_controller` returns.
-AnyController = Union[FlatnessSMC, Microstepping, CascadeFOC, ExactLinearization]
+AnyController = Union[FlatnessSMC, DQFlatnessSMC, Microstepping, CascadeFOC, ExactLinearization]
 
 
 def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
@@ -49,26 +63,44 @@ def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[floa
 
 def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_period: float | None,
                     measurement: str, smc_gains: SMCGains = _PAPER_SMC_GAINS, v_limit: float = math.inf,
-                    bandwidth_scale: float = 1.0, compute_delay: bool = False) -> AnyController:
+                    bandwidth_scale: float = 1.0, compute_delay: bool = False,
+                    torques: Optional[TorqueModel] = None,
+                    d_current: DCurrentPlan = ZERO_D_CURRENT,
+                    loss_aware: Optional[LossAwareRho] = None) -> AnyController:
     """The controller ``kind`` (one of :data:`CONTROLLER_TYPES`) for this motor model, plan and drive.
 
-    ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` with ``smc_gains`` (the scenario's, designed or
-    given); the baselines are tuned by the rules above and need ``control_period``.
+    ``smc`` is :class:`~flatstep.control.smc.FlatnessSMC` and ``dq_smc``
+    :class:`~flatstep.control.dq_smc.DQFlatnessSMC`, both with ``smc_gains`` (the scenario's, designed or given);
+    the baselines are tuned by the rules above and need ``control_period``. ``smc_ff``, ``dq_smc_ff`` and ``cascade_ff``
+    are the same laws with the known ``torques`` (required for them, read by no other type), whose observer shares
+    them except the cascade's (anti-cogging as firmware does it); ``cascade_model`` gives them to its observer too.
+    The d-q flatness types track the planned ``d_current``; ``smc_la`` and ``smc_la_ff`` are the paper's law on the
+    ``loss_aware`` rho*(t) (:mod:`flatstep.plan.loss_aware`; default ``LossAwareRho.for_plan(plan)``).
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
-    if kind == "smc":
-        return FlatnessSMC(motor, plan, smc_gains, measurement)
+    if kind in FEEDFORWARD_TYPES and torques is None:
+        raise ValueError(f"controller type {kind!r} needs the torques it knows beyond eq. (1): give a TorqueModel "
+                         "(a [feedforward] table in a scenario file), or use the type without '_ff'")
+    known = torques if kind in FEEDFORWARD_TYPES and torques is not None else NO_TORQUES
+    if kind in ("smc", "smc_ff", "smc_la", "smc_la_ff"):
+        return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known,
+                           loss_aware=(loss_aware or LossAwareRho.for_plan(plan)) if kind in ("smc_la", "smc_la_ff")
+                           else None)
+    if kind in ("dq_smc", "dq_smc_ff"):
+        return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:
         raise ValueError(f"controller type {kind!r} is tuned from the control period (lambda = 0.3/Ts): give one "
-                         "([drive] control_rate); only 'smc' has gains of its own for continuous time")
+                         f"([drive] control_rate); only the flatness types {SMC_TYPES} have gains of their own for "
+                         "continuous time")
     scale = check_positive("bandwidth_scale", bandwidth_scale)
     lam, wn = (scale * w for w in bandwidths(control_period, compute_delay))
     if kind == "microstep":
         return Microstepping(motor, plan, MicrostepGains(lam), control_period=control_period,
                              measurement=measurement, v_limit=v_limit)
-    if kind == "cascade":
+    if kind in ("cascade", "cascade_ff", "cascade_model"):
         return CascadeFOC(motor, plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn),
-                          control_period=control_period, measurement=measurement, v_limit=v_limit)
+                          control_period=control_period, measurement=measurement, v_limit=v_limit, torques=known,
+                          model_observer=kind == "cascade_model")
     return ExactLinearization(motor, plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam),
                               control_period=control_period, measurement=measurement, v_limit=v_limit)

@@ -11,7 +11,9 @@ One control period k, at ``t_k = k Ts``:
    segments;
 5. the plant (eq. (1) plus any :class:`~flatstep.model.plant.PlantEffects`: detent, Coulomb friction, iron loss)
    is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
-6. the observer predicts the next angle, speed and load from the torque of the measured currents.
+6. the observer predicts the next angle, speed and load from the torque of the measured currents, less the
+   torques the controller's model knows beyond eq. (1) (its ``observer_torques``, a
+   :class:`~flatstep.model.torque_model.TorqueModel`, if it has one).
 
 This loop runs in Python, one period at a time: it is the specification the C engine is tested against,
 not the fast path.
@@ -25,8 +27,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..control.protocol import Controller
-from ..model.motor import MotorParams, acceleration, torque
+from ..model.motor import MotorParams, torque
 from ..model.plant import PlantEffects, plant_acceleration, plant_rhs
+from ..model.torque_model import TorqueModel
 from ..validate import check_bool, check_count, check_quantity
 from .drive import Drive
 from .observers import Observer
@@ -127,6 +130,7 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
         times at which the law faulted (``faults``; the drive then applied 0 V for that period).
     """
     Ts, model = loop.control_period, controller.motor
+    torques: Optional[TorqueModel] = getattr(controller, "observer_torques", None)  # what the observer also knows
     sensors, drive, observer = loop.sensors, loop.drive, loop.observer
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
     if observer is not None:
@@ -154,8 +158,9 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
         if observer is not None:
             xh = np.array([th_m] + [0.0] * (observer.order - 1)) if xh is None else xh + Lc * (th_m - xh[0])
             x_m = (ia_m, ib_m, xh[1], xh[0])  # measured currents, estimated speed and angle
-            Te = torque(x_m, model)
-            y = (*x_m, acceleration(x_m, model, xh[2] if observer.order > 2 else 0.0))
+            # the motor torque less the torques the controller knows (its torque model), as the C loop computes it
+            Te = torque(x_m, model) - (0.0 if torques is None else float(torques.torque(t, xh[0], xh[1], model.Nr)))
+            y = (*x_m, (Te - model.B * xh[1] - (xh[2] if observer.order > 2 else 0.0)) / model.J)
         elif sensors is None:
             y = (*x, float(plant_acceleration(x, plant, load, effects)))
         else:

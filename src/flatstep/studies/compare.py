@@ -25,7 +25,7 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..control.tuning import CONTROLLER_TYPES
+from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SMC_TYPES
 from ..engine.result import STATUSES, SimResult
 from ..plan.rest_to_rest import RestToRest
 from .batch import run_batch
@@ -102,6 +102,11 @@ def _check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
     return tuple(kinds)
 
 
+def scenario_kinds(scenario: Scenario) -> tuple[str, ...]:
+    """Every controller type the scenario can run: all of them, less the ``_ff`` ones without a torque model."""
+    return tuple(k for k in CONTROLLER_TYPES if scenario.torques is not None or k not in FEEDFORWARD_TYPES)
+
+
 def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band: Optional[float] = None,
             bandwidth_scale: float = 1.0, engine: str = "c") -> dict[str, dict[str, Any]]:
     """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects).
@@ -111,7 +116,7 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
     band = default_band(scenario) if band is None else band
     out: dict[str, dict[str, Any]] = {}
     for kind in _check_kinds(kinds):
-        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
+        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind not in SMC_TYPES else 1.0)
         r = sc.run(engine)
         out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.simulated_plant.motor.R),
                      "result": r, "faults": int(r.meta.get("controller_faults", 0)), "status": r.status,
@@ -143,7 +148,7 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
     errors = plant_errors(study)
     out: dict[str, dict[str, Any]] = {}
     for kind in _check_kinds(kinds):
-        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind != "smc" else 1.0)
+        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind not in SMC_TYPES else 1.0)
         runs = perturbed(sc, errors, f"/{kind}")
         rows = run_batch(runs, keep=KEEP, **batch_options)
         worst: dict[str, Optional[float]] = {}
@@ -159,7 +164,7 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
         out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed,
                      "statuses": statuses, "rows": rows}
         if log is not None:
-            log(f"{kind}{'' if bandwidth_scale == 1 or kind == 'smc' else f' x{bandwidth_scale:g}'} on "
+            log(f"{kind}{'' if bandwidth_scale == 1 or kind in SMC_TYPES else f' x{bandwidth_scale:g}'} on "
                 f"{len(rows)} plants")
     return out
 

@@ -14,7 +14,10 @@ from ..engine.simulate import check_run, simulate
 from ..loop.reference import DriveLoop
 from ..model.motor import MotorParams
 from ..model.plant import Plant
+from ..model.torque_model import TorqueModel
+from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.feasibility import FeasibilityReport, check_feasibility
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..validate import check_quantity
 
@@ -47,6 +50,13 @@ class Scenario:
     loop : DriveLoop, optional
         Sampled control in a drive (period, substeps, drive, sensors, observer, delay); ``None``:
         continuous-time control, as in the paper.
+    torques : TorqueModel, optional
+        The torques the ``_ff`` controller types know beyond eq. (1) (the feedforward; other types ignore it).
+    d_current : DCurrentPlan
+        The d current the d-q flatness types track (default 0; other types ignore it).
+    loss_aware : LossAwareRho
+        The loss-aware rho*(t) of the ``smc_la`` types (``None``: ``LossAwareRho.for_plan(plan)``; other types
+        ignore it).
     solver : Continuous, optional
         How continuous-time control is solved (``None``: the defaults of
         :class:`~flatstep.engine.settings.Continuous`); only without a loop.
@@ -65,6 +75,9 @@ class Scenario:
     loop: Optional[DriveLoop] = None
     solver: Optional[Continuous] = None
     t_end: float = 0.06
+    torques: Optional[TorqueModel] = None
+    d_current: DCurrentPlan = ZERO_D_CURRENT
+    loss_aware: Optional[LossAwareRho] = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "t_end", check_quantity("t_end", self.t_end))
@@ -73,7 +86,8 @@ class Scenario:
         if not isinstance(self.name, str):
             raise ValueError(f"Scenario.name={self.name!r} must be a string")
         for name, kind in (("motor", MotorParams), ("plan", RestToRest), ("gains", SMCGains), ("plant", Plant),
-                           ("loop", DriveLoop), ("solver", Continuous)):
+                           ("loop", DriveLoop), ("solver", Continuous), ("torques", TorqueModel),
+                           ("d_current", DCurrentPlan), ("loss_aware", LossAwareRho)):
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Scenario.{name}={value!r} is not a {kind.__name__}")
@@ -100,7 +114,8 @@ class Scenario:
         return make_controller(self.controller_type, self.motor, self.plan, control_period=self.control_period,
                                measurement=self.measurement, smc_gains=self.gains, v_limit=v_bus,
                                bandwidth_scale=self.bandwidth_scale,
-                               compute_delay=loop.compute_delay if loop is not None else False)
+                               compute_delay=loop.compute_delay if loop is not None else False,
+                               torques=self.torques, d_current=self.d_current, loss_aware=self.loss_aware)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""

@@ -24,6 +24,9 @@ from ..loop.reference import DriveLoop
 from ..loop.sensors import Sensors
 from ..model.motor import PRESETS, MotorParams
 from ..model.plant import Plant, PlantEffects
+from ..model.torque_model import TorqueModel
+from ..plan.d_current import DCurrentPlan
+from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..validate import InputError, check_bool, check_choice, check_count, check_quantity
 from .scenario import Scenario
@@ -33,17 +36,19 @@ EFFECT_KEYS = ("detent_torque", "coulomb_torque", "coulomb_speed", "magnetizing_
 T = TypeVar("T")
 SECTIONS: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "t_end", "motor", "plant", "plan", "controller", "drive", "sensors", "observer",
-         "load", "robustness"),
+         "load", "feedforward", "robustness"),
     "motor": MOTOR_KEYS,
     "plant": MOTOR_KEYS + ("scale",) + EFFECT_KEYS,
     "plan": ("theta1", "theta2", "rho1", "rho2", "t0", "tf"),
     "controller": ("type", "bandwidth_scale", "measurement", "W1", "W2", "eps1", "eps2", "xi", "wn", "hold_damping",
-                   "design", "uncertainty"),
+                   "design", "uncertainty", "weakening", "weakening_speed", "rho_margin", "rho_hold"),
     "drive": ("control_rate", "substeps", "compute_delay", "v_bus", "pwm", "f_pwm", "dead_time"),
     "sensors": ("encoder_counts", "encoder_offset", "current_bits", "current_range", "current_offset",
                 "current_noise", "delay", "seed"),
     "observer": ("bandwidth", "load_states"),
     "load": ("torque",),
+    "feedforward": ("detent_torque", "detent_harmonic", "detent_phase", "coulomb_torque", "coulomb_speed", "load",
+                    "load_step", "load_t0", "load_tf"),
     "robustness": ("relative_error", "parameters", "samples", "seed"),
 }
 
@@ -214,6 +219,12 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     if measurement is not None:
         measurement = _value(where, "controller", "measurement", partial(check_choice, "measurement",
                                                                          valid=MEASUREMENTS), measurement)
+    weakening = {k: ctrl.pop(k) for k in ("weakening", "weakening_speed") if k in ctrl}
+    d_current = _wrap(where, "controller", DCurrentPlan, **weakening)
+    rho_keys = {"rho_margin": "margin", "rho_hold": "rho_hold"}
+    given = {rho_keys[k]: ctrl.pop(k) for k in rho_keys if k in ctrl}
+    loss_aware = _wrap(where, "controller", LossAwareRho, **{"rho_hold": 0.5 * min(plan.rho1, plan.rho2), **given}
+                       ) if given else None
     observer = None
     if design:
         if period is None or drive is None:  # no control_rate: neither a period nor a drive
@@ -235,9 +246,11 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
     loop = None if period is None else _wrap(where, "drive", DriveLoop, control_period=period, substeps=substeps,
                                              compute_delay=compute_delay, drive=drive, sensors=sensors,
                                              observer=observer)
+    torques = _wrap(where, "feedforward", TorqueModel, **sec["feedforward"]) if "feedforward" in doc else None
     simulated = _wrap(where, "plant", Plant, motor=plant if plant is not None else motor, effects=effects, load=load)
     scenario = _wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
                      gains=gains, measurement=measurement, t_end=doc.get("t_end", 0.06), plant=simulated,
-                     loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale)
+                     loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale, torques=torques,
+                     d_current=d_current, loss_aware=loss_aware)
     robustness = _wrap(where, "robustness", Robustness, **sec["robustness"]) if "robustness" in doc else None
     return scenario, robustness

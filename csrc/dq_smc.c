@@ -1,0 +1,160 @@
+// dq_smc_init / dq_smc_reset / dq_smc_step: the law of flatstep.control.dq_smc, in its operation order.
+#include "dq_smc.h"
+
+// Returns true when x is finite and > 0.
+static bool positive(fs_real x)
+{
+    return fs_isfinite(x) && x > 0;
+}
+
+// Returns nothing; fills p with the paper's motor, move and gains, i_d* = 0, no torque model, ideal measurement
+// and v_limit = 1e3 V.
+void dq_smc_params_default(struct dq_smc_params *p)
+{
+    struct smc_params sp;
+    struct dq_smc_current none = {0, 0, 0, 1, 0, 0};
+    struct torque_model tm = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
+    smc_params_default(&sp);
+    p->motor = sp.motor;
+    p->plan = sp.plan;
+    p->current = none;
+    p->gains = sp.gains;
+    p->torques = tm;
+    p->measurement = SMC_IDEAL;
+    p->v_limit = FS_C(1e3);
+}
+
+// Returns DQ_SMC_PARAMS_OK, or the dq_smc_param_error naming the invalid group (s is then left unusable).
+int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
+{
+    const struct smc_gains *g = &p->gains;
+    const struct dq_smc_current *c = &p->current;
+    if (!motor_params_valid(&p->motor))
+        return DQ_SMC_EMOTOR;
+    if (!plan_valid(&p->plan)
+        || !(fs_isfinite(c->i_d1) && fs_isfinite(c->i_d2) && fs_isfinite(c->t0) && fs_isfinite(c->tf)
+             && (c->i_d2 == c->i_d1 || c->tf > c->t0) && fs_isfinite(c->weakening) && c->weakening >= 0
+             && fs_isfinite(c->weakening_speed) && c->weakening_speed >= 0))
+        return DQ_SMC_EPLAN;
+    if (!(positive(g->W1) && positive(g->W2) && positive(g->eps1) && positive(g->eps2) && positive(g->xi)
+          && positive(g->wn) && g->hold_damping == 0))
+        return DQ_SMC_EGAINS;
+    if (p->measurement != SMC_IDEAL && p->measurement != SMC_MODEL)
+        return DQ_SMC_EMEASUREMENT;
+    if (!(fs_isfinite(p->v_limit) && p->v_limit >= FS_C(1e-3)))
+        return DQ_SMC_ELIMITS;
+    if (!torque_model_valid(&p->torques))
+        return DQ_SMC_ETORQUES;
+    s->p = *p;
+    plan_init(&s->plan, &p->plan);
+    s->alpha1 = fs_pow(g->wn, 2);
+    s->alpha2 = 2 * g->xi * g->wn;
+    if (!(fs_isfinite(s->alpha1) && fs_isfinite(s->alpha2)))
+        return DQ_SMC_EGAINS;
+    dq_smc_reset(s);
+    return DQ_SMC_PARAMS_OK;
+}
+
+// Returns nothing; clears the accumulated status.
+void dq_smc_reset(struct dq_smc *s)
+{
+    s->status_seen = CTRL_OK;
+}
+
+// Returns nothing; writes the planned d current and its rate at time t, for the planned speed w and acceleration a.
+static void dq_smc_current_ref(const struct dq_smc_current *c, fs_real t, fs_real w, fs_real a, fs_real *i_d,
+                               fs_real *di_d)
+{
+    fs_real span = c->i_d2 - c->i_d1;
+    if (span == 0) {
+        *i_d = c->i_d1;
+        *di_d = 0;
+    } else {
+        *i_d = c->i_d1 + plan_psi(t, c->t0, c->tf, 0) * span;
+        *di_d = plan_psi(t, c->t0, c->tf, 1) * span;
+    }
+    if (c->weakening != 0 && fs_fabs(w) > c->weakening_speed) {
+        *i_d = *i_d - c->weakening * (fs_fabs(w) - c->weakening_speed);
+        *di_d = *di_d - c->weakening * (w > 0 ? a : -a);
+    }
+}
+
+// Returns ctrl_status bits; writes the law's voltages (dq_smc.h) and scales them into v_limit.
+uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[2])
+{
+    // Law: s1 = i_d - i_d*, s2 = e'' + a2 e' + a1 e; i_d' -> Gamma1, theta''' -> Gamma2 in the d-q model's inverse.
+    const struct motor_params *m = &s->p.motor;
+    const struct smc_gains *g = &s->p.gains;
+    fs_real ref[PLAN_FLAG_LEN], sn, cs, i_d, i_q, E, acc, e, de, dde, s1, s2, gamma1, gamma2, dE, v_d, v_q, id_ref,
+        did_ref, norm, z;
+    uint32_t status = CTRL_OK;
+    v[0] = v[1] = 0;
+    // x - x is 0 for a finite x and NaN otherwise: one test covers every input used.
+    z = (t - t) + (y[0] - y[0]) + (y[1] - y[1]) + (y[2] - y[2]) + (y[3] - y[3]);
+    if (s->p.measurement == SMC_IDEAL)
+        z += y[4] - y[4];
+    if (z != 0) {
+        s->status_seen |= CTRL_NONFINITE;
+        return CTRL_NONFINITE;
+    }
+    plan_flag(&s->plan, t, ref);
+    dq_smc_current_ref(&s->p.current, t, ref[PLAN_DTHETA], ref[PLAN_DDTHETA], &id_ref, &did_ref);
+    // Park transform by Nr theta: i_d = ia c + ib s, i_q = -ia s + ib c.
+    fs_sincos(m->Nr * y[3], &sn, &cs);
+    i_d = y[0] * cs + y[1] * sn;
+    i_q = -y[0] * sn + y[1] * cs;
+    if (s->p.measurement == SMC_IDEAL) {
+        acc = y[4];
+    } else {
+        E = torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]);
+        acc = (m->Km * i_q - m->B * y[2] - E) / m->J;
+    }
+    e = y[3] - ref[PLAN_THETA];
+    de = y[2] - ref[PLAN_DTHETA];
+    dde = acc - ref[PLAN_DDTHETA];
+    s1 = i_d - id_ref;
+    s2 = dde + s->alpha2 * de + s->alpha1 * e;
+    gamma1 = did_ref - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
+    gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
+    dE = torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc);
+    v_d = m->L * gamma1 + m->R * i_d - m->L * m->Nr * y[2] * i_q;
+    v_q = m->L * ((m->J * gamma2 + m->B * acc + dE) / m->Km) + m->R * i_q + m->L * m->Nr * y[2] * i_d + m->Km * y[2];
+    v[0] = v_d * cs - v_q * sn;
+    v[1] = v_d * sn + v_q * cs;
+    if (!(fs_isfinite(v[0]) && fs_isfinite(v[1]))) {
+        v[0] = v[1] = 0;
+        status = CTRL_OVERFLOW;
+    } else if (fs_hypot(v[0], v[1]) > s->p.v_limit) {
+        // Scale by the larger component first so that hypot cannot overflow.
+        norm = fs_fabs(v[0]) > fs_fabs(v[1]) ? fs_fabs(v[0]) : fs_fabs(v[1]);
+        v[0] /= norm;
+        v[1] /= norm;
+        norm = fs_hypot(v[0], v[1]);
+        v[0] *= s->p.v_limit / norm;
+        v[1] *= s->p.v_limit / norm;
+        status = CTRL_SATURATED;
+    }
+    s->status_seen |= status;
+    return status;
+}
+
+// Returns dq_smc_step's status for the interface's untyped state.
+static uint32_t dq_smc_step_any(void *self, fs_real t, const fs_real *y, fs_real *v)
+{
+    return dq_smc_step(self, t, y, v);
+}
+
+// Returns nothing; dq_smc_reset for the interface's untyped state.
+static void dq_smc_reset_any(void *self)
+{
+    dq_smc_reset(self);
+}
+
+// Returns nothing; binds s into the run loops' interface (a stateless law: the continuous loop may run it).
+void dq_smc_controller(struct dq_smc *s, struct controller *c)
+{
+    c->self = s;
+    c->step = dq_smc_step_any;
+    c->reset = dq_smc_reset_any;
+    c->stateless = true;
+}

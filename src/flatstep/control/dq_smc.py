@@ -1,0 +1,149 @@
+r"""Flatness + sliding-mode control on the d-q flat outputs :math:`(\theta, i_d)` (flatstep.model.flat_dq).
+
+The structure of the paper's law (eqs. 12-14, :mod:`flatstep.control.smc`), with :math:`i_d` in place of
+:math:`\rho`:
+
+.. math::
+    s_1 = i_d - i_d^*,\qquad s_2 = \ddot e + \alpha_2\dot e + \alpha_1 e,\quad e = \theta - \theta^*\\
+    \Gamma_1 = \dot i_d^* - W_1\frac{s_1}{|s_1| + \epsilon_1},\qquad
+    \Gamma_2 = \theta^{*(3)} - \alpha_2\ddot e - \alpha_1\dot e - W_2\frac{s_2}{|s_2| + \epsilon_2}
+
+and the voltages are the d-q flat inverse (:func:`flatstep.model.flat_dq.dq_voltages`) with
+:math:`\dot i_d \to \Gamma_1`, :math:`\theta^{(3)} \to \Gamma_2`, at the measured state and with the rate
+:math:`\dot E` of the torques the law knows (:class:`~flatstep.model.torque_model.TorqueModel`). With the exact
+model the law gives :math:`\dot s_1 = -W_1 s_1/(|s_1| + \epsilon_1)` and
+:math:`\dot s_2 = -W_2 s_2/(|s_2| + \epsilon_2)`. Unlike the paper's pair :math:`(\rho, \theta)` it has no
+singularity: no square root, no division by a current, any torque demand is reached through :math:`i_q`.
+With :math:`i_d^* = 0` (the default) every ampere makes torque, and the copper loss is that of the torque the
+move needs. The gains are :class:`~flatstep.control.smc.SMCGains`, from the same
+:func:`~flatstep.control.design.design_gains` (``W1``, ``eps1`` act on :math:`s_1` in amperes as they do on
+:math:`\rho`); the detent hold (``hold_damping``) belongs to the paper's law and is refused here.
+"""
+from __future__ import annotations
+
+from typing import Any, Optional
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..model.flat_dq import dq_voltages, inverse_park, park
+from ..model.motor import MotorParams
+from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
+from ..plan.rest_to_rest import RestToRest
+from .smc import MEASUREMENTS, SMCGains
+
+Array = NDArray[np.float64]
+#: The paper's gains (Section 3), the default.
+PAPER_GAINS = SMCGains()
+
+
+class DQFlatnessSMC:
+    """Flatness-based sliding-mode control of (theta, i_d) along a plan (module docstring).
+
+    Parameters
+    ----------
+    motor : MotorParams
+        The controller's model of the motor.
+    plan : RestToRest
+        The planned angle (its ``rho`` is not used).
+    gains : SMCGains
+        The design constants, as for the paper's law; ``hold_damping`` must be ``None``.
+    measurement : str
+        Where theta'' comes from: ``"ideal"`` and ``"observer"`` read it from the measurement, ``"model"``
+        computes it from the measured state, ``J theta'' = Km i_q - B omega - E``.
+    d_current : DCurrentPlan
+        The planned d current (default 0).
+    torques : TorqueModel
+        The torques the law knows beyond eq. (1) (default none).
+    """
+
+    #: The C twin: csrc/dq_smc.h.
+    c_name = "dq_smc"
+    #: The C step's bound on hypot(va, vb) [V].
+    c_v_limit = 1e3
+
+    def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = PAPER_GAINS,
+                 measurement: str = "ideal", *, d_current: DCurrentPlan = ZERO_D_CURRENT,
+                 torques: TorqueModel = NO_TORQUES) -> None:
+        if measurement not in MEASUREMENTS:
+            raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
+        if gains.hold_damping is not None:
+            raise ValueError(f"gains.hold_damping={gains.hold_damping!r}: the detent hold belongs to the paper's "
+                             "(rho, theta) law; the d-q law holds the plan's end point by its sliding surfaces "
+                             "(give hold_damping=None)")
+        for name, value, kind in (("d_current", d_current, DCurrentPlan), ("torques", torques, TorqueModel)):
+            if not isinstance(value, kind):
+                raise ValueError(f"{name}={value!r} is not a {kind.__name__}")
+        self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
+        self.d_current, self.torques = d_current, torques
+
+    def dq_currents(self, x: ArrayLike) -> tuple[Array, Array]:
+        """The measured ``(i_d, i_q)``: the Park transform by the measured electrical angle."""
+        ia, ib, _, theta = np.asarray(x, dtype=float)
+        return park(ia, ib, self.motor.Nr * theta)
+
+    def acceleration(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> Array:
+        """The acceleration theta'' as the law sees it: the given one, or in ``model`` mode the torque model's."""
+        if self.measurement != "model":
+            if ddtheta is None:
+                raise ValueError(f"measurement={self.measurement!r} needs the acceleration ddtheta; "
+                                 "use measurement='model' to compute it from the state")
+            return np.asarray(ddtheta, dtype=float)
+        m = self.motor
+        _, _, omega, theta = np.asarray(x, dtype=float)
+        _, i_q = self.dq_currents(x)
+        return (m.Km * i_q - m.B * omega - self.torques.torque(t, theta, omega, m.Nr)) / m.J
+
+    def sliding_variables(self, t: ArrayLike, x: ArrayLike,
+                          ddtheta: Optional[ArrayLike] = None) -> tuple[Array, Array]:
+        """Return ``(s1, s2)`` at times ``t`` for states ``x`` (vectorized)."""
+        _, _, omega, theta = np.asarray(x, dtype=float)
+        ref = self.plan.flag(t)
+        i_d, _ = self.dq_currents(x)
+        acc = self.acceleration(t, x, ddtheta)
+        g = self.gains
+        return (i_d - self.d_current.flag(t, ref.dtheta, ref.ddtheta)[0],
+                acc - ref.ddtheta + g.alpha2 * (omega - ref.dtheta) + g.alpha1 * (theta - ref.theta))
+
+    def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> Array:
+        """Phase voltages (va, vb) of the law, vectorized over time."""
+        _, _, omega, theta = np.asarray(x, dtype=float)
+        m, g = self.motor, self.gains
+        ref = self.plan.flag(t)
+        id_ref, did_ref = self.d_current.flag(t, ref.dtheta, ref.ddtheta)
+        i_d, i_q = self.dq_currents(x)
+        acc = self.acceleration(t, x, ddtheta)
+        e, de, dde = theta - ref.theta, omega - ref.dtheta, acc - ref.ddtheta
+        s1 = i_d - id_ref
+        s2 = dde + g.alpha2 * de + g.alpha1 * e
+        gamma1 = did_ref - g.W1 * s1 / (np.abs(s1) + g.eps1)
+        gamma2 = ref.dddtheta - g.alpha2 * dde - g.alpha1 * de - g.W2 * s2 / (np.abs(s2) + g.eps2)
+        dE = self.torques.torque_rate(t, theta, omega, acc, m.Nr)
+        v_d, v_q = dq_voltages(m, i_d, i_q, omega, acc, gamma1, gamma2, dE)
+        return np.array(inverse_park(v_d, v_q, m.Nr * theta))
+
+    @property
+    def observer_torques(self) -> TorqueModel:
+        """The torques the drive loop's observer predicts with: the law's own (the observer shares its model)."""
+        return self.torques
+
+    def initial_state(self) -> None:
+        """Return ``None``: the law is static, no state between steps."""
+        return None
+
+    def step(self, state: None, measurement: ArrayLike, t: float) -> tuple[Array, None]:
+        """Controller step ``(state, measurement, t) -> (voltages, new state)``; this law is static.
+
+        ``measurement`` is ``(ia, ib, omega, theta, ddtheta)``; ``ddtheta`` is not read in ``model`` mode.
+        """
+        y = np.asarray(measurement, dtype=float)
+        return self.voltages(t, y[:4], None if self.measurement == "model" else y[4]), state
+
+    def c_params(self) -> dict[str, Any]:
+        """The fields of the C ``struct dq_smc_params`` (csrc/dq_smc.h) for this controller."""
+        g = self.gains
+        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(), current=self.d_current.as_dict(),
+                    gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn, hold_damping=0.0),
+                    torques=self.torques.as_dict(), measurement=1 if self.measurement == "model" else 0,
+                    v_limit=self.c_v_limit)
