@@ -97,12 +97,13 @@ static void seg_end(const struct segment *g, struct sim_stats *st, fs_real *t, f
         x[m] = xs[m];
 }
 
-// Returns the end of the segment that starts at t: the first knot after t before t_end, or t_end.
-static fs_real segment_end(const struct continuous_params *p, fs_real t, fs_real t_end)
+// Returns the end of the segment that starts at t: the first knot more than `tiny` after t and before t_end, or
+// t_end (a knot closer than that would make a segment shorter than the integrator's rounding level).
+static fs_real segment_end(const struct continuous_params *p, fs_real t, fs_real t_end, fs_real tiny)
 {
     size_t k;
     for (k = 0; k < p->n_knots; k++)
-        if (p->knots[k] > t && p->knots[k] < t_end)
+        if (p->knots[k] > t + tiny && p->knots[k] < t_end - tiny)
             return p->knots[k];
     return t_end;
 }
@@ -143,7 +144,7 @@ int continuous_run(const struct controller *ctrl, const struct plant *plant, con
             x_out[4 * i + m] = x0[m];
     for (a = t_out[0]; a < t_end && rc == SIM_OK; a = b) {
         // A new segment at each knot restarts the integrator, as the scipy engine restarts solve_ivp.
-        b = segment_end(p, a, t_end);
+        b = segment_end(p, a, t_end, (fs_real)1e-12 * (t_end - t_out[0]));
         e = seg_init(&g, &op, &c, a, x);
         xs = g.method == CONTINUOUS_DOPRI5 ? g.u.d5.x : g.u.d8.x;
         for (t = a; e == ODE_OK && t < b; steps++) {

@@ -101,7 +101,7 @@ def test_drive_loop_at_a_rate_and_as_dict():
     d = lp.as_dict()
     assert d["sensors"] == Sensors(delay=1).as_dict() and "drive" not in d and "observer" not in d
     assert (d["control_period"], d["substeps"], d["compute_delay"]) == (lp.control_period, 2, False)
-    with pytest.raises(ValueError, match=r"rate=0.0 Hz is out of range: .*valid: \(0, 1e\+08\] Hz"):
+    with pytest.raises(ValueError, match=r"rate=0.0 Hz is out of range: .*valid: \[0.001, 1e\+08\] Hz"):
         fs.DriveLoop.at(0.0)
 
 

@@ -16,7 +16,7 @@ def test_defaults_and_as_dict():
 @pytest.mark.parametrize("kwargs, match", [
     (dict(method="Euler"), r"method='Euler' is not an integrator; valid: \('DOP853'"),
     (dict(method="dop853"), r"method='dop853' is not an integrator"),
-    (dict(rtol=0.0), r"rtol=0.0 is out of range: .*valid: \(0, 1\]"),
+    (dict(rtol=0.0), r"rtol=0.0 is out of range: .*valid: \[1e-16, 1\]"),
     (dict(atol=-1e-12), r"atol=-1e-12 is out of range"),
     (dict(dt_out=-1.0), r"dt_out=-1.0 s is out of range"),
     (dict(dt_out=np.nan), r"dt_out=nan"),

@@ -148,7 +148,8 @@ def check_run(plan: RestToRest, t_end: float, settings: Union[DriveLoop, Continu
 
 def _grid(t_end: float, knots: list[float], dt_out: float) -> list[Array]:
     """Output times split at the plan's knots so that no integration step straddles one."""
-    edges = [0.0] + sorted(k for k in knots if 0.0 < k < t_end) + [t_end]
+    tiny = 1e-12 * t_end  # a knot closer than this to an edge would make a segment below rounding level
+    edges = [0.0] + sorted(k for k in knots if tiny < k < t_end - tiny) + [t_end]
     return [np.linspace(a, b, max(2, int(round((b - a) / dt_out)) + 1))
             for a, b in zip(edges[:-1], edges[1:], strict=True)]
 

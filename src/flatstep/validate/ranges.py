@@ -46,38 +46,38 @@ def _q(low: float, high: float, unit: str, why: str, low_closed: bool = False, h
 #: :data:`INTEGER_RANGES`.
 QUANTITIES: dict[str, Quantity] = {
     # the motor
-    "R": _q(0.0, 1e4, "ohm", "a phase resistance above 0 and at most 10 kohm"),
-    "L": _q(0.0, 10.0, "H", "a phase inductance above 0 and at most 10 H"),
-    "Km": _q(0.0, 100.0, "V s/rad", "a torque constant above 0 and at most 100 N m/A"),
-    "J": _q(0.0, 100.0, "kg m^2", "an inertia above 0 and at most 100 kg m^2"),
+    "R": _q(1e-6, 1e4, "ohm", "a phase resistance from 1 uohm to 10 kohm", low_closed=True),
+    "L": _q(1e-9, 10.0, "H", "a phase inductance from 1 nH to 10 H", low_closed=True),
+    "Km": _q(1e-7, 100.0, "V s/rad", "a torque constant from 1e-7 to 100 N m/A", low_closed=True),
+    "J": _q(1e-12, 100.0, "kg m^2", "an inertia from 1e-12 to 100 kg m^2", low_closed=True),
     "B": _q(0.0, 1e3, "N m s/rad", "viscous friction cannot be negative", low_closed=True),
     # the plant's effects and load
     "torque_amplitude": _q(0.0, 1e3, "N m", "an amplitude, >= 0 and at most 1000 N m", low_closed=True),
-    "coulomb_speed": _q(0.0, 1e6, "rad/s", "the speed scale of the smooth sign, > 0"),
-    "magnetizing_resistance": _q(0.0, 1e9, "ohm", "an iron-loss resistance above 0"),
+    "coulomb_speed": _q(1e-9, 1e6, "rad/s", "the speed scale of the smooth sign, from 1e-9 rad/s", low_closed=True),
+    "magnetizing_resistance": _q(1e-6, 1e9, "ohm", "an iron-loss resistance from 1 uohm", low_closed=True),
     "load": _q(-1e3, 1e3, "N m", "a load torque within +-1000 N m", low_closed=True),
     # the plan
     "angle": _q(-1e6, 1e6, "rad", "an angle within +-1e6 rad", low_closed=True),
-    "current": _q(0.0, 1e3, "A", "a current-vector norm above 0 (the angle of a zero vector is undefined) and "
-                                 "at most 1000 A"),
+    "current": _q(1e-6, 1e3, "A", "a current-vector norm from 1 uA (the angle of a zero vector is undefined) to "
+                                  "1000 A", low_closed=True),
     "time": _q(0.0, 1e6, "s", "the run starts at t = 0: times are >= 0 and at most 1e6 s", low_closed=True),
     "t_end": _q(0.0, 1e6, "s", "a horizon above 0"),
     # the controller
-    "gain": _q(0.0, 1e12, "", "a gain above 0 and at most 1e12"),
-    "damping": _q(0.0, 1e3, "", "a damping ratio above 0"),
+    "gain": _q(1e-12, 1e12, "", "a gain from 1e-12 to 1e12", low_closed=True),
+    "damping": _q(1e-6, 1e3, "", "a damping ratio from 1e-6 to 1000", low_closed=True),
     "relative": _q(0.0, 0.5, "", "a relative parameter error in [0, 0.5)", low_closed=True, high_open=True),
     "scale": _q(0.0, 1e3, "", "a factor above 0 and at most 1000"),
     # the drive, sensors and observer
-    "v_bus": _q(0.0, 1e4, "V", "a bus voltage above 0 and at most 10 kV"),
-    "rate": _q(0.0, 1e8, "Hz", "a rate above 0 and at most 100 MHz"),
+    "v_bus": _q(1e-3, 1e4, "V", "a bus voltage from 1 mV to 10 kV", low_closed=True),
+    "rate": _q(1e-3, 1e8, "Hz", "a rate from 1 mHz to 100 MHz", low_closed=True),
     "period": _q(1e-8, 1e3, "s", "a period of at least 10 ns and at most 1000 s", low_closed=True),
-    "current_range": _q(0.0, 1e4, "A", "an ADC full scale above 0"),
+    "current_range": _q(1e-6, 1e4, "A", "an ADC full scale from 1 uA", low_closed=True),
     "current_noise": _q(0.0, 1e3, "A", "a noise standard deviation, >= 0", low_closed=True),
     "current_offset": _q(-1e3, 1e3, "A", "an offset within +-1000 A", low_closed=True),
-    "bandwidth": _q(0.0, 1e9, "rad/s", "a bandwidth above 0"),
+    "bandwidth": _q(1e-6, 1e9, "rad/s", "a bandwidth from 1e-6 to 1e9 rad/s", low_closed=True),
     # the solver
-    "tolerance": _q(0.0, 1.0, "", "an error tolerance above 0 and at most 1"),
-    "dt_out": _q(0.0, 1e6, "s", "an output spacing above 0"),
+    "tolerance": _q(1e-16, 1.0, "", "an error tolerance from 1e-16 to 1", low_closed=True),
+    "dt_out": _q(1e-12, 1e6, "s", "an output spacing from 1 ps", low_closed=True),
 }
 
 #: Integer quantities: ``(low, high)``, inclusive.
