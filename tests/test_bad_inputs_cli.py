@@ -81,6 +81,21 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], int, list[str]]]:
         ("compare scales zero", ["compare", str(tmp / "drive.toml"), "--scales", "0"], 2, ["--scales"]),
         ("compare samples", ["compare", str(tmp / "drive.toml"), "--samples", "-3"], 2, ["--samples", "-3"]),
         ("design no drive", ["design", str(tmp / "nodrive.toml")], 2, ["control_rate"]),
+        ("identify missing", ["identify", str(tmp / "missing.csv")], 2, ["missing.csv"]),
+        ("identify directory out", ["identify", "--out", str(tmp), str(tmp / "missing.csv")], 2, ["--out"]),
+        ("identify toml as csv", ["identify", str(tmp / "drive.toml")], 2, ["drive.toml"]),
+        ("identify no mode", ["identify"], 2, ["--excite"]),
+        ("identify seeds", ["identify", "--accuracy", str(tmp / "drive.toml"), "--seeds", "0"], 2, ["seeds=0"]),
+        ("identify seed", ["identify", "--excite", str(tmp / "drive.toml"), "--seed", "-5"], 2, ["seed=-5"]),
+        ("identify duration", ["identify", "--excite", str(tmp / "drive.toml"), "--duration", "1e9"], 2,
+         ["duration=1000000000.0"]),
+        ("identify duration nan", ["identify", "--excite", str(tmp / "drive.toml"), "--duration", "nan"], 2,
+         ["duration=nan"]),
+        ("identify noise", ["identify", "--accuracy", str(tmp / "drive.toml"), "--noise", "-1"], 2, ["--noise"]),
+        ("identify nr", ["identify", "--nr", "0", str(tmp / "missing.csv")], 2, ["Nr=0"]),
+        ("identify confidence", ["identify", "--confidence", "2", str(tmp / "missing.csv")], 2, ["confidence=2.0"]),
+        ("identify coulomb speed", ["identify", "--coulomb-speed", "-1", str(tmp / "missing.csv")], 2,
+         ["coulomb_speed=-1.0"]),
     ]
     for flag, values in DESIGN:
         for v in values:

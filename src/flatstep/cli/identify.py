@@ -14,6 +14,7 @@ from typing import Any, Optional
 
 from ..model.motor import MotorParams
 from ..studies.scenario_file import load_scenario
+from .flags import count, quantity
 from .status import EXIT_REFUSED
 
 
@@ -62,6 +63,9 @@ def _accuracy(args: argparse.Namespace) -> int:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     """``flatstep identify``: one of the three uses of the module docstring."""
+    for flag, path in (("--out", args.out), ("--record", args.record)):
+        if path is not None and Path(path).is_dir():
+            raise ValueError(f"{flag} {path}: is a directory; give a file name")
     modes = [m for m in ("data", "excite", "accuracy") if getattr(args, m)]
     if len(modes) != 1:
         raise ValueError("give a recording (flatstep identify DATA.csv), or --excite SCENARIO --record DATA.csv, or "
@@ -103,17 +107,18 @@ def add_identify_command(sub: argparse._SubParsersAction[argparse.ArgumentParser
                          description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     ide.add_argument("data", nargs="?", default=None,
                      help="a recording: CSV with the columns t, va, vb, ia, ib, theta (docs/identification.md)")
-    ide.add_argument("--nr", type=int, default=None, help="rotor teeth (default 50, or the scenario's)")
+    ide.add_argument("--nr", type=count("Nr", "--nr"), default=None, help="rotor teeth (default 50, or the scenario's)")
     ide.add_argument("--detent", action="store_true", help="also estimate the detent torque's amplitude and phase")
     ide.add_argument("--coulomb", action="store_true", help="also estimate the Coulomb friction")
-    ide.add_argument("--coulomb-speed", type=float, default=0.3,
+    ide.add_argument("--coulomb-speed", type=quantity("coulomb_speed", "--coulomb-speed"), default=0.3,
                      help="omega_s [rad/s] of the Coulomb term's smooth sign tanh(omega/omega_s) (default 0.3)")
     ide.add_argument("--no-offsets", action="store_true", help="do not estimate a voltage offset per phase")
     ide.add_argument("--no-noise-compensation", action="store_true",
                      help="plain least squares: do not remove the current noise's bias from the electrical fit")
     ide.add_argument("--bandwidth", type=float, nargs=2, default=(200.0, 100.0), metavar=("ELEC", "MECH"),
                      help="filter cutoffs [Hz] of the electrical and mechanical equations (default 200 100)")
-    ide.add_argument("--confidence", type=float, default=0.95, help="level of the intervals (default 0.95)")
+    ide.add_argument("--confidence", type=quantity("confidence", "--confidence"),
+                     default=0.95, help="level of the intervals (default 0.95)")
     ide.add_argument("--out", default=None, help="write the [motor] table (TOML) here")
     ide.add_argument("--json", action="store_true", help="print the result as JSON")
     ide.add_argument("--excite", metavar="SCENARIO", default=None,
@@ -121,10 +126,13 @@ def add_identify_command(sub: argparse._SubParsersAction[argparse.ArgumentParser
     ide.add_argument("--record", metavar="DATA.csv", default=None, help="with --excite: write the recording here")
     ide.add_argument("--accuracy", metavar="SCENARIO", nargs="+", default=None,
                      help="excite and identify these scenarios over --seeds seeds; table against the targets")
-    ide.add_argument("--seeds", type=int, default=10, help="with --accuracy: seeds 0..N-1 (default 10)")
-    ide.add_argument("--seed", type=int, default=0, help="with --excite: the excitation's seed (default 0)")
-    ide.add_argument("--duration", type=float, default=1.0, help="with --excite/--accuracy: seconds (default 1)")
-    ide.add_argument("--noise", type=float, default=None,
+    ide.add_argument("--seeds", type=count("seeds", "--seeds"), default=10,
+                     help="with --accuracy: seeds 0..N-1 (default 10)")
+    ide.add_argument("--seed", type=count("seed", "--seed"), default=0,
+                     help="with --excite: the excitation's seed (default 0)")
+    ide.add_argument("--duration", type=quantity("duration", "--duration"), default=1.0,
+                     help="with --excite/--accuracy: seconds (default 1)")
+    ide.add_argument("--noise", type=quantity("current_noise", "--noise"), default=None,
                      help="with --excite/--accuracy: ADC noise [A rms] instead of the scenario's sensors' own")
     ide.add_argument("--preset-plant", action="store_true",
                      help="with --excite/--accuracy: simulate the scenario's [motor], not its [plant]")

@@ -24,8 +24,8 @@ from ..engine.result import full_step
 from ..engine.simulate import simulate
 from ..plan.feasibility import check_feasibility
 from ..plan.rest_to_rest import RestToRest
-from ..validate import check_nonnegative, check_positive
-from ..validate.limits import MIN_PERIODS_PER_MOVE
+from ..validate import check_count, check_nonnegative, check_positive, check_quantity
+from ..validate.limits import MIN_PERIODS_PER_MOVE, check_resources, estimate
 from .record import Recording, recording_from_result
 from .scenario import Scenario
 
@@ -91,7 +91,9 @@ def excite(scenario: Scenario, *, duration: float = 1.0, seed: int = 0, segment:
     if loop is None:
         raise ValueError(f"scenario {scenario.name!r} has no drive loop: the excitation is recorded by a sampled "
                          "drive ([drive] control_rate in the scenario file)")
-    duration = check_positive("duration", duration, unit=" s")
+    duration = check_quantity("duration", duration)
+    check_resources(estimate(duration, control_period=loop.control_period, substeps=loop.substeps),
+                    what=f"the excitation of {duration:g} s")
     segment = check_positive("segment", segment, unit=" s")
     if not (0 < steps[0] <= steps[1] and 0 < rho_range[0] <= rho_range[1]):
         raise ValueError(f"steps={steps!r} and rho_range={rho_range!r} must be ranges (low, high) of positive numbers")
@@ -100,7 +102,7 @@ def excite(scenario: Scenario, *, duration: float = 1.0, seed: int = 0, segment:
         if sensors is None:
             raise ValueError("current_noise needs the scenario's sensors ([sensors] in the scenario file)")
         sensors = replace(sensors, current_noise=check_nonnegative("current_noise", current_noise, unit=" A"))
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(check_count("seed", seed))
     plant = scenario.simulated_plant
     theta, rho = scenario.plan.theta1, scenario.plan.rho1
     x = scenario.plan.x0(plant.motor.Nr)

@@ -62,10 +62,12 @@ QUANTITIES: dict[str, Quantity] = {
                                   "1000 A", low_closed=True),
     "time": _q(0.0, 1e6, "s", "the run starts at t = 0: times are >= 0 and at most 1e6 s", low_closed=True),
     "t_end": _q(0.0, 1e6, "s", "a horizon above 0"),
+    "duration": _q(1e-3, 3600.0, "s", "a recording from 1 ms to one hour", low_closed=True),
     # the controller
     "gain": _q(1e-12, 1e12, "", "a gain from 1e-12 to 1e12", low_closed=True),
     "damping": _q(1e-6, 1e3, "", "a damping ratio from 1e-6 to 1000", low_closed=True),
     "relative": _q(0.0, 0.5, "", "a relative parameter error in [0, 0.5)", low_closed=True, high_open=True),
+    "confidence": _q(0.0, 1.0, "", "a confidence level in (0, 1), e.g. 0.95", high_open=True),
     "scale": _q(0.0, 1e3, "", "a factor above 0 and at most 1000"),
     # the drive, sensors and observer
     "v_bus": _q(1e-3, 1e4, "V", "a bus voltage from 1 mV to 10 kV", low_closed=True),
@@ -92,6 +94,7 @@ INTEGER_RANGES: dict[str, tuple[int, int]] = {
     "samples": (0, 10_000_000),
     "load_states": (0, 2),
     "repeat": (1, 100_000),
+    "seeds": (1, 100_000),
 }
 
 #: The largest value of each unbounded-above quantity, for documentation.
