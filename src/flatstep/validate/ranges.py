@@ -6,7 +6,6 @@ C core's integers or floats, or that would make a run's numbers meaningless; not
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 
@@ -97,5 +96,10 @@ INTEGER_RANGES: dict[str, tuple[int, int]] = {
     "seeds": (1, 100_000),
 }
 
-#: The largest value of each unbounded-above quantity, for documentation.
-UNBOUNDED = math.inf
+
+def markdown_table() -> str:
+    """Every range of :data:`QUANTITIES` and :data:`INTEGER_RANGES` as a Markdown table (docs/errors.md)."""
+    rows = ["| quantity | valid | why |", "|---|---|---|"]
+    rows += [f"| `{name}` | {q.describe()} | {q.why} |" for name, q in QUANTITIES.items()]
+    rows += [f"| `{name}` (integer) | [{low}, {high}] | |" for name, (low, high) in INTEGER_RANGES.items()]
+    return "\n".join(rows)

@@ -1,0 +1,19 @@
+"""docs/errors.md states the ranges and limits that the code enforces (no drift between the two)."""
+from pathlib import Path
+
+from flatstep.validate import limits
+from flatstep.validate.ranges import markdown_table
+
+DOC = (Path(__file__).resolve().parent.parent / "docs" / "errors.md").read_text()
+
+
+def test_the_ranges_table_is_the_codes():
+    assert markdown_table() in DOC
+
+
+def test_the_limits_are_the_codes():
+    assert limits.MAX_STEPS == 200_000_000 and "| `MAX_STEPS` | 2e8" in DOC
+    assert limits.MAX_STEPS_REFERENCE == 2_000_000 and "| `MAX_STEPS_REFERENCE` | 2e6" in DOC
+    assert limits.MAX_RESULT_BYTES == 1 << 30 and "| `MAX_RESULT_BYTES` | 1 GiB" in DOC
+    assert limits.BYTES_PER_SAMPLE == 256 and "(256)" in DOC
+    assert limits.MIN_PERIODS_PER_MOVE == 10 and "at least 10 control periods" in DOC
