@@ -181,3 +181,31 @@ def test_valid_values_at_the_edges_are_accepted():
     fs.DriveLoop(control_period=1e-7, substeps=1000)
     assert fs.RestToRest(-100.0, 100.0, 1e-3, 100.0, t0=0.0, tf=1e3).tf == 1e3
     assert np.isfinite(fs.simulate(MOTOR, PLAN, t_end=0.04).theta[-1])
+
+
+MORE_CASES = [
+    ("run_batch one scenario", lambda: fs.run_batch(fs.Scenario(), progress=False), "scenarios="),
+    ("run_batch engine", lambda: fs.run_batch([fs.Scenario()], engine="fortran", progress=False), "'fortran'"),
+    ("run_batch fresh", lambda: fs.run_batch([fs.Scenario()], fresh="yes", progress=False), "fresh='yes'"),
+    ("run_batch progress", lambda: fs.run_batch([fs.Scenario()], progress="yes"), "progress='yes'"),
+    ("run_batch keep", lambda: fs.run_batch([fs.Scenario()], keep="theta", progress=False), "keep='theta'"),
+    ("run_batch folder", lambda: fs.run_batch([fs.Scenario()], out="/nonexistent/rows.jsonl", progress=False),
+     "/nonexistent"),
+    ("scenario_grid axis", lambda: fs.scenario_grid(fs.Scenario(), t_end=0.06), "t_end=0.06"),
+    ("simulate plan", lambda: fs.simulate(MOTOR, None), "plan=None"),
+    ("simulate loop", lambda: fs.simulate(MOTOR, PLAN, loop="fast"), "loop='fast'"),
+    ("simulate solver", lambda: fs.simulate(MOTOR, PLAN, solver="LSODA"), "solver='LSODA'"),
+    ("simulate controller", lambda: fs.simulate(MOTOR, PLAN, "smc"), "controller='smc'"),
+    ("FlatnessSMC motor", lambda: fs.FlatnessSMC("paper", PLAN), "motor='paper'"),
+    ("FlatnessSMC plan", lambda: fs.FlatnessSMC(MOTOR, "plan"), "plan='plan'"),
+    ("FlatnessSMC gains", lambda: fs.FlatnessSMC(MOTOR, PLAN, {"W1": 1.0}), "gains={'W1': 1.0}"),
+    ("preset list", lambda: fs.MotorParams.preset(["paper"]), "['paper']"),
+    ("load function", lambda: fs.simulate(fs.Plant(MOTOR, load=lambda t: "x"), PLAN, engine="scipy"), "not a number"),
+]
+
+
+@pytest.mark.parametrize("what, call, named", MORE_CASES, ids=[c[0] for c in MORE_CASES])
+def test_an_entry_point_refuses_a_wrong_object(what, call, named):
+    with pytest.raises(ValueError, match=None) as err:
+        call()
+    assert named in str(err.value), str(err.value)

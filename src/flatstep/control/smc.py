@@ -47,6 +47,7 @@ from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.loss_aware import LossAwareRho
 from ..plan.rest_to_rest import RestToRest
 from ..validate import check_finite, check_quantity
+from .protocol import check_parts
 
 MEASUREMENTS = ("ideal", "model", "observer")
 
@@ -122,6 +123,7 @@ class FlatnessSMC:
                  loss_aware: Optional[LossAwareRho] = None) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
+        check_parts(motor, plan, gains, SMCGains)
         if not isinstance(torques, TorqueModel):
             raise ValueError(f"torques={torques!r} is not a TorqueModel")
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import solve_ivp
 
 from .. import _core
-from ..control.protocol import Controller, SlidingController, StaticController, is_static
+from ..control.protocol import Controller, SlidingController, StaticController, check_plan, is_static
 from ..control.smc import FlatnessSMC
 from ..errors import RunError
 from ..loop.reference import DriveLoop, run_reference
@@ -93,7 +93,16 @@ def simulate(plant: Union[Plant, MotorParams], plan: RestToRest, controller: Opt
         The time series; ``meta["engine"]`` records who computed them.
     """
     plant = plant if isinstance(plant, Plant) else Plant(plant)
+    check_plan(plan)
     controller = controller if controller is not None else FlatnessSMC(plant.motor, plan)
+    if not isinstance(controller, Controller):
+        raise ValueError(f"controller={controller!r} is not a flatstep controller (flatstep.control.protocol."
+                         "Controller: FlatnessSMC, a baseline, ...)")
+    for name, value, kind in (("loop", loop, DriveLoop), ("solver", solver, Continuous)):
+        if value is not None and not isinstance(value, kind):
+            raise ValueError(f"{name}={value!r} is not a {kind.__name__} (or None)")
+    if not isinstance(engine, str):
+        raise ValueError(f"engine={engine!r} must be a string: one of 'c', 'python', 'scipy'")
     if loop is not None and solver is not None:
         raise ValueError("give either loop= (sampled control) or solver= (continuous control), not both")
     timing = "sampled" if loop is not None else "continuous"
@@ -226,7 +235,8 @@ def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, so
                         atol=solver.atol)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
             reason = "nonfinite" if not np.all(np.isfinite(sol.y)) else "step_size"
-            raise RunError(reason, float(sol.t[-1]) if sol.t.size else seg[0],
+            reached = np.asarray(sol.t, dtype=float)
+            raise RunError(reason, float(reached[-1]) if reached.size else float(seg[0]),
                            f"scipy {method} integration failed on [{seg[0]:.6g}, {seg[-1]:.6g}] s: {sol.message}")
         ts.append(sol.t if not ts else sol.t[1:])
         xs.append(sol.y if not xs else sol.y[:, 1:])

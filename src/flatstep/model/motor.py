@@ -57,7 +57,7 @@ class MotorParams:
         """Return a named parameter set; see :data:`PRESETS`."""
         try:
             return PRESETS[name]
-        except KeyError:
+        except (KeyError, TypeError):
             raise ValueError(f"unknown motor preset {name!r}; valid presets: {sorted(PRESETS)}") from None
 
     def replace(self, **changes: float) -> "MotorParams":
@@ -88,7 +88,11 @@ def load_function(load: Load) -> Callable[[NDArray[np.float64]], NDArray[np.floa
     """Normalise a load torque (a constant [N m] or a function of time) to a vectorized function."""
     if callable(load):
         def tau(t: NDArray[np.float64]) -> NDArray[np.float64]:
-            value = np.asarray(load(t), dtype=float)
+            try:
+                value = np.asarray(load(t), dtype=float)
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"load torque function {load!r} returned a value that is not a number at t={t!r}: "
+                                 f"{exc}") from None
             if not np.all(np.isfinite(value)):
                 raise ValueError(f"load torque function returned a non-finite value {value!r} at t={t!r}")
             return np.broadcast_to(value, np.shape(t)) if np.ndim(value) == 0 else value

@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import Any, Iterable, Optional, Sequence, TextIO
 
 from ..engine.result import SimResult
-from ..validate import check_integer
+from ..engine.simulate import RUNNERS
+from ..validate import check_bool, check_integer
 from .batch_file import BatchWriteError, open_batch_file
 from .executors import as_executor, check_cancelled, default_chunk_size, executor_workers, run_chunks
 from .fingerprint import fingerprint
@@ -221,6 +222,8 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     run, with a warning. The lock is an ``O_CREAT | O_EXCL`` file holding the writer's pid, removed when the
     batch ends (also on an exception); one left by a killed writer (its pid gone) is taken over with a warning.
     """
+    if isinstance(scenarios, (Scenario, str)) or not isinstance(scenarios, Iterable):
+        raise ValueError(f"scenarios={scenarios!r} must be a sequence of Scenario (a list, or scenario_grid(...))")
     scenarios = list(scenarios)
     bad = [i for i, s in enumerate(scenarios) if not isinstance(s, Scenario)]
     if bad:
@@ -228,6 +231,14 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     for name, value in (("workers", workers), ("chunk_size", chunk_size)):
         if value is not None:
             check_integer(name, value)
+    fresh = check_bool("fresh", fresh)
+    engines = sorted({e for _, e in RUNNERS})
+    if engine not in engines:
+        raise ValueError(f"engine={engine!r} is not an engine; valid: {engines}")
+    if progress is not None:
+        progress = check_bool("progress", progress)
+    if isinstance(keep, str):
+        raise ValueError(f"keep={keep!r} must be a sequence of series names, e.g. ('t', 'theta'), not a string")
     valid = set(SimResult.__dataclass_fields__) - {"meta"} | {"theta_error", "rho_error"}
     if set(keep) - valid:
         raise ValueError(f"keep={list(keep)!r} names unknown series; valid: {sorted(valid)}")
@@ -289,6 +300,9 @@ def scenario_grid(base: Scenario, **axes: Iterable[Any]) -> list[Scenario]:
     if unknown:
         raise ValueError(f"unknown scenario field(s) {sorted(unknown)}; valid: {list(Scenario.__dataclass_fields__)}")
     keys = list(axes)
+    bad = [k for k in keys if isinstance(axes[k], (str, bytes)) or not isinstance(axes[k], Iterable)]
+    if bad:
+        raise ValueError(f"{bad[0]}={axes[bad[0]]!r}: give the values of an axis as a list, e.g. {bad[0]}=[...]")
     grid = []
     for values in product(*(list(axes[k]) for k in keys)):  # one value per key
         label = ",".join(f"{k}={v!r}" if not hasattr(v, "as_dict") else f"{k}={v.as_dict()}"

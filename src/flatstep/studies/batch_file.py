@@ -321,6 +321,8 @@ def open_batch_file(path: Path, fingerprints: Sequence[str], names: Sequence[str
     """
     if path.is_dir():
         raise ValueError(f"out={str(path)!r} is a directory; give the name of a batch file (JSON lines)")
+    if not path.parent.is_dir():
+        raise ValueError(f"out={str(path)!r}: its folder {str(path.parent)!r} does not exist; create it first")
     lock = acquire_lock(path)
     stack.callback(release_lock, lock)
     try:
