@@ -12,8 +12,8 @@ def test_the_ranges_table_is_the_codes():
 
 
 def test_the_limits_are_the_codes():
-    assert limits.MAX_STEPS == 200_000_000 and "| `MAX_STEPS` | 2e8" in DOC
-    assert limits.MAX_STEPS_REFERENCE == 2_000_000 and "| `MAX_STEPS_REFERENCE` | 2e6" in DOC
+    assert limits.MAX_STEPS == 100_000_000 and "| `MAX_STEPS` | 1e8" in DOC
+    assert limits.MAX_STEPS_REFERENCE == 200_000 and "| `MAX_STEPS_REFERENCE` | 2e5" in DOC
     assert limits.MAX_RESULT_BYTES == 1 << 30 and "| `MAX_RESULT_BYTES` | 1 GiB" in DOC
     assert limits.BYTES_PER_SAMPLE == 256 and "(256)" in DOC
     assert limits.MIN_PERIODS_PER_MOVE == 10 and "at least 10 control periods" in DOC

@@ -9,7 +9,7 @@ from flatstep.engine.settings import C_METHODS, SCIPY_METHODS
 def test_defaults_and_as_dict():
     s = fs.Continuous()
     assert s.as_dict() == {"method": None, "rtol": 1e-10, "atol": 1e-12, "dt_out": 1e-5, "max_steps": 10_000_000,
-                           "max_wall_time": 60.0}
+                           "max_wall_time": 15.0}
     assert isinstance(fs.Continuous(rtol=1, atol=1, dt_out=1).rtol, float)  # numbers are stored as floats
 
 

@@ -41,7 +41,7 @@ class Continuous:
     atol: float = 1e-12
     dt_out: float = 1e-5
     max_steps: int = 10_000_000
-    max_wall_time: float = 60.0
+    max_wall_time: float = 15.0
 
     def __post_init__(self) -> None:
         if self.method is not None and self.method not in C_METHODS + SCIPY_METHODS:

@@ -8,8 +8,8 @@ Resources: a run is refused up front, with the estimate and how to lower it, whe
 
 * return more than :data:`MAX_RESULT_BYTES` of time series (:data:`BYTES_PER_SAMPLE` per returned sample);
 * take more than :data:`MAX_STEPS` plant integration steps on the C core (control periods x RK4 substeps, or x
-  PWM segments in switched mode; about 15 s on one core of a 2020s PC) or :data:`MAX_STEPS_REFERENCE` on the
-  readable Python reference loop, about 100x slower per step.
+  PWM segments in switched mode; about 10 s on one core of a 2020s PC) or :data:`MAX_STEPS_REFERENCE` on the
+  readable Python reference loop, about 800x slower per step.
 
 docs/errors.md lists these limits. They are module constants: a user who really needs a larger run may raise them
 (``flatstep.validate.limits.MAX_STEPS = ...``), knowingly.
@@ -28,10 +28,10 @@ MIN_PERIODS_PER_MOVE = 10
 BYTES_PER_SAMPLE = 256
 #: Largest result of one run [bytes] (1 GiB: about 4.2 million samples).
 MAX_RESULT_BYTES = 1 << 30
-#: Most plant integration steps of one run on the C core.
-MAX_STEPS = 200_000_000
-#: Most plant integration steps of one run on the Python reference loop (``engine="python"``).
-MAX_STEPS_REFERENCE = 2_000_000
+#: Most plant integration steps of one run on the C core (about 85 ns each with the sliding controller: 10 s).
+MAX_STEPS = 100_000_000
+#: Most plant integration steps of one run on the Python reference loop (``engine="python"``, about 70 us each: 15 s).
+MAX_STEPS_REFERENCE = 200_000
 #: Segments of one PWM period in switched mode (csrc/drive.h ``DRIVE_PWM_SEGMENTS``).
 PWM_SEGMENTS = 9
 
