@@ -90,7 +90,7 @@ INTEGER_RANGES: dict[str, tuple[int, int]] = {
     "current_bits": (2, 32),
     "delay": (0, 1000),
     "seed": (0, 2**63 - 1),
-    "samples": (0, 10_000_000),
+    "samples": (0, 100_000),
     "load_states": (0, 2),
     "repeat": (1, 100_000),
     "seeds": (1, 100_000),
