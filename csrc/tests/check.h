@@ -31,5 +31,6 @@ int test_ode(void);
 int test_sim(void);
 int test_drive(void);
 int test_baselines(void);
+int test_trajectory(void);
 
 #endif

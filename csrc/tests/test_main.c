@@ -22,8 +22,10 @@ int main(int argc, char **argv)
         test_drive();
     else if (strcmp(suite, "baselines") == 0)
         test_baselines();
+    else if (strcmp(suite, "trajectory") == 0)
+        test_trajectory();
     else {
-        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines\n", argv[0]);
+        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines | trajectory\n", argv[0]);
         return 2;
     }
     printf("%s: %d checks, %d failed\n", suite, check_count, check_failures);
