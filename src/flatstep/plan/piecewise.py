@@ -154,7 +154,7 @@ class PiecewisePlan:
         ih = 1.0 / (b[i + 1] - b[i])
         return i, ih, np.where(inside, (t - b[i]) * ih, 0.0), inside  # outside: held, tau unused
 
-    def _held(self, coef: Array, t: Array, inside: Array, value: Array) -> Array:
+    def _held(self, coef: Array, t: Array, inside: NDArray[np.bool_], value: Array) -> Array:
         """``value`` inside the move, the held start or end value outside it (a NaN time holds the start)."""
         start, end = self._ends(coef)
         return np.where(inside, value, np.where(t >= self.breaks[-1], end, start))
