@@ -7,6 +7,7 @@
 #include "fs_real.h"
 #include "motor.h"
 #include "plan.h"
+#include "trajectory.h"
 
 // cffi:begin
 
@@ -45,6 +46,9 @@ struct smc_params {
     int measurement;  // enum smc_measurement
     fs_real v_limit;  // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
     fs_real rho_min;  // smallest current magnitude the law acts on [A], > 0
+    // NULL: track plan; else track this table (trajectory.h, caller-owned, outliving s), plan then holding the
+    // table's end points (the hold's target and tf)
+    const struct traj *traj;
 };
 
 struct smc {
@@ -76,7 +80,7 @@ struct smc_terms {
 };
 
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
-// v_limit = 1e3 V and rho_min = 1e-6 A.
+// v_limit = 1e3 V, rho_min = 1e-6 A and no table.
 void smc_params_default(struct smc_params *p);
 
 // Returns SMC_PARAMS_OK, or the smc_param_error naming the invalid group (s is then left unusable).

@@ -2,6 +2,7 @@
 #include <stdint.h>
 #include "check.h"
 #include "plan.h"
+#include "smc.h"
 #include "trajectory.h"
 
 // The paper's psi (highest power first) and its move of test_plan: theta 0 -> 0.02 rad on [0.02, 0.04] s.
@@ -100,11 +101,45 @@ static int valid_checks(void)
     return 0;
 }
 
+// Returns 0; smc tracks a table given in its params: the step's reference is traj_flag's, and a broken table is
+// refused.
+static int smc_checks(void)
+{
+    static const double breaks[3] = {0.01, 0.03, 0.05};
+    double th[2 * TRAJ_NCOEF] = {0}, rh[2 * TRAJ_NCOEF] = {0}, f[PLAN_FLAG_LEN], v[2], t;
+    double y[5] = {0.1, 0.3, 0.5, 0.01, 2.0};
+    struct traj tr = {2, breaks, th, rh}, bad = {0, breaks, th, rh};
+    struct smc_params p;
+    struct smc s;
+    struct smc_terms w;
+    int i, j;
+    for (j = 0; j < TRAJ_NCOEF; j++)
+        th[j] = PSI[j] * 0.02, th[TRAJ_NCOEF + j] = -PSI[j] * 0.01;
+    th[2 * TRAJ_NCOEF - 1] += 0.02;
+    rh[TRAJ_NCOEF - 1] = rh[2 * TRAJ_NCOEF - 1] = 0.4;
+    smc_params_default(&p);
+    CHECK(p.traj == NULL, "no table by default");
+    p.traj = &bad;
+    CHECK(smc_init(&s, &p) == SMC_EPLAN, "a broken table is refused");
+    p.traj = &tr;
+    CHECK(smc_init(&s, &p) == SMC_PARAMS_OK, "a valid table is taken");
+    for (i = 0; i <= 30; i++) {
+        t = 0.002 * i;
+        smc_step_terms(&s, t, y, NULL, v, &w);
+        traj_flag(&tr, t, f);
+        for (j = 0; j < PLAN_FLAG_LEN; j++)
+            CHECK(w.flag[j] == f[j], "flag[%d] at t=%g", j, t);
+        CHECK(isfinite(v[0]) && isfinite(v[1]), "finite voltages at t=%g", t);
+    }
+    return 0;
+}
+
 // Returns the number of failed checks of the trajectory suite.
 int test_trajectory(void)
 {
     psi_segment_checks();
     lookup_checks();
     valid_checks();
+    smc_checks();
     return check_failures;
 }

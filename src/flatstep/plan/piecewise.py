@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -116,6 +116,11 @@ class PiecewisePlan:
     def tf(self) -> float:
         """End of the move [s]."""
         return float(self.breaks[-1])
+
+    @property
+    def knots(self) -> tuple[float, ...]:
+        """Where the plan's derivatives may jump: every break (an integrator restarts there)."""
+        return tuple(self.breaks.tolist())
 
     @property
     def durations(self) -> Array:
@@ -261,3 +266,7 @@ class PiecewisePlan:
             self._c["keep"] = (arrays, ptrs)
             self._c["traj"] = ffi.new("struct traj *", dict(n=self.n, breaks=ptrs[0], theta=ptrs[1], rho=ptrs[2]))
         return self._c["traj"]
+
+
+#: A plan the controllers track: the paper's rest-to-rest move or a segment table.
+Plan = Union[RestToRest, PiecewisePlan]
