@@ -37,6 +37,11 @@ size_t traj_segment(const struct traj *tr, fs_real t);
 // A NaN t holds the start, as any t <= breaks[0] does.
 bool traj_flag(const struct traj *tr, fs_real t, fs_real flag[PLAN_FLAG_LEN]);
 
+// Returns and writes what traj_flag does; *seg is the caller's guess of the segment (the last call's), checked,
+// then its successor, then bisection; on return the segment of t. Times in order (a control loop's) so cost no
+// search.
+bool traj_flag_seg(const struct traj *tr, fs_real t, size_t *seg, fs_real flag[PLAN_FLAG_LEN]);
+
 // Returns nothing; writes traj_flag at each of the n times t into flag (n x PLAN_FLAG_LEN, row-major).
 void traj_flag_n(const struct traj *tr, const fs_real *t, size_t n, fs_real *flag);
 

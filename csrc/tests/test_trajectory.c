@@ -77,6 +77,16 @@ static int lookup_checks(void)
             CHECK(traj_theta(&tr, t, k) == f[PLAN_THETA + k], "traj_theta(%d) is the flag's at t=%g", k, t);
     }
     CHECK(traj_theta(&tr, 1.5, 5) == 0 && traj_theta(&tr, 1.5, -1) == 0, "orders out of range give 0");
+    // traj_flag_seg: the same flag from any guess, and the segment of t on return.
+    for (i = 0; i < 200; i++) {
+        size_t seg = (size_t)(i * 7) % 5, want;  // guesses 0 .. 4, n = 3 included (out of range)
+        t = -0.2 + 0.02 * ((i * 37) % 200);
+        want = traj_segment(&tr, t);
+        CHECK(traj_flag_seg(&tr, t, &seg, fp) == traj_flag(&tr, t, f), "inside at t=%g", t);
+        for (k = 0; k < PLAN_FLAG_LEN; k++)
+            CHECK(fp[k] == f[k], "flag[%d] from a guess at t=%g", k, t);
+        CHECK(!(t > 0 && t < 3.5) || seg == want, "segment %zu of t=%g, want %zu", seg, t, want);
+    }
     return 0;
 }
 
