@@ -1,0 +1,113 @@
+r"""The motor's limits on a plan, and a plan's worst margins against them through the flat maps.
+
+A plan of the flat outputs fixes, at every instant, the currents and voltages the motor needs
+(:func:`flatstep.model.flat.flat_to_state`: R i, L di/dt, the back EMF and the reactance). :func:`plan_margins`
+samples a plan and reports how much of each limit it uses:
+
+* ``voltage``: the largest phase voltage :math:`\max(|v_a|, |v_b|)` over the bus voltage;
+* ``current``: the largest current magnitude :math:`\rho` over ``i_max``;
+* ``torque_angle``: the largest :math:`|\cos\delta| = |J\ddot\theta + B\dot\theta| / K_m\rho` over
+  :math:`\sin` of ``torque_angle_max`` (the paper's law is singular at :math:`|\cos\delta| = 1`);
+* ``speed``, ``acceleration``, ``jerk``: the peaks over the optional caps.
+
+A plan is feasible when every ratio is at most 1.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Optional
+
+import numpy as np
+
+from ..model.flat import flat_to_state
+from ..model.motor import MotorParams
+from ..validate import check_finite, check_positive
+from .piecewise import PiecewisePlan
+
+#: Samples per segment of a margin check.
+SAMPLES_PER_SEGMENT = 24
+
+
+@dataclass(frozen=True)
+class MotorLimits:
+    r"""The bus, the current and the law's torque-angle margin, and optional speed, acceleration and jerk caps.
+
+    Parameters
+    ----------
+    v_bus : float
+        Bus voltage [V]: each phase voltage must stay within +-v_bus.
+    i_max : float
+        Largest current-vector magnitude rho [A].
+    i_hold : float
+        The current held across the torque axis, :math:`\rho\sin\delta` [A], > 0: the current at rest, and
+        the one that keeps the (rho, theta) law away from its singularity while it makes torque.
+    torque_angle_max : float
+        Largest torque angle the plan may ask for, :math:`\pi/2 - \delta` [rad], in (0, pi/2).
+    v_use : float
+        Fraction of v_bus the plan's feedforward may use, in (0, 1]; the rest is the controller's to correct.
+    speed_max, accel_max, jerk_max : float, optional
+        Caps [rad/s, rad/s^2, rad/s^3].
+    """
+
+    v_bus: float
+    i_max: float
+    i_hold: float = 0.2
+    torque_angle_max: float = 1.3
+    v_use: float = 0.9
+    speed_max: Optional[float] = None
+    accel_max: Optional[float] = None
+    jerk_max: Optional[float] = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "v_bus", check_positive("v_bus", self.v_bus, unit=" V"))
+        object.__setattr__(self, "i_max", check_positive("i_max", self.i_max, unit=" A"))
+        object.__setattr__(self, "i_hold", check_positive("i_hold", self.i_hold, unit=" A"))
+        if self.i_hold >= self.i_max:
+            raise ValueError(f"i_hold={self.i_hold!r} A must be below i_max={self.i_max!r} A, or no torque is left")
+        angle = check_finite("torque_angle_max", self.torque_angle_max)
+        if not 0 < angle < math.pi / 2:
+            raise ValueError(f"torque_angle_max={angle!r} rad must be in (0, pi/2)")
+        use = check_finite("v_use", self.v_use)
+        if not 0 < use <= 1:
+            raise ValueError(f"v_use={use!r} must be in (0, 1]: the fraction of the bus the plan may use")
+        for name in ("speed_max", "accel_max", "jerk_max"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, check_positive(name, getattr(self, name)))
+
+    @property
+    def iq_max(self) -> float:
+        """The largest torque current: within i_max beside i_hold, and within the torque angle."""
+        return min(math.sqrt(self.i_max**2 - self.i_hold**2), self.i_hold * math.tan(self.torque_angle_max))
+
+    def as_dict(self) -> dict[str, Optional[float]]:
+        """The limits by name, for JSON."""
+        return asdict(self)
+
+
+def plan_margins(plan: PiecewisePlan, motor: MotorParams, limits: MotorLimits,
+                 samples_per_segment: int = SAMPLES_PER_SEGMENT) -> dict[str, float]:
+    """The plan's worst use of each limit (module docstring): ratios, feasible when all are <= 1.
+
+    The peaks themselves are returned beside them (``v_peak`` [V], ``rho_peak`` [A], ``speed_peak`` ...).
+    """
+    tau = (np.arange(samples_per_segment) + 0.5) / samples_per_segment
+    t = np.concatenate([(plan.breaks[:-1, None] + plan.durations[:, None] * tau[None, :]).ravel(), plan.breaks])
+    f = plan.flag(np.sort(t))
+    torque = motor.J * f.ddtheta + motor.B * f.dtheta
+    cos_delta = np.abs(torque) / (motor.Km * f.rho)
+    out = dict(rho_peak=float(np.max(f.rho)), speed_peak=float(np.max(np.abs(f.dtheta))),
+               accel_peak=float(np.max(np.abs(f.ddtheta))), jerk_peak=float(np.max(np.abs(f.dddtheta))),
+               cos_delta_peak=float(np.max(cos_delta)))
+    if out["cos_delta_peak"] >= 1:
+        out.update(v_peak=math.inf, voltage=math.inf)
+    else:
+        _, v = flat_to_state(f, motor)
+        out["v_peak"] = float(np.max(np.abs(v)))
+        out["voltage"] = out["v_peak"] / limits.v_bus
+    out["current"] = out["rho_peak"] / limits.i_max
+    out["torque_angle"] = out["cos_delta_peak"] / math.sin(limits.torque_angle_max)
+    for key, cap in (("speed", limits.speed_max), ("acceleration", limits.accel_max), ("jerk", limits.jerk_max)):
+        out[key] = out[f"{'accel' if key == 'acceleration' else key}_peak"] / cap if cap else 0.0
+    out["worst"] = max(out[k] for k in ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk"))
+    return out
