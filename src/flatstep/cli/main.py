@@ -28,6 +28,7 @@ from ..studies.scenario import PAPER_SCENARIOS, Scenario
 from ..studies.scenario_file import load_scenario
 from .compare import add_compare_command
 from .design import add_design_command
+from .plan import add_plan_command
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, exit_code, warn
 
@@ -176,6 +177,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_design_command(sub)
     add_robustness_command(sub)
     add_compare_command(sub)
+    add_plan_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d,e", help="a: planning, b: closed loop, c: controller step, "

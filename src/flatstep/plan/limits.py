@@ -52,8 +52,8 @@ class MotorLimits:
 
     v_bus: float
     i_max: float
-    i_hold: float = 0.2
-    torque_angle_max: float = 1.3
+    i_hold: float = 0.3
+    torque_angle_max: float = 1.2
     v_use: float = 0.9
     speed_max: Optional[float] = None
     accel_max: Optional[float] = None

@@ -96,7 +96,7 @@ class PiecewisePlan:
         object.__setattr__(self, "breaks", b)
         object.__setattr__(self, "theta", _table("theta", self.theta, n))
         object.__setattr__(self, "rho", _table("rho", self.rho, n))
-        lowest = float(np.min(self.flag(np.linspace(b[0], b[-1], 64 * n + 1)).rho))
+        lowest = float(np.min(self.flag(np.linspace(b[0], b[-1], 16 * n + 1)).rho))
         if not lowest > 0:
             raise ValueError(f"rho falls to {lowest!r} A on the plan; the current magnitude must stay > 0")
         for a in (self.breaks, self.theta, self.rho):
@@ -213,6 +213,15 @@ class PiecewisePlan:
         theta[-1] += plan.theta1
         rho[-1] += plan.rho1
         return cls(np.array([plan.t0, plan.tf]), theta[None, :], rho[None, :])
+
+    @classmethod
+    def hold(cls, theta: float, rho: float, t0: float, t1: float) -> "PiecewisePlan":
+        """One segment holding ``theta`` [rad] at the current magnitude ``rho`` [A] over ``[t0, t1]``."""
+        row = np.zeros((1, NCOEF))
+        row[0, -1] = theta
+        rho_row = np.zeros((1, NCOEF))
+        rho_row[0, -1] = rho
+        return cls(np.array([t0, t1]), row, rho_row)
 
     @classmethod
     def from_ppoly(cls, theta: PPoly, rho: float | PPoly) -> "PiecewisePlan":
