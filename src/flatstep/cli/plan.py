@@ -25,21 +25,19 @@ def plot_plan(pf: PlanFile, path: Path) -> None:
     plan = pf.plan
     t = np.linspace(plan.t0, plan.tf, 4001)
     f = plan.flag(t)
-    x, v = flat_to_state(f, pf.motor)
+    _, v = flat_to_state(f, pf.motor)
     fig, ax = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
     ax[0].plot(t, f.theta)
     ax[0].set_ylabel(r"$\theta^*$ [rad]")
     ax[1].plot(t, f.dtheta)
     ax[1].set_ylabel(r"$\dot\theta^*$ [rad/s]")
-    ax[2].plot(t, v[0], label="$v_a$")
-    ax[2].plot(t, v[1], label="$v_b$", alpha=0.7)
+    # the vector's magnitude: each phase voltage reaches it once per electrical turn
+    ax[2].plot(t, np.hypot(v[0], v[1]), label=r"$|v|$ (phase peak)")
     ax[3].plot(t, f.rho, label=r"$\rho^* = |i|$")
-    ax[3].plot(t, x[0], label="$i_a$", alpha=0.5)
     if pf.limits is not None:
-        for sign in (1, -1):
-            ax[2].axhline(sign * pf.limits.v_bus, color="k", ls="--", lw=1)
+        ax[2].axhline(pf.limits.v_bus, color="k", ls="--", lw=1, label="$V_{bus}$")
         ax[3].axhline(pf.limits.i_max, color="k", ls="--", lw=1, label="$i_{max}$")
-    ax[2].set_ylabel("feedforward voltage [V]")
+    ax[2].set_ylabel("voltage demand [V]")
     ax[3].set_ylabel("current [A]")
     ax[3].set_xlabel("t [s]")
     for a in ax[2:]:
