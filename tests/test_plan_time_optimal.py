@@ -30,7 +30,8 @@ def test_the_plan_is_feasible_on_a_finer_check_and_near_the_bound(moves, v_bus):
     limits = MotorLimits(v_bus=v_bus, i_max=1.0)
     plan = moves[v_bus]
     m = plan_margins(plan, MOTOR, limits, samples_per_segment=97)  # four times the planner's sampling
-    assert m["voltage"] <= limits.v_use * (1 + 1e-3) and m["current"] <= 1 and m["torque_angle"] <= 1 + 1e-3, m
+    # within the bus with the controller's headroom (v_use) kept up to 0.5 %, the current and the torque angle
+    assert m["voltage"] <= limits.v_use * 1.005 and m["current"] <= 1 and m["torque_angle"] <= 1, m
     assert m["voltage"] > 0.85  # the bus is what limits a 5 rad move
     bound = bang_bang_time(5.0, MOTOR, limits)
     assert bound < plan.tf < 1.2 * bound, (plan.tf, bound)

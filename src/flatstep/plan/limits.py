@@ -4,7 +4,9 @@ A plan of the flat outputs fixes, at every instant, the currents and voltages th
 (:func:`flatstep.model.flat.flat_to_state`: R i, L di/dt, the back EMF and the reactance). :func:`plan_margins`
 samples a plan and reports how much of each limit it uses:
 
-* ``voltage``: the largest phase voltage :math:`\max(|v_a|, |v_b|)` over the bus voltage;
+* ``voltage``: the largest voltage magnitude :math:`\sqrt{v_a^2 + v_b^2}` over the bus voltage: each phase
+  voltage reaches it once per electrical turn, so it bounds them at any rotor angle (and does not depend on
+  where the samples fall on the turn);
 * ``current``: the largest current magnitude :math:`\rho` over ``i_max``;
 * ``torque_angle``: the largest :math:`|\cos\delta| = |J\ddot\theta + B\dot\theta| / K_m\rho` over
   :math:`\sin` of ``torque_angle_max`` (the paper's law is singular at :math:`|\cos\delta| = 1`);
@@ -19,12 +21,14 @@ from dataclasses import asdict, dataclass
 from typing import Optional
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
 from ..validate import check_finite, check_positive
 from .piecewise import PiecewisePlan
 
+Array = NDArray[np.float64]
 #: Samples per segment of a margin check.
 SAMPLES_PER_SEGMENT = 24
 
@@ -40,8 +44,12 @@ class MotorLimits:
     i_max : float
         Largest current-vector magnitude rho [A].
     i_hold : float
-        The current held across the torque axis, :math:`\rho\sin\delta` [A], > 0: the current at rest, and
-        the one that keeps the (rho, theta) law away from its singularity while it makes torque.
+        The current across the torque axis at rest, :math:`\rho\sin\delta` [A], > 0 (the holding current).
+    i_run : float, optional
+        The current across the torque axis at speed [A], in (0, i_hold]; ``None``: i_hold throughout. Less of
+        it lowers the reactance voltage :math:`N_r\omega L i_d` (the plan of rho*, :meth:`across`).
+    speed_corner : float
+        The speed [rad/s] at which the across-axis floor is halfway from i_hold to i_run.
     torque_angle_max : float
         Largest torque angle the plan may ask for, :math:`\pi/2 - \delta` [rad], in (0, pi/2).
     v_use : float
@@ -53,6 +61,8 @@ class MotorLimits:
     v_bus: float
     i_max: float
     i_hold: float = 0.3
+    i_run: Optional[float] = None
+    speed_corner: float = 10.0
     torque_angle_max: float = 1.2
     v_use: float = 0.9
     speed_max: Optional[float] = None
@@ -65,6 +75,12 @@ class MotorLimits:
         object.__setattr__(self, "i_hold", check_positive("i_hold", self.i_hold, unit=" A"))
         if self.i_hold >= self.i_max:
             raise ValueError(f"i_hold={self.i_hold!r} A must be below i_max={self.i_max!r} A, or no torque is left")
+        if self.i_run is not None:
+            run = check_positive("i_run", self.i_run, unit=" A")
+            if run > self.i_hold:
+                raise ValueError(f"i_run={run!r} A must be in (0, i_hold={self.i_hold!r} A]")
+            object.__setattr__(self, "i_run", run)
+        object.__setattr__(self, "speed_corner", check_positive("speed_corner", self.speed_corner, unit=" rad/s"))
         angle = check_finite("torque_angle_max", self.torque_angle_max)
         if not 0 < angle < math.pi / 2:
             raise ValueError(f"torque_angle_max={angle!r} rad must be in (0, pi/2)")
@@ -75,10 +91,30 @@ class MotorLimits:
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, check_positive(name, getattr(self, name)))
 
-    @property
-    def iq_max(self) -> float:
-        """The largest torque current: within i_max beside i_hold, and within the torque angle."""
-        return min(math.sqrt(self.i_max**2 - self.i_hold**2), self.i_hold * math.tan(self.torque_angle_max))
+    def floor(self, omega: ArrayLike) -> Array:
+        """The across-axis current without torque: i_hold at rest, towards i_run at speed."""
+        w = np.abs(np.asarray(omega, dtype=float))
+        run = self.i_hold if self.i_run is None else self.i_run
+        return run + (self.i_hold - run) / (1.0 + (w / self.speed_corner) ** 2)
+
+    def across(self, iq: ArrayLike, omega: ArrayLike) -> Array:
+        r"""The planned current across the torque axis for the torque current ``iq`` at speed ``omega``.
+
+        .. math:: i_d = \sqrt{f(\omega)^2 + (i_q\cot\alpha_{max})^2}
+
+        smooth in both, and never below :math:`|i_q|\cot\alpha_{max}`: the torque angle stays below
+        ``torque_angle_max``.
+        """
+        return np.hypot(self.floor(omega), np.asarray(iq, dtype=float) / math.tan(self.torque_angle_max))
+
+    def rho(self, iq: ArrayLike, omega: ArrayLike) -> Array:
+        """The planned current magnitude rho* = hypot(iq, across(iq, omega))."""
+        return np.hypot(np.asarray(iq, dtype=float), self.across(iq, omega))
+
+    def iq_cap(self, omega: ArrayLike) -> Array:
+        """The largest torque current within i_max at speed ``omega``."""
+        room = np.sqrt(np.maximum(self.i_max**2 - self.floor(omega) ** 2, 0.0))
+        return room * math.sin(self.torque_angle_max)
 
     def as_dict(self) -> dict[str, Optional[float]]:
         """The limits by name, for JSON."""
@@ -103,7 +139,7 @@ def plan_margins(plan: PiecewisePlan, motor: MotorParams, limits: MotorLimits,
         out.update(v_peak=math.inf, voltage=math.inf)
     else:
         _, v = flat_to_state(f, motor)
-        out["v_peak"] = float(np.max(np.abs(v)))
+        out["v_peak"] = float(np.max(np.hypot(v[0], v[1])))
         out["voltage"] = out["v_peak"] / limits.v_bus
     out["current"] = out["rho_peak"] / limits.i_max
     out["torque_angle"] = out["cos_delta_peak"] / math.sin(limits.torque_angle_max)

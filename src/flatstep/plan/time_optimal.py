@@ -1,13 +1,14 @@
 r"""The fastest rest-to-rest move the motor and its bus can make: a speed-dependent envelope, smoothed and checked.
 
-**Envelope.** At speed :math:`\omega`, with the current :math:`i_d` = ``i_hold`` across the torque axis and
-:math:`i_q` along it, the steady phase voltage (:math:`di/dt = 0`) is
+**Envelope.** At speed :math:`\omega`, with the current :math:`i_q` along the torque axis and the planned
+:math:`i_d` across it (:meth:`~flatstep.plan.limits.MotorLimits.across`: the holding current at rest, less at
+speed, never so little that the torque angle passes its cap), the steady phase voltage (:math:`di/dt = 0`) is
 
 .. math::
     v_d = R i_d - N_r\omega L i_q,\qquad v_q = R i_q + N_r\omega L i_d + K_m\omega,\qquad
     v_d^2 + v_q^2 \le (\gamma V_{bus})^2,
 
-a quadratic in :math:`i_q` whose roots, clipped to ``limits.iq_max``, bound the torque current and so the
+solved by bisection for the largest :math:`\pm i_q` within ``i_max``: they bound the torque current and so the
 acceleration :math:`a_\pm(\omega) = (K_m i_{q\pm} - B\omega)/J` (back EMF helps braking: :math:`|a_-| > a_+`).
 
 **Bang-bang profile.** Accelerate on :math:`a_+`, cruise at the speed cap if reached, brake on :math:`a_-`:
@@ -19,7 +20,7 @@ this is the *bang-bang bound* :func:`bang_bang_time`, the lower bound the planne
 firmwares smooth moves): the jerk becomes continuous, theta''' exists for the law's feedforward, the duration
 grows by :math:`2w`, and the end position is kept. The result becomes a table of degree-7 segments through
 the profile's (theta, theta', theta'', theta''') at its knots (:func:`.segments.hermite_rows`), with
-:math:`\rho = \sqrt{i_q^2 + i_{hold}^2}`.
+:math:`\rho^* = \sqrt{i_q^2 + i_d^2}` (:meth:`~flatstep.plan.limits.MotorLimits.rho`).
 
 **Search.** The inductance needs voltage headroom, which the envelope's :math:`\gamma < 1` leaves. For each
 smoothing width of a small set (multiples of :math:`L/R`) a bisection finds the largest :math:`\gamma` whose
@@ -29,6 +30,7 @@ rest); the shortest feasible table wins. Its feasibility is checked on the table
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Optional
 
 import numpy as np
@@ -49,27 +51,43 @@ _WIDTHS = (0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
 _BISECT = 9
 
 
-def iq_bounds(omega: Array, motor: MotorParams, limits: MotorLimits, gamma: float = 1.0) -> tuple[Array, Array]:
-    """The torque currents (lowest, highest) the bus allows at speeds ``omega`` >= 0 (module docstring)."""
-    m, i_d = motor, limits.i_hold
+def _voltage2(iq: Array, omega: Array, motor: MotorParams, limits: MotorLimits) -> Array:
+    """The steady squared voltage magnitude at torque current ``iq``, speed ``omega`` and the planned i_d."""
+    m, i_d = motor, limits.across(iq, omega)
     e = m.Nr * omega * m.L
-    a = m.R**2 + e**2
-    b = m.R * m.Km * omega
-    c = (m.R * i_d) ** 2 + (e * i_d + m.Km * omega) ** 2 - (gamma * limits.v_bus) ** 2
-    disc = np.sqrt(np.maximum(b * b - a * c, 0.0))
-    hi, lo = (-b + disc) / a, (-b - disc) / a
-    reach = b * b - a * c > 0
-    return (np.where(reach, np.maximum(lo, -limits.iq_max), 0.0), np.where(reach, np.minimum(hi, limits.iq_max), 0.0))
+    return (m.R * i_d - e * iq) ** 2 + (m.R * iq + e * i_d + m.Km * omega) ** 2
 
 
+def iq_bounds(omega: Array, motor: MotorParams, limits: MotorLimits, gamma: float = 1.0) -> tuple[Array, Array]:
+    """The torque currents (lowest, highest) the bus and i_max allow at speeds ``omega`` >= 0 (module docstring).
+
+    A bisection on each side of 0, vectorized over the speeds; 0 where even no torque exceeds the bus.
+    """
+    omega = np.asarray(omega, dtype=float)
+    cap = limits.iq_cap(omega)
+    v2 = (gamma * limits.v_bus) ** 2
+    bounds = []
+    for sign in (-1.0, 1.0):
+        ok, bad = np.zeros_like(omega), sign * cap
+        full = _voltage2(bad, omega, motor, limits) <= v2
+        for _ in range(32):  # a loop over halvings, vectorized over the speeds
+            mid = 0.5 * (ok + bad)
+            inside = _voltage2(mid, omega, motor, limits) <= v2
+            ok, bad = np.where(inside, mid, ok), np.where(inside, bad, mid)
+        bounds.append(np.where(full, sign * cap, ok))
+    reach = _voltage2(np.zeros_like(omega), omega, motor, limits) <= v2
+    return np.where(reach, bounds[0], 0.0), np.where(reach, bounds[1], 0.0)
+
+
+@lru_cache(maxsize=512)
 def _envelope(motor: MotorParams, limits: MotorLimits, gamma: float) -> tuple[Array, Array, Array]:
     """Speed grid up to the top speed and the accelerations a+ > 0, a- < 0 on it."""
     m = motor
     top = limits.speed_max or math.inf
     # the top speed where a+ reaches 0: below the speed where the back EMF alone takes the bus
     w_emf = gamma * limits.v_bus / m.Km
-    probe = np.linspace(0.0, min(top, w_emf), 4 * _GRID)
-    lo, hi = iq_bounds(probe, m, limits, gamma)
+    probe = np.linspace(0.0, min(top, w_emf), _GRID)
+    _, hi = iq_bounds(probe, m, limits, gamma)
     acc = (m.Km * hi - m.B * probe) / m.J
     if not acc[0] > 0:
         raise ValueError(f"the motor cannot start: at rest the bus {limits.v_bus} V (x {gamma:.3g}) and the limits "
@@ -83,6 +101,8 @@ def _envelope(motor: MotorParams, limits: MotorLimits, gamma: float) -> tuple[Ar
     if limits.accel_max:
         a_plus, a_minus = np.minimum(a_plus, limits.accel_max), np.maximum(a_minus, -limits.accel_max)
     a_plus[-1] = max(a_plus[-1], 1e-12 * a_plus[0])  # the top speed is reached in finite time on the grid
+    for a in (omega, a_plus, a_minus):  # cached: shared by every caller
+        a.flags.writeable = False
     return omega, a_plus, a_minus
 
 
@@ -118,7 +138,8 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
     omega, t_acc, t_dec, _, w_peak, cruise = _bang_bang(d, motor, limits, gamma)
     t1, t2 = float(np.interp(w_peak, omega, t_acc)), float(np.interp(w_peak, omega, t_dec))
     total = t1 + cruise + t2
-    dt = (total + 2 * width) / _FINE
+    # fine enough for the shortest of speed-up, braking and smoothing, and for the whole move
+    dt = min((total + 2 * width) / _FINE, min(t1, t2, width) / 40)
     n_box = max(1, int(round(width / dt)))
     t = np.arange(int(math.ceil(total / dt)) + 1) * dt
     speed = np.where(t <= t1, np.interp(t, t_acc, omega),
@@ -130,7 +151,12 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
     scale = d / theta[-1]
     acc = np.gradient(speed, dt) * scale
     jerk = np.gradient(acc, dt)
-    knots = np.unique(np.concatenate([np.linspace(0, speed.size - 1, _KNOTS + 1).round().astype(int)]))
+    # knots dense where the speed changes (speed-up and braking, smoothing included), few in the cruise
+    last, up, down = speed.size - 1, (t1 + 2 * width) / dt, (t1 + cruise) / dt
+    edges = np.clip([0.0, up, down, last], 0, last) if cruise > 0 else np.array([0.0, last / 2, last / 2, last])
+    knots = np.unique(np.concatenate([np.linspace(edges[0], edges[1], _KNOTS // 2 + 1),
+                                      np.linspace(edges[1], edges[2], 5),
+                                      np.linspace(edges[2], edges[3], _KNOTS // 2 + 1)]).round().astype(int))
     state = np.column_stack([theta * scale, speed * scale, acc, jerk])[knots]
     state[0, 1:] = state[-1, 1:] = 0.0
     state[-1, 0] = d
@@ -138,20 +164,18 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
     sign = 1.0 if distance >= 0 else -1.0
     rows = sign * hermite_rows(state[:-1], state[1:], h)
     rows[:, -1] += theta1
-    iq = (motor.J * state[:, 2] + motor.B * state[:, 1]) / motor.Km
-    diq = (motor.J * state[:, 3] + motor.B * state[:, 2]) / motor.Km
-    rho = np.hypot(iq, limits.i_hold)
-    drho = iq * diq / rho
-    zeros = np.zeros_like(rho)
-    rho_rows = hermite_rows(np.column_stack([rho, drho, zeros, zeros])[:-1],
-                            np.column_stack([rho, drho, zeros, zeros])[1:], h)
+    rho_fine = limits.rho((motor.J * acc + motor.B * speed * scale) / motor.Km, speed * scale)
+    # rho and rho' at the knots (the law reads rho' only); rho'' and rho''' set to 0 keep each segment monotone
+    rho_state = np.column_stack([rho_fine, np.gradient(rho_fine, dt), 0 * rho_fine, 0 * rho_fine])[knots]
+    rho_rows = hermite_rows(rho_state[:-1], rho_state[1:], h)
     return PiecewisePlan(t0 + np.concatenate([[0.0], np.cumsum(h)]), rows, rho_rows)
 
 
 def _feasible(plan: PiecewisePlan, motor: MotorParams, limits: MotorLimits) -> bool:
     """Whether the table keeps every limit (the bus within ``v_use``)."""
     m = plan_margins(plan, motor, limits)
-    return m["voltage"] <= limits.v_use and max(m["current"], m["torque_angle"], m["speed"], m["acceleration"],
+    # 0.2 % below v_use: the sampled check may miss the peak between its samples by about that much
+    return m["voltage"] <= limits.v_use * 0.998 and max(m["current"], m["torque_angle"], m["speed"], m["acceleration"],
                                                   m["jerk"]) <= 1.0
 
 
@@ -172,13 +196,16 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
     for w in widths or tuple(k * tau_e for k in _WIDTHS):
         lo, hi = 0.0, 1.0
         found: Optional[PiecewisePlan] = None
-        top = smoothed_plan(d, motor, limits, hi, w, theta1=theta1, t0=t0)
+        top = smoothed_plan(d, motor, limits, hi, w)
         if _feasible(top, motor, limits):
             found = top
         else:
             for _ in range(_BISECT):
                 mid = 0.5 * (lo + hi)
-                candidate = smoothed_plan(d, motor, limits, mid, w, theta1=theta1, t0=t0) if mid > 0.05 else None
+                try:  # a table that cannot be built (rho of a too coarse fit below 0) is a rejected candidate
+                    candidate = smoothed_plan(d, motor, limits, mid, w) if mid > 0.05 else None
+                except ValueError:
+                    candidate = None
                 if candidate is not None and _feasible(candidate, motor, limits):
                     lo, found = mid, candidate
                 else:
@@ -186,8 +213,11 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
         if found is not None and (best is None or found.tf < best.tf):
             best = found
     if best is None:
-        raise ValueError(f"no feasible plan of {d} rad within {limits}: raise v_bus or i_max, or lower i_hold")
-    return best
+        raise ValueError(f"no feasible plan of {d} rad within {limits}: raise v_bus or i_max, lower i_hold or i_run")
+    # planned from 0 at t = 0, so that a move's plan does not depend on where and when it starts
+    theta = best.theta.copy()
+    theta[:, -1] += theta1
+    return PiecewisePlan(best.breaks + t0, theta, best.rho)
 
 
 
