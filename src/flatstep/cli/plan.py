@@ -93,8 +93,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         report["limits"], report["margins"] = pf.limits.as_dict(), m
         print("  worst use of each limit (1 = at the limit): " +
               ", ".join(f"{k} {m[k]:.3f}" for k in MARGINS if m[k] > 0))
-        print(f"  peaks: phase voltage {m['v_peak']:.4g} V of {pf.limits.v_bus:g} V, current {m['rho_peak']:.4g} A "
-              f"of {pf.limits.i_max:g} A, speed {m['speed_peak']:.4g} rad/s")
+        print(f"  peaks: voltage demand |v| {m['v_peak']:.4g} V of {pf.limits.v_bus:g} V, "
+              f"current {m['rho_peak']:.4g} A of {pf.limits.i_max:g} A, speed {m['speed_peak']:.4g} rad/s")
         report["feasible"] = bool(m["worst"] <= 1.0)
         if not report["feasible"]:
             over = [k for k in MARGINS if m[k] > 1]

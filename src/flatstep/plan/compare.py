@@ -1,9 +1,11 @@
 r"""The comparison of docs/planning.md: flatstep's time-optimal plan against a trapezoid and a Ruckig profile.
 
-Same motor (the NEMA 17 preset), same bus, same limits (:class:`~flatstep.plan.limits.MotorLimits`); each
-baseline at its best constant caps (:func:`~flatstep.plan.baselines.best_baseline`) with a fixed holding current,
-flatstep's plan with the across-axis current planned down to ``i_run`` at speed. Every plan is tracked on the
-20 kHz drive (bus, 14-bit encoder, 12-bit current ADC, observer, gains of
+Same motor (the NEMA 17 preset), same bus, same current and torque-angle limits
+(:class:`~flatstep.plan.limits.MotorLimits`); each baseline at its best constant caps
+(:func:`~flatstep.plan.baselines.best_baseline`) with a fixed holding current and its feedforward within 90 % of
+the bus, flatstep's plan with the across-axis current planned down to ``i_run`` at speed and its feedforward
+within ``v_use`` = 87 % of the bus (the headroom its smaller current needs on the drive below). Every plan is
+tracked on the 20 kHz drive (bus, 14-bit encoder, 12-bit current ADC, observer, gains of
 :func:`~flatstep.control.design.design_gains`). Run::
 
     python -m flatstep.plan.compare --out docs/figures
@@ -53,9 +55,14 @@ def track(plan: PiecewisePlan, motor: MotorParams, v_bus: float) -> dict[str, fl
                 faults=float(r.meta.get("controller_faults", 0)))
 
 
+def baseline_limits(limits: MotorLimits) -> MotorLimits:
+    """The baselines' limits: a fixed holding current, the feedforward within 90 % of the bus."""
+    return replace(limits, i_run=None, v_use=0.9)
+
+
 def plans_for(distance: float, motor: MotorParams, limits: MotorLimits) -> dict[str, PiecewisePlan]:
     """The time-optimal plan and both baselines at their best over ``distance``, each from t = 5 ms."""
-    fixed = replace(limits, i_run=None)
+    fixed = baseline_limits(limits)
     out = {"flatstep": time_optimal(distance, motor, limits, t0=0.005)}
     for kind in KINDS:
         plan, caps = best_baseline(kind, distance, motor, fixed)
@@ -67,7 +74,7 @@ def plans_for(distance: float, motor: MotorParams, limits: MotorLimits) -> dict[
 
 def sequence_plans(motor: MotorParams, limits: MotorLimits) -> dict[str, PiecewisePlan]:
     """The 10-waypoint sequence, resting at each waypoint, by each planner (moves planned one by one)."""
-    fixed = replace(limits, i_run=None)
+    fixed = baseline_limits(limits)
     out: dict[str, PiecewisePlan] = {}
     for name in PLANNERS:
         breaks, theta, rho, t = [np.array([0.005])], [], [], 0.005
@@ -92,7 +99,7 @@ def _row(label: str, plans: dict[str, PiecewisePlan], motor: MotorParams, limits
     """One table row: each planner's duration, margins and tracking."""
     row: dict[str, Any] = {"case": label, "bound": bound}
     for name, plan in plans.items():
-        m = plan_margins(plan, motor, limits if name == "flatstep" else replace(limits, i_run=None))
+        m = plan_margins(plan, motor, limits if name == "flatstep" else baseline_limits(limits))
         row[name] = dict(duration=plan.tf - plan.t0, voltage=m["voltage"], current=m["current"],
                          **track(plan, motor, limits.v_bus))
     row["ratio_ruckig"] = row["flatstep"]["duration"] / row["ruckig"]["duration"]
@@ -156,12 +163,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m flatstep.plan.compare", description=__doc__.split("\n")[0])
     parser.add_argument("--out", default="docs/figures", help="where the figure and the JSON go")
     parser.add_argument("--i-run", type=float, default=0.1, help="flatstep's across-axis current at speed [A]")
+    parser.add_argument("--v-use", type=float, default=0.87, help="flatstep's share of the bus for its feedforward")
     args = parser.parse_args(argv)
     motor = PRESETS["nema17"]
     results: dict[str, list[dict[str, Any]]] = {}
     start = time.perf_counter()
     for v_bus in (24.0, 12.0):
-        limits = MotorLimits(v_bus=v_bus, i_max=1.0, i_run=args.i_run)
+        limits = MotorLimits(v_bus=v_bus, i_max=1.0, i_run=args.i_run, v_use=args.v_use)
         rows = [_row(f"{d:g} rad", plans_for(d, motor, limits), motor, limits, bang_bang_time(d, motor, limits))
                 for d in DISTANCES]
         rows.append(_row("10 waypoints", sequence_plans(motor, limits), motor, limits, None))
