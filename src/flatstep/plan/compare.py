@@ -100,7 +100,7 @@ def _row(label: str, plans: dict[str, PiecewisePlan], motor: MotorParams, limits
     row: dict[str, Any] = {"case": label, "bound": bound}
     for name, plan in plans.items():
         m = plan_margins(plan, motor, limits if name == "flatstep" else baseline_limits(limits))
-        row[name] = dict(duration=plan.tf - plan.t0, voltage=m["voltage"], current=m["current"],
+        row[name] = dict(duration=plan.tf - plan.t0, voltage=m["voltage"], current=m["current"], speed=m["speed_peak"],
                          **track(plan, motor, limits.v_bus))
     row["ratio_ruckig"] = row["flatstep"]["duration"] / row["ruckig"]["duration"]
     row["ratio_trapezoid"] = row["flatstep"]["duration"] / row["trapezoid"]["duration"]
@@ -110,13 +110,15 @@ def _row(label: str, plans: dict[str, PiecewisePlan], motor: MotorParams, limits
 def _print(rows: list[dict[str, Any]], v_bus: float) -> None:
     """The rows as the markdown tables of docs/planning.md."""
     print(f"\n### {v_bus:g} V: move time [ms] and ratio\n")
-    print("| move | bang-bang bound | flatstep | trapezoid | Ruckig | flatstep / Ruckig | flatstep / trapezoid |")
-    print("|---|---|---|---|---|---|---|")
+    print("| move | bang-bang bound | flatstep | trapezoid | Ruckig | flatstep / Ruckig | flatstep / trapezoid "
+          "| peak speed flatstep / Ruckig [rad/s] |")
+    print("|---|---|---|---|---|---|---|---|")
     for r in rows:
         bound = "-" if r["bound"] is None else f"{1e3 * r['bound']:.2f}"
         print(f"| {r['case']} | {bound} | {1e3 * r['flatstep']['duration']:.2f} | "
               f"{1e3 * r['trapezoid']['duration']:.2f} | {1e3 * r['ruckig']['duration']:.2f} | "
-              f"{r['ratio_ruckig']:.3f} | {r['ratio_trapezoid']:.3f} |")
+              f"{r['ratio_ruckig']:.3f} | {r['ratio_trapezoid']:.3f} | "
+              f"{r['flatstep']['speed']:.1f} / {r['ruckig']['speed']:.1f} |")
     print(f"\n### {v_bus:g} V: tracked on the 20 kHz drive\n")
     print("| move | planner | max error [mrad] | peak phase voltage [V] | saturated periods | copper loss [mJ] "
           "| planned voltage / bus | faults |")

@@ -47,7 +47,7 @@ Array = NDArray[np.float64]
 _GRID = 1500         # speed-grid points of the phase plane
 _FINE = 3000         # time samples of the smoothed profile
 _KNOTS = 96          # segments of the table
-_WIDTHS = (0.0625, 0.125, 0.25, 0.5, 1.0, 2.0)  # smoothing widths tried, in units of L / R
+_WIDTHS = (0.0625, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
 _BISECT = 9
 
 
