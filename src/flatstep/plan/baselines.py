@@ -129,32 +129,47 @@ def _ok(plan: PiecewisePlan, motor: MotorParams, limits: MotorLimits) -> bool:
     return m["voltage"] <= limits.v_use and max(m["current"], m["torque_angle"]) <= 1.0
 
 
+def _largest_accel(kind: str, distance: float, motor: MotorParams, limits: MotorLimits, v: float,
+                   tj: Optional[float], a_top: float) -> Optional[tuple[PiecewisePlan, dict[str, float]]]:
+    """At speed cap ``v`` and jerk time ``tj``, the plan with the largest feasible acceleration cap (bisection)."""
+    lo, hi, found = 0.0, a_top, None
+    for _ in range(10):
+        a = 0.5 * (lo + hi)
+        caps = dict(v_max=float(v), a_max=float(a), j_max=float(a / tj) if tj else math.inf)
+        plan = baseline_plan(kind, distance, motor, limits, caps["v_max"], caps["a_max"],
+                             caps["j_max"] if tj else None)
+        if _ok(plan, motor, limits):
+            lo, found = a, (plan, caps)
+        else:
+            hi = a
+    return found
+
+
 def best_baseline(kind: str, distance: float, motor: MotorParams,
                   limits: MotorLimits) -> tuple[PiecewisePlan, dict[str, float]]:
     """The fastest ``kind`` baseline whose whole move keeps the limits: a search over its constant caps.
 
-    Speed caps on a grid up to the bus's top speed; for each (and each jerk time, for ruckig), the largest
-    feasible acceleration cap by bisection. Returns the plan and its caps.
+    Speed caps on a grid up to the bus's top speed, then a finer grid around the best one; for each (and each
+    jerk time, for ruckig), the largest feasible acceleration cap by bisection. Returns the plan and its caps.
     """
     a_top = motor.Km * float(limits.iq_cap(0.0)) / motor.J
     w_top = limits.v_use * limits.v_bus / motor.Km
     tau_e = motor.L / motor.R
+    jerk_times = (None,) if kind == "trapezoid" else tuple(k * tau_e for k in (0.25, 0.5, 1.0, 2.0))
     best: Optional[tuple[PiecewisePlan, dict[str, float]]] = None
-    for v in w_top * np.linspace(0.2, 1.0, 13):
-        for tj in ((None,) if kind == "trapezoid" else tuple(k * tau_e for k in (0.25, 0.5, 1.0, 2.0))):
-            lo, hi, found = 0.0, a_top, None
-            for _ in range(10):
-                a = 0.5 * (lo + hi)
-                caps = dict(v_max=float(v), a_max=float(a), j_max=float(a / tj) if tj else math.inf)
-                plan = baseline_plan(kind, distance, motor, limits, caps["v_max"], caps["a_max"],
-                                     caps["j_max"] if tj else None)
-                if _ok(plan, motor, limits):
-                    lo, found = a, (plan, caps)
-                else:
-                    hi = a
-            if found is not None and (best is None or found[0].tf < best[0].tf):
-                best = found
+    coarse = w_top * np.linspace(0.2, 1.0, 13)
+    step = coarse[1] - coarse[0]
+    for speeds in (coarse, None):
+        if speeds is None:  # refine: 16 speeds across one coarse step either side of the best
+            if best is None:
+                break
+            speeds = best[1]["v_max"] + step * np.linspace(-1.0, 1.0, 17)
+            speeds = speeds[(speeds > 0) & (speeds <= w_top)]
+        for v in speeds:
+            for tj in jerk_times:
+                found = _largest_accel(kind, distance, motor, limits, float(v), tj, a_top)
+                if found is not None and (best is None or found[0].tf < best[0].tf):
+                    best = found
     if best is None:
         raise ValueError(f"no {kind} over {distance} rad keeps the limits {limits}")
     return best
-
