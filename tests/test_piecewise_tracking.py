@@ -83,3 +83,12 @@ def test_a_waypoint_sequence_runs_on_every_engine(sequence):
     s_py = simulate(MOTOR, sequence, ctrl, engine="python", loop=loop, t_end=t_end)
     np.testing.assert_allclose(s_c.theta, s_py.theta, atol=1e-10)
     np.testing.assert_allclose(s_c.va, s_py.va, rtol=1e-8, atol=1e-8)
+
+
+
+def test_a_c_twin_without_tables_refuses_one(sequence):
+    from flatstep.control.cascade import CascadeFOC, CascadeGains
+
+    ctrl = CascadeFOC(MOTOR, sequence, CascadeGains(2000.0, 100.0), control_period=5e-5)
+    with pytest.raises(ValueError, match="tracks the paper's move only"):
+        simulate(MOTOR, sequence, ctrl, engine="c", loop=DriveLoop(control_period=5e-5), t_end=0.01)
