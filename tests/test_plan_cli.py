@@ -13,7 +13,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-EXAMPLES = sorted((Path(__file__).parents[1] / "examples").glob("plan-*.toml"))
+EXAMPLES = sorted((Path(__file__).parents[1] / "examples").glob("plans/*.toml"))
 
 
 def test_there_are_examples_of_every_kind():

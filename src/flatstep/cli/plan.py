@@ -4,24 +4,27 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
-import matplotlib
 import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from ..model.flat import flat_to_state
+from ..plan.limits import plan_margins
+from .status import EXIT_LOST, EXIT_OK, EXIT_REFUSED
 
-from ..model.flat import flat_to_state  # noqa: E402
-from ..plan.limits import plan_margins  # noqa: E402
-from ..plan.plan_file import PlanFile, load_plan_file  # noqa: E402
-from .status import EXIT_LOST, EXIT_OK, EXIT_REFUSED  # noqa: E402
+if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
+    from ..plan.plan_file import PlanFile
 
 MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
 
 
-def plot_plan(pf: PlanFile, path: Path) -> None:
+def plot_plan(pf: "PlanFile", path: Path) -> None:
     """plan.png: angle, speed, phase voltage demand against the bus, current magnitude against its limit."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     plan = pf.plan
     t = np.linspace(plan.t0, plan.tf, 4001)
     f = plan.flag(t)
@@ -51,7 +54,7 @@ def plot_plan(pf: PlanFile, path: Path) -> None:
     plt.close(fig)
 
 
-def _simulate(pf: PlanFile) -> dict[str, Any]:
+def _simulate(pf: "PlanFile") -> dict[str, Any]:
     """Run the plan on the 20 kHz drive (bus, sensors, observer, designed gains); tracking figures."""
     from ..control.design import design_gains
     from ..control.smc import FlatnessSMC
@@ -79,6 +82,8 @@ def _simulate(pf: PlanFile) -> dict[str, Any]:
 
 def cmd_plan(args: argparse.Namespace) -> int:
     """``flatstep plan FILE.toml``: plan the waypoints, print the steps and margins, write plan.png, plan.json."""
+    from ..plan.plan_file import load_plan_file
+
     pf = load_plan_file(args.file)
     plan = pf.plan
     print(f"{pf.name}: {len(pf.steps)} steps in {plan.n} segments, {plan.tf - plan.t0:.6g} s "
@@ -117,7 +122,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
 def add_plan_command(sub: Any) -> None:
     """Register ``flatstep plan`` on the subcommand parser ``sub``."""
     p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)")
-    p.add_argument("file", help="a plan file (TOML, see examples/plan-*.toml)")
+    p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml)")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
                    help="also run the plan on the 20 kHz drive (bus, sensors, observer, designed gains)")

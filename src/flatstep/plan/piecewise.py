@@ -22,15 +22,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Union
+from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import PPoly
 
 from ..model.equilibria import equilibrium_currents
 from ..model.flat import FlatFlag
 from .rest_to_rest import _PSI_HORNER, RestToRest
+
+if TYPE_CHECKING:  # SciPy's interpolate is imported where a conversion needs it, not with the package
+    from scipy.interpolate import PPoly
 
 Array = NDArray[np.float64]
 #: Coefficients per segment and output (degree 10, the degree of the paper's psi).
@@ -224,7 +226,7 @@ class PiecewisePlan:
         return cls(np.array([t0, t1]), row, rho_row)
 
     @classmethod
-    def from_ppoly(cls, theta: PPoly, rho: float | PPoly) -> "PiecewisePlan":
+    def from_ppoly(cls, theta: "PPoly", rho: Union[float, "PPoly"]) -> "PiecewisePlan":
         r"""A table from a :class:`scipy.interpolate.PPoly` of theta (degree <= 10), with rho constant or a PPoly.
 
         The coefficients of :math:`(t - b_i)^p` become those of :math:`\tau^p` by the factor :math:`h_i^p`.
@@ -232,7 +234,7 @@ class PiecewisePlan:
         b = np.asarray(theta.x, dtype=float)
         h = np.diff(b)
 
-        def local(pp: PPoly) -> Array:
+        def local(pp: "PPoly") -> Array:
             c = np.asarray(pp.c, dtype=float)
             if c.shape[0] > NCOEF or not np.array_equal(pp.x, b):
                 raise ValueError(f"a PPoly of degree {c.shape[0] - 1} on {pp.x.size} breaks: the table takes degree "
@@ -240,11 +242,13 @@ class PiecewisePlan:
             powers = np.arange(c.shape[0] - 1, -1, -1)[:, None]
             return (c * h[None, :] ** powers).T
 
-        rh = np.full((b.size - 1, 1), float(rho)) if not isinstance(rho, PPoly) else local(rho)
+        rh = np.full((b.size - 1, 1), float(rho)) if isinstance(rho, (int, float)) else local(rho)
         return cls(b, local(theta), rh)
 
-    def to_ppoly(self) -> tuple[PPoly, PPoly]:
+    def to_ppoly(self) -> tuple["PPoly", "PPoly"]:
         """The table as two :class:`scipy.interpolate.PPoly` (theta, rho) in the local variable ``t - b_i``."""
+        from scipy.interpolate import PPoly
+
         h = self.durations
         scale = h[None, :] ** -np.arange(NCOEF - 1, -1, -1)[:, None]
         return PPoly(self.theta.T * scale, self.breaks), PPoly(self.rho.T * scale, self.breaks)

@@ -24,7 +24,6 @@ from typing import Optional, Sequence, Union
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import PPoly, make_interp_spline
 
 from ..validate import check_finite, check_nonnegative, check_positive
 from .piecewise import NCOEF, PiecewisePlan, horner
@@ -99,6 +98,8 @@ def _hermite(theta: Array, h: Array, given: list[Optional[float]]) -> Array:
 
 def _spline(theta: Array, h: Array) -> tuple[Array, Array]:
     """Rows and durations of the degree-7 interpolating spline of a piece, at rest at both ends."""
+    from scipy.interpolate import PPoly, make_interp_spline
+
     times = np.concatenate([[0.0], np.cumsum(h)])
     rest = [(1, 0.0), (2, 0.0), (3, 0.0)]
     pp = PPoly.from_spline(make_interp_spline(times, theta, k=7, bc_type=(rest, rest)))
