@@ -52,6 +52,15 @@ def horner(coef: Array, tau: Array, order: int = 0) -> Array:
     return a
 
 
+def horner_rows(table: Array, i: NDArray[np.intp], tau: Array, order: int = 0) -> Array:
+    """:func:`horner` on the rows ``table[i]``, gathering one column at a time (the same operations, less memory)."""
+    d = table[:, : NCOEF - order] * FALL[order, : NCOEF - order] if order else table
+    a = d[i, 0]
+    for j in range(1, NCOEF - order):  # a loop over the degree, vectorized over the samples
+        a = a * tau + d[i, j]
+    return a
+
+
 def _table(name: str, value: ArrayLike, n: int) -> Array:
     """A coefficient table as an (n, 11) float array, or a ValueError naming it."""
     arr = np.array(value, dtype=float)
@@ -171,14 +180,14 @@ class PiecewisePlan:
         t = np.asarray(t, dtype=float)
         tv = t.ravel()
         i, ih, tau, inside = self._locate(tv)
-        th, rh = self.theta[i], self.rho[i]
+        th, rh = self.theta, self.rho
         ih2 = ih * ih
-        out = (self._held(self.rho, tv, inside, horner(rh, tau)),
-               np.where(inside, horner(rh, tau, 1) * ih, 0.0),
-               self._held(self.theta, tv, inside, horner(th, tau)),
-               np.where(inside, horner(th, tau, 1) * ih, 0.0),
-               np.where(inside, horner(th, tau, 2) * ih2, 0.0),
-               np.where(inside, horner(th, tau, 3) * (ih2 * ih), 0.0))
+        out = (self._held(self.rho, tv, inside, horner_rows(rh, i, tau)),
+               np.where(inside, horner_rows(rh, i, tau, 1) * ih, 0.0),
+               self._held(self.theta, tv, inside, horner_rows(th, i, tau)),
+               np.where(inside, horner_rows(th, i, tau, 1) * ih, 0.0),
+               np.where(inside, horner_rows(th, i, tau, 2) * ih2, 0.0),
+               np.where(inside, horner_rows(th, i, tau, 3) * (ih2 * ih), 0.0))
         return FlatFlag(*(a.reshape(t.shape) for a in out))
 
     def theta_deriv(self, t: ArrayLike, order: int) -> Array:
@@ -191,7 +200,7 @@ class PiecewisePlan:
         scale = np.ones_like(ih)
         for _ in range(order):
             scale = scale * ih
-        value = horner(self.theta[i], tau, order) * scale
+        value = horner_rows(self.theta, i, tau, order) * scale
         out = self._held(self.theta, tv, inside, value) if order == 0 else np.where(inside, value, 0.0)
         return out.reshape(t.shape)
 
