@@ -100,3 +100,20 @@ def test_invalid_tables_are_refused(kwargs, match):
 def test_theta_deriv_refuses_an_order_out_of_range(table):
     with pytest.raises(ValueError, match="order=5"):
         table.theta_deriv(0.1, 5)
+
+
+def test_concatenate_joins_consecutive_tables_and_refuses_a_gap():
+    a = PiecewisePlan.from_rest_to_rest(RestToRest(0.0, 1.0, 0.5, 0.5, 0.0, 0.1))
+    hold = PiecewisePlan.hold(1.0, 0.5, 0.1, 0.3)
+    b = PiecewisePlan.from_rest_to_rest(RestToRest(1.0, -2.0, 0.5, 0.7, 0.3, 0.5))
+    joined = PiecewisePlan.concatenate([a, hold, b])
+    np.testing.assert_array_equal(joined.breaks, [0.0, 0.1, 0.3, 0.5])
+    t = np.linspace(-0.1, 0.6, 701)
+    want = np.where(t < 0.1, a.theta_deriv(t, 0), np.where(t < 0.3, 1.0, b.theta_deriv(t, 0)))
+    np.testing.assert_allclose(joined.theta_deriv(t, 0), want, atol=1e-12)
+    assert joined.rho2 == pytest.approx(0.7)
+    assert np.all(np.abs(joined.continuity(3)) < 1e-6 * np.array([1, 1e2, 1e4, 1e6]))  # psi rests: C3 joins
+    with pytest.raises(ValueError, match="must meet"):
+        PiecewisePlan.concatenate([a, b])
+    with pytest.raises(ValueError, match="at least one"):
+        PiecewisePlan.concatenate([])

@@ -77,20 +77,18 @@ def sequence_plans(motor: MotorParams, limits: MotorLimits) -> dict[str, Piecewi
     fixed = baseline_limits(limits)
     out: dict[str, PiecewisePlan] = {}
     for name in PLANNERS:
-        breaks, theta, rho, t = [np.array([0.005])], [], [], 0.005
+        moves: list[PiecewisePlan] = []
+        t = 0.005
         for a, b in zip(SEQUENCE[:-1], SEQUENCE[1:], strict=True):
             if name == "flatstep":
-                move = time_optimal(b - a, motor, limits, theta1=a, t0=t)
+                moves.append(time_optimal(b - a, motor, limits, theta1=a, t0=t))
             else:
                 base, _ = best_baseline(name, b - a, motor, fixed)
                 th = base.theta.copy()
                 th[:, -1] += a
-                move = PiecewisePlan(base.breaks + t, th, base.rho)
-            breaks.append(move.breaks[1:])
-            theta.append(move.theta)
-            rho.append(move.rho)
-            t = move.tf
-        out[name] = PiecewisePlan(np.concatenate(breaks), np.vstack(theta), np.vstack(rho))
+                moves.append(PiecewisePlan(base.breaks + t, th, base.rho))
+            t = moves[-1].tf
+        out[name] = PiecewisePlan.concatenate(moves)
     return out
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Union
+from typing import TYPE_CHECKING, Any, Sequence, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -233,6 +233,18 @@ class PiecewisePlan:
         rho_row = np.zeros((1, NCOEF))
         rho_row[0, -1] = rho
         return cls(np.array([t0, t1]), row, rho_row)
+
+    @classmethod
+    def concatenate(cls, parts: Sequence["PiecewisePlan"]) -> "PiecewisePlan":
+        """One table of consecutive tables, each starting where the one before ends (a ValueError if not)."""
+        if not parts:
+            raise ValueError("no tables to concatenate: give at least one")
+        for k, (a, b) in enumerate(zip(parts[:-1], parts[1:], strict=True)):
+            if abs(b.t0 - a.tf) > 1e-12 * max(1.0, abs(a.tf)):
+                raise ValueError(f"table {k + 1} starts at t0={b.t0!r} s, but table {k} ends at tf={a.tf!r} s: "
+                                 "consecutive tables must meet")
+        return cls(np.concatenate([parts[0].breaks] + [p.breaks[1:] for p in parts[1:]]),
+                   np.vstack([p.theta for p in parts]), np.vstack([p.rho for p in parts]))
 
     @classmethod
     def from_ppoly(cls, theta: "PPoly", rho: Union[float, "PPoly"]) -> "PiecewisePlan":

@@ -93,28 +93,23 @@ def _label(i: int) -> str:
 def _optimal_sequence(points: list[Waypoint], motor: MotorParams, limits: MotorLimits,
                       t0: float) -> tuple[PiecewisePlan, list[tuple[str, float, float]]]:
     """Time-optimal moves from rest to rest through the waypoints, with their dwells (velocities: rests)."""
-    breaks, theta, rho, steps, t = [np.array([t0])], [], [], [], t0
+    parts: list[tuple[str, PiecewisePlan]] = []
+    t = t0
     for i, p in enumerate(points):
         if p.velocity not in (None, 0.0):
             raise ValueError(f"waypoint {i}: velocity={p.velocity!r} rad/s; the time_optimal planner rests at "
                              "every waypoint: give 0 or None")
         if p.dwell > 0:
-            parts = [(f"dwell at {i}", PiecewisePlan.hold(p.theta, limits.i_hold, t, t + p.dwell))]
-        else:
-            parts = []
+            parts.append((f"dwell at {i}", PiecewisePlan.hold(p.theta, limits.i_hold, t, t + p.dwell)))
+            t = parts[-1][1].tf
         if i + 1 < len(points):
             if points[i + 1].theta == p.theta:
                 raise ValueError(f"waypoints {i} and {i + 1} sit at {p.theta} rad: give the rest as a dwell")
-            start = t + (p.dwell if p.dwell > 0 else 0.0)
             parts.append((_label(i), time_optimal(points[i + 1].theta - p.theta, motor, limits, theta1=p.theta,
-                                                  t0=start)))
-        for label, part in parts:
-            breaks.append(part.breaks[1:])
-            theta.append(part.theta)
-            rho.append(part.rho)
-            steps.append((label, part.t0, part.tf - part.t0))
-            t = part.tf
-    return PiecewisePlan(np.concatenate(breaks), np.vstack(theta), np.vstack(rho)), steps
+                                                  t0=t)))
+            t = parts[-1][1].tf
+    steps = [(label, part.t0, part.tf - part.t0) for label, part in parts]
+    return PiecewisePlan.concatenate([part for _, part in parts]), steps
 
 
 def _family_steps(plan: PiecewisePlan, points: list[Waypoint], family: str) -> list[tuple[str, float, float]]:

@@ -233,24 +233,15 @@ def time_optimal_sequence(waypoints: list[tuple[float, float]], motor: MotorPara
     dwell = [check_finite(f"waypoint {i} dwell", w[1]) for i, w in enumerate(waypoints)]
     if min(dwell) < 0:
         raise ValueError(f"dwells {dwell} s must be >= 0")
-    breaks, rows, rho_rows, t = [t0], [], [], t0
-    hold = np.zeros((1, 11))
-    hold_rho = hold.copy()
-    hold_rho[0, -1] = limits.i_hold
+    parts: list[PiecewisePlan] = []
+    t = t0
     for i in range(len(theta)):
         if dwell[i] > 0:
-            h = hold.copy()
-            h[0, -1] = theta[i]
-            rows.append(h)
-            rho_rows.append(hold_rho)
-            t += dwell[i]
-            breaks.append(t)
+            parts.append(PiecewisePlan.hold(theta[i], limits.i_hold, t, t + dwell[i]))
+            t = parts[-1].tf
         if i + 1 < len(theta):
             if theta[i + 1] == theta[i]:
                 raise ValueError(f"waypoints {i} and {i + 1} sit at {theta[i]} rad: give the rest as a dwell")
-            move = time_optimal(theta[i + 1] - theta[i], motor, limits, theta1=theta[i], t0=t)
-            rows.append(move.theta)
-            rho_rows.append(move.rho)
-            breaks.extend(move.breaks[1:].tolist())
-            t = move.tf
-    return PiecewisePlan(np.array(breaks), np.vstack(rows), np.vstack(rho_rows))
+            parts.append(time_optimal(theta[i + 1] - theta[i], motor, limits, theta1=theta[i], t0=t))
+            t = parts[-1].tf
+    return PiecewisePlan.concatenate(parts)
