@@ -1,5 +1,6 @@
 // The degree-10 interpolating polynomial psi of eq. (17) and the rest-to-rest flat flag built on it.
 #include "plan.h"
+#include "trajectory.h"
 
 // Power-basis coefficients of psi(tau) and its first three tau-derivatives, row j holding the tau^j
 // coefficient of each (so one Horner step reads one row); integers, so exact in float and double.
@@ -91,6 +92,7 @@ bool plan_init(struct plan_coef *c, const struct plan *p)
 {
     fs_real d[4];
     c->p = *p;
+    c->traj = NULL;
     span_powers(p->t0, p->tf, c->Tk);
     c->dtheta = p->theta2 - p->theta1;
     c->drho = p->rho2 - p->rho1;
@@ -103,10 +105,13 @@ bool plan_init(struct plan_coef *c, const struct plan *p)
 
 // Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
 // theta''') at time t, exactly as flatstep.plan.RestToRest.flag: one pass over the four psi polynomials.
+// With c->traj set, returns and writes traj_flag(c->traj, t, flag) instead.
 bool plan_flag(const struct plan_coef *c, fs_real t, fs_real flag[PLAN_FLAG_LEN])
 {
     const fs_real *rest;
     fs_real d[4];
+    if (c->traj)
+        return traj_flag(c->traj, t, flag);
     if (t <= c->p.t0 || t >= c->p.tf) {  // at rest: the flag held since t0 or from tf on
         rest = c->rest[t >= c->p.tf];
         flag[0] = rest[0], flag[1] = rest[1], flag[2] = rest[2];

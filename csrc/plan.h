@@ -17,9 +17,13 @@ struct plan {
     fs_real t0, tf;          // start and end of the move [s], tf > t0
 };
 
+// A piecewise-polynomial table of the flat outputs (trajectory.h).
+struct traj;
+
 // A plan ready to evaluate: the plan and the constants plan_flag needs, filled once by plan_init (caller-owned).
 struct plan_coef {
     struct plan p;
+    const struct traj *traj;         // NULL (plan_init): psi of p; else plan_flag evaluates this table (traj_flag)
     fs_real Tk[4];                   // (tf - t0)^k, k = 0..3, by pow once here so that plan_flag calls no pow
     fs_real dtheta, drho;            // theta2 - theta1, rho2 - rho1
     fs_real rest[2][PLAN_FLAG_LEN];  // the flag held up to t0 and from tf on
@@ -34,6 +38,7 @@ bool plan_init(struct plan_coef *c, const struct plan *p);
 
 // Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
 // theta''') at time t, exactly as flatstep.plan.RestToRest.flag: one pass over the four psi polynomials.
+// With c->traj set, returns and writes traj_flag(c->traj, t, flag) instead.
 bool plan_flag(const struct plan_coef *c, fs_real t, fs_real flag[PLAN_FLAG_LEN]);
 
 // Returns the order-th time derivative (0..3) of psi(t, t0, tf) of eq. (17): held at 0 before t0 and at 1

@@ -16,7 +16,7 @@
 #endif
 
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
-// v_limit = 1e3 V, rho_min = 1e-6 A and no torque model.
+// v_limit = 1e3 V, rho_min = 1e-6 A, no torque model and no table.
 void smc_params_default(struct smc_params *p)
 {
     struct motor_params m = {FS_C(8.4), FS_C(0.010), FS_C(0.05), FS_C(3.6e-6), FS_C(1e-4), 50};
@@ -32,6 +32,7 @@ void smc_params_default(struct smc_params *p)
     p->measurement = SMC_IDEAL;
     p->v_limit = FS_C(1e3);
     p->rho_min = FS_C(1e-6);
+    p->traj = NULL;
 }
 
 // Returns true when x is finite and > 0.
@@ -46,7 +47,7 @@ int smc_init(struct smc *s, const struct smc_params *p)
     const struct smc_gains *g = &p->gains;
     if (!motor_params_valid(&p->motor))
         return SMC_EMOTOR;
-    if (!plan_valid(&p->plan))
+    if (!plan_valid(&p->plan) || (p->traj && !traj_valid(p->traj)))
         return SMC_EPLAN;
     if (!(positive(g->W1) && positive(g->W2) && positive(g->eps1) && positive(g->eps2) && positive(g->xi)
           && positive(g->wn)))
@@ -64,6 +65,7 @@ int smc_init(struct smc *s, const struct smc_params *p)
         return SMC_EPLAN;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
+    s->plan.traj = p->traj;
     s->alpha1 = fs_pow(g->wn, 2);
     s->alpha2 = 2 * g->xi * g->wn;
     if (g->hold_damping > 0) {  // rho2 > 0 (plan_valid); Km rho2 may still underflow, the gain and rate overflow

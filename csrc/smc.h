@@ -8,6 +8,7 @@
 #include "motor.h"
 #include "plan.h"
 #include "torque_model.h"
+#include "trajectory.h"
 
 // cffi:begin
 
@@ -63,6 +64,9 @@ struct smc_params {
     fs_real rho_min;                   // smallest current magnitude the law acts on [A], > 0
     struct torque_model torques;       // torques the law knows beyond eq. (1); all zero: the paper's law bit for bit
     struct smc_loss_aware loss_aware;  // rho_hold > 0: track the loss-aware rho*(t) instead of the plan's rho
+    // NULL: track plan; else track this table (trajectory.h, caller-owned, outliving s), plan then holding the
+    // table's end points (the hold's target and tf)
+    const struct traj *traj;
 };
 
 struct smc {
@@ -94,7 +98,7 @@ struct smc_terms {
 };
 
 // Returns nothing; fills p with the paper's motor, move (Section 3) and gains, ideal measurement,
-// v_limit = 1e3 V, rho_min = 1e-6 A and no torque model.
+// v_limit = 1e3 V, rho_min = 1e-6 A, no torque model and no table.
 void smc_params_default(struct smc_params *p);
 
 // Returns SMC_PARAMS_OK, or the smc_param_error naming the invalid group (s is then left unusable).

@@ -48,7 +48,7 @@ printf '   %-20s %5d  (smc_step and the core functions it calls; libm not includ
 # 3. A bare-metal image for QEMU's mps2-an386 (Cortex-M4): one smc_step call between markers.
 elf="$OUT/smc_step_m4.elf"
 # shellcheck disable=SC2086
-if ! "${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/count_main.c csrc/motor.c csrc/plan.c csrc/flat.c \
+if ! "${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/count_main.c csrc/motor.c csrc/plan.c csrc/trajectory.c csrc/flat.c \
         csrc/smc.c -nostartfiles --specs=nosys.specs -Wl,--gc-sections -T embedded/mps2_an386.ld -lm \
         -o "$elf" 2>"$OUT/link.log"; then
     echo "-- emulation: skipped: linking against newlib's libm failed (see $OUT/link.log;" \

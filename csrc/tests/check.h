@@ -32,5 +32,6 @@ int test_sim(void);
 int test_drive(void);
 int test_baselines(void);
 int test_dq_smc(void);
+int test_trajectory(void);
 
 #endif

@@ -24,8 +24,10 @@ int main(int argc, char **argv)
         test_baselines();
     else if (strcmp(suite, "dq_smc") == 0)
         test_dq_smc();
+    else if (strcmp(suite, "trajectory") == 0)
+        test_trajectory();
     else {
-        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines | dq_smc\n", argv[0]);
+        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines | dq_smc | trajectory\n", argv[0]);
         return 2;
     }
     printf("%s: %d checks, %d failed\n", suite, check_count, check_failures);

@@ -103,7 +103,7 @@ def run_continuous(controller: Controller, motor: MotorParams, load: float, x0: 
     effects : PlantEffects, optional
         Effects acting on the plant.
     knots : sequence of float, optional
-        Where the reference's derivatives jump (default: the controller's ``plan.t0`` and ``plan.tf``);
+        Where the reference's derivatives jump (default: the controller's ``plan.knots``);
         integration restarts there.
     h_max : float
         The largest step [s].
@@ -123,7 +123,7 @@ def run_continuous(controller: Controller, motor: MotorParams, load: float, x0: 
         steps included).
     """
     bound = controller_struct(controller)
-    knots = (controller.plan.t0, controller.plan.tf) if knots is None else knots
+    knots = controller.plan.knots if knots is None else knots
     X, st = _run_continuous(bound.iface, _plant(motor, load, effects), x0, _vec(t_out), rtol=rtol, atol=atol,
                             knots=knots, h_max=h_max, max_steps=max_steps, method=method)
     return np.ascontiguousarray(X.T), st
@@ -166,7 +166,7 @@ def continuous_result(controller: FlatnessSMC, motor: MotorParams, load: float, 
     lib.smc_controller(ctrl, iface)
     plant = _plant(motor, load, effects)
     X, st = _run_continuous(iface, plant, x0, tv, rtol=rtol, atol=atol,
-                            knots=(controller.plan.t0, controller.plan.tf), h_max=h_max, max_steps=max_steps,
+                            knots=controller.plan.knots, h_max=h_max, max_steps=max_steps,
                             method=method)
     lib.smc_reset(ctrl)
     cols, status = _result_rows(ctrl, plant, tv, X)

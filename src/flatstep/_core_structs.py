@@ -18,6 +18,7 @@ from .control.smc import FlatnessSMC
 from .errors import RunError
 from .model.motor import MotorParams
 from .model.plant import PlantEffects
+from .plan.piecewise import PiecewisePlan
 from .plan.rest_to_rest import RestToRest
 from .validate import check_positive
 
@@ -129,8 +130,12 @@ def controller_struct(controller: Controller) -> BoundController:
     if name is None or not hasattr(lib, f"{name}_init"):
         raise ValueError(f"{type(controller).__name__} has no C implementation (c_name={name!r}); "
                          "run it on engine='python'")
+    params = controller.c_params()
+    if isinstance(controller.plan, PiecewisePlan) and "traj" not in params:
+        raise ValueError(f"{type(controller).__name__}'s C twin tracks the paper's move only, not a segment table "
+                         f"({controller.plan.n} segments): run it on engine='python', or use FlatnessSMC")
     state = ffi.new(f"struct {name} *")
-    err = getattr(lib, f"{name}_init")(state, ffi.new(f"struct {name}_params *", controller.c_params()))
+    err = getattr(lib, f"{name}_init")(state, ffi.new(f"struct {name}_params *", params))
     if err != 0:
         raise ValueError(f"{name}_init rejected the {type(controller).__name__} parameters (error {err}): "
                          f"{controller.c_params()!r}")

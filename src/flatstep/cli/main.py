@@ -32,6 +32,7 @@ from .compare import add_compare_command
 from .design import add_design_command
 from .flags import count, out_dir, quantity
 from .identify import add_identify_command
+from .plan import add_plan_command
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
 
@@ -190,6 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_robustness_command(sub)
     add_compare_command(sub)
     add_identify_command(sub)
+    add_plan_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d,e", help="a: planning, b: closed loop, c: controller step, "

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
-from ..plan.rest_to_rest import RestToRest
+from ..plan.piecewise import Plan
 
 
 @runtime_checkable
@@ -31,9 +31,13 @@ class Controller(Protocol):
     """What the sampled loops (Python reference and C) need of a controller."""
 
     motor: MotorParams
-    plan: RestToRest
     gains: Any  # a frozen dataclass with ``as_dict()``, recorded in each result's metadata
     measurement: str
+
+    @property
+    def plan(self) -> Plan:
+        """The move the law tracks."""
+        ...
 
     @property
     def c_name(self) -> Optional[str]:

@@ -45,7 +45,7 @@ from ..model.motor import MotorParams
 from ..model.motor import acceleration as motor_acceleration
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.loss_aware import LossAwareRho
-from ..plan.rest_to_rest import RestToRest
+from ..plan.piecewise import PiecewisePlan, Plan
 from ..validate import check_finite, check_quantity
 from .protocol import check_parts
 
@@ -92,14 +92,15 @@ class SMCGains:
 
 
 class FlatnessSMC:
-    """Flatness-based sliding-mode controller tracking a :class:`~flatstep.plan.rest_to_rest.RestToRest` plan.
+    """Flatness-based sliding-mode controller tracking a plan: the paper's move or a segment table.
 
     Parameters
     ----------
     motor : MotorParams
         The controller's model of the motor (may differ from the plant's).
-    plan : RestToRest
-        The planned flat-output trajectory.
+    plan : RestToRest or PiecewisePlan
+        The planned flat-output trajectory (:class:`~flatstep.plan.rest_to_rest.RestToRest` or
+        :class:`~flatstep.plan.piecewise.PiecewisePlan`; the hold targets its end points).
     gains : SMCGains
         The design constants (default: the paper's).
     measurement : str
@@ -118,7 +119,7 @@ class FlatnessSMC:
     #: The C step's guards: bound on hypot(va, vb) [V] and smallest current norm acted on [A].
     c_v_limit, c_rho_min = 1e3, 1e-6
 
-    def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = SMCGains(),
+    def __init__(self, motor: MotorParams, plan: Plan, gains: SMCGains = SMCGains(),
                  measurement: str = "ideal", *, torques: TorqueModel = NO_TORQUES,
                  loss_aware: Optional[LossAwareRho] = None) -> None:
         if measurement not in MEASUREMENTS:
@@ -220,7 +221,9 @@ class FlatnessSMC:
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct smc_params`` (csrc/smc.h) for this controller."""
         g = self.gains
-        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+        # a table is passed by pointer (csrc/trajectory.h), the plan then holding its end points
+        table = dict(traj=self.plan.c_struct()) if isinstance(self.plan, PiecewisePlan) else {}
+        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(), **table,
                     gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn,
                                hold_damping=g.hold_damping or 0.0),
                     # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state

@@ -29,7 +29,7 @@ from ..loop.reference import DriveLoop, run_reference
 from ..model.flat import flat_to_state, polar
 from ..model.motor import MotorParams, rhs
 from ..model.plant import Plant
-from ..plan.rest_to_rest import RestToRest
+from ..plan.piecewise import Plan
 from ..validate import check_quantity
 from ..validate.limits import check_resources, check_timing, estimate
 from .result import SimResult
@@ -52,10 +52,10 @@ class Run(NamedTuple):
 
 #: A runner: ``(plant, plan, controller, settings, t_end, x0) -> Run``; ``settings`` is the
 #: :class:`~flatstep.loop.reference.DriveLoop` of a sampled runner or the :class:`Continuous` of a continuous one.
-Runner = Callable[[Plant, RestToRest, Controller, Any, float, Array], Run]
+Runner = Callable[[Plant, Plan, Controller, Any, float, Array], Run]
 
 
-def simulate(plant: Union[Plant, MotorParams], plan: RestToRest, controller: Optional[Controller] = None, *,
+def simulate(plant: Union[Plant, MotorParams], plan: Plan, controller: Optional[Controller] = None, *,
              loop: Optional[DriveLoop] = None, solver: Optional[Continuous] = None, engine: str = "c",
              t_end: float = 0.06, x0: Optional[ArrayLike] = None) -> SimResult:
     """Simulate the closed loop from ``t = 0`` to ``t_end``.
@@ -65,8 +65,9 @@ def simulate(plant: Union[Plant, MotorParams], plan: RestToRest, controller: Opt
     plant : Plant or MotorParams
         The simulated plant (:class:`~flatstep.model.plant.Plant`: motor, effects, load); a bare
         :class:`~flatstep.model.motor.MotorParams` is a plant with no effects and no load.
-    plan : RestToRest
-        The planned move; the run starts from ``x0``, by default the plan's start equilibrium.
+    plan : RestToRest or PiecewisePlan
+        The planned move (the paper's, or a segment table such as a waypoint sequence); the run starts from
+        ``x0``, by default the plan's start equilibrium.
     controller : Controller, optional
         Any controller of :mod:`flatstep.control` (:class:`~flatstep.control.protocol.Controller`); default
         :class:`~flatstep.control.smc.FlatnessSMC` with the paper's gains on the plant's motor, ``ideal``
@@ -136,7 +137,7 @@ def check_x0(x0: ArrayLike) -> Array:
     return x
 
 
-def check_run(plan: RestToRest, t_end: float, settings: Union[DriveLoop, Continuous], engine: str,
+def check_run(plan: Plan, t_end: float, settings: Union[DriveLoop, Continuous], engine: str,
               series: bool = True) -> None:
     """Refuse a run that is inconsistent, or above the resource limits of :mod:`flatstep.validate.limits`.
 
@@ -180,7 +181,7 @@ def _static(controller: Controller, engine: str) -> StaticController:
     return controller
 
 
-def _continuous_c(plant: Plant, plan: RestToRest, controller: Controller, solver: Continuous, t_end: float,
+def _continuous_c(plant: Plant, plan: Plan, controller: Controller, solver: Continuous, t_end: float,
                   x0: Array) -> Run:
     """C ``continuous_run`` (DOP853 by default) on the output grid of :func:`_grid`."""
     method = solver.method or "DOP853"
@@ -189,7 +190,7 @@ def _continuous_c(plant: Plant, plan: RestToRest, controller: Controller, solver
                          f"(engine='scipy' takes {SCIPY_METHODS})")
     _static(controller, "c")
     load = _constant_load(plant, "c")
-    segs = _grid(t_end, [plan.t0, plan.tf], solver.dt_out)
+    segs = _grid(t_end, list(plan.knots), solver.dt_out)
     t = np.concatenate([segs[0]] + [s[1:] for s in segs[1:]])
     meta = {"engine": "c", "method": method, "rtol": solver.rtol, "atol": solver.atol}
     if isinstance(controller, FlatnessSMC):
@@ -204,7 +205,7 @@ def _continuous_c(plant: Plant, plan: RestToRest, controller: Controller, solver
     return Run(t, X, {**meta, **stats})
 
 
-def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, solver: Continuous, t_end: float,
+def _continuous_scipy(plant: Plant, plan: Plan, controller: Controller, solver: Continuous, t_end: float,
                       x0: Array) -> Run:
     """:func:`scipy.integrate.solve_ivp`, restarted at the plan's knots."""
     method = solver.method or "LSODA"
@@ -230,7 +231,7 @@ def _continuous_scipy(plant: Plant, plan: RestToRest, controller: Controller, so
     ts: list[Array] = []
     xs: list[Array] = []
     x = x0
-    for seg in _grid(t_end, [plan.t0, plan.tf], solver.dt_out):
+    for seg in _grid(t_end, list(plan.knots), solver.dt_out):
         sol = solve_ivp(closed_loop, (seg[0], seg[-1]), x, method=method, t_eval=seg, rtol=solver.rtol,
                         atol=solver.atol)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
@@ -259,7 +260,7 @@ def _periods(loop: DriveLoop, t_end: float) -> int:
     return max(1, math.ceil(t_end / loop.control_period - 1e-9))
 
 
-def _sampled_c(plant: Plant, plan: RestToRest, controller: Controller, loop: DriveLoop, t_end: float,
+def _sampled_c(plant: Plant, plan: Plan, controller: Controller, loop: DriveLoop, t_end: float,
                x0: Array) -> Run:
     """C ``sampled_run``: any controller, any plant effect, any loop part (switched PWM included)."""
     _check_measurement(controller, loop)
@@ -273,7 +274,7 @@ def _sampled_c(plant: Plant, plan: RestToRest, controller: Controller, loop: Dri
                faults=t[(status & _core.FAULT_BITS) != 0])
 
 
-def _sampled_python(plant: Plant, plan: RestToRest, controller: Controller, loop: DriveLoop, t_end: float,
+def _sampled_python(plant: Plant, plan: Plan, controller: Controller, loop: DriveLoop, t_end: float,
                     x0: Array) -> Run:
     """The readable reference of :mod:`flatstep.loop.reference`."""
     _check_measurement(controller, loop)
@@ -291,7 +292,7 @@ RUNNERS: dict[tuple[str, str], Runner] = {
 }
 
 
-def assemble(run: Run, plant: Plant, plan: RestToRest, controller: Controller,
+def assemble(run: Run, plant: Plant, plan: Plan, controller: Controller,
              settings: Union[DriveLoop, Continuous]) -> SimResult:
     """The one place a :class:`~flatstep.engine.result.SimResult` is built.
 

@@ -92,6 +92,11 @@ class RestToRest:
         theta2 = stable_angle(ia2, ib2, Nr, near=theta1)
         return cls(theta1, theta2, math.hypot(ia1, ib1), math.hypot(ia2, ib2), t0, tf)
 
+    @property
+    def knots(self) -> tuple[float, float]:
+        """Where the plan's derivatives may jump: ``(t0, tf)`` (an integrator restarts there)."""
+        return (self.t0, self.tf)
+
     def flag(self, t: ArrayLike) -> FlatFlag:
         """The planned flat flag (rho*, rho*', theta*, theta*', theta*'', theta*''') at times ``t``."""
         t = np.asarray(t, dtype=float)

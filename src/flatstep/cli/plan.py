@@ -1,0 +1,129 @@
+"""Command line: ``flatstep plan FILE.toml``, a waypoint plan, its margins, plan.png and plan.json."""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
+
+from ..model.flat import flat_to_state
+from ..plan.limits import plan_margins
+from .status import EXIT_LOST, EXIT_OK, EXIT_REFUSED
+
+if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
+    from ..plan.plan_file import PlanFile
+
+MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
+
+
+def plot_plan(pf: "PlanFile", path: Path) -> None:
+    """plan.png: angle, speed, phase voltage demand against the bus, current magnitude against its limit."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plan = pf.plan
+    t = np.linspace(plan.t0, plan.tf, 4001)
+    f = plan.flag(t)
+    _, v = flat_to_state(f, pf.motor)
+    fig, ax = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
+    ax[0].plot(t, f.theta)
+    ax[0].set_ylabel(r"$\theta^*$ [rad]")
+    ax[1].plot(t, f.dtheta)
+    ax[1].set_ylabel(r"$\dot\theta^*$ [rad/s]")
+    # the vector's magnitude: each phase voltage reaches it once per electrical turn
+    ax[2].plot(t, np.hypot(v[0], v[1]), label=r"$|v|$ (phase peak)")
+    ax[3].plot(t, f.rho, label=r"$\rho^* = |i|$")
+    if pf.limits is not None:
+        ax[2].axhline(pf.limits.v_bus, color="k", ls="--", lw=1, label="$V_{bus}$")
+        ax[3].axhline(pf.limits.i_max, color="k", ls="--", lw=1, label="$i_{max}$")
+    ax[2].set_ylabel("voltage demand [V]")
+    ax[3].set_ylabel("current [A]")
+    ax[3].set_xlabel("t [s]")
+    for a in ax[2:]:
+        a.legend(loc="upper right", fontsize=8)
+    for _, start, _ in pf.steps:
+        for a in ax:
+            a.axvline(start, color="0.8", lw=0.5, zorder=0)
+    fig.suptitle(f"{pf.name}: {len(pf.steps)} steps, {plan.tf - plan.t0:.4g} s")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _simulate(pf: "PlanFile") -> dict[str, Any]:
+    """Run the plan on the 20 kHz drive (bus, sensors, observer, designed gains); tracking figures."""
+    from ..control.design import design_gains
+    from ..control.smc import FlatnessSMC
+    from ..engine.simulate import simulate
+    from ..loop.drive import Drive
+    from ..loop.reference import DriveLoop
+    from ..loop.sensors import Sensors
+
+    if pf.limits is None:
+        raise ValueError("--simulate needs a [limits] section: the drive's bus is v_bus")
+    rate = float(pf.simulate.get("control_rate", 20000.0))
+    plan, v_bus = pf.plan, pf.limits.v_bus
+    d = design_gains(pf.motor, cast(Any, plan), control_period=1.0 / rate, v_bus=v_bus)
+    loop = DriveLoop(control_period=1.0 / rate, substeps=4, drive=Drive(v_bus=v_bus), sensors=Sensors(),
+                     observer=d.observer)
+    r = simulate(pf.motor, plan, FlatnessSMC(pf.motor, plan, d.gains, "observer"), loop=loop,
+                 t_end=plan.tf + float(pf.simulate.get("t_after", 0.02)))
+    err = np.abs(r.theta - r.theta_ref)
+    full_step = 2 * np.pi / (4 * pf.motor.Nr)
+    return dict(control_rate=rate, max_abs_theta_error=float(err.max()), full_step=full_step,
+                lost_step=bool(err.max() >= full_step), final_error=float(r.theta[-1] - plan.theta2),
+                peak_phase_voltage=float(np.max(np.abs([r.va, r.vb]))), v_bus=v_bus,
+                controller_faults=int(r.meta.get("controller_faults", 0)))
+
+
+def cmd_plan(args: argparse.Namespace) -> int:
+    """``flatstep plan FILE.toml``: plan the waypoints, print the steps and margins, write plan.png, plan.json."""
+    from ..plan.plan_file import load_plan_file
+
+    pf = load_plan_file(args.file)
+    plan = pf.plan
+    print(f"{pf.name}: {len(pf.steps)} steps in {plan.n} segments, {plan.tf - plan.t0:.6g} s "
+          f"(t = {plan.t0:g} .. {plan.tf:.6g} s)")
+    for label, start, duration in pf.steps:
+        print(f"  {label:<14} start {start:10.6f} s  duration {duration:10.6f} s")
+    report: dict[str, Any] = dict(name=pf.name, total_duration=plan.tf - plan.t0, t0=plan.t0, tf=plan.tf,
+                                  segments=plan.n,
+                                  steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps])
+    if pf.limits is not None:
+        m = plan_margins(plan, pf.motor, pf.limits)
+        report["limits"], report["margins"] = pf.limits.as_dict(), m
+        print("  worst use of each limit (1 = at the limit): " +
+              ", ".join(f"{k} {m[k]:.3f}" for k in MARGINS if m[k] > 0))
+        print(f"  peaks: voltage demand |v| {m['v_peak']:.4g} V of {pf.limits.v_bus:g} V, "
+              f"current {m['rho_peak']:.4g} A of {pf.limits.i_max:g} A, speed {m['speed_peak']:.4g} rad/s")
+        report["feasible"] = bool(m["worst"] <= 1.0)
+        if not report["feasible"]:
+            over = [k for k in MARGINS if m[k] > 1]
+            print(f"  infeasible: the plan exceeds {', '.join(over)} (not simulated)")
+    if args.simulate and report.get("feasible", True):
+        report["tracking"] = tr = _simulate(pf)
+        print(f"  on the {tr['control_rate']:g} Hz drive: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
+              f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
+              f"final error {tr['final_error']:.3g} rad")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    plot_plan(pf, out / "plan.png")
+    (out / "plan.json").write_text(json.dumps(report, indent=2) + "\n")
+    print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
+    if not report.get("feasible", True):
+        return EXIT_REFUSED
+    return EXIT_LOST if report.get("tracking", {}).get("lost_step", False) else EXIT_OK
+
+
+def add_plan_command(sub: Any) -> None:
+    """Register ``flatstep plan`` on the subcommand parser ``sub``."""
+    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)")
+    p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml)")
+    p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
+    p.add_argument("--simulate", action="store_true",
+                   help="also run the plan on the 20 kHz drive (bus, sensors, observer, designed gains)")
+    p.set_defaults(func=cmd_plan)

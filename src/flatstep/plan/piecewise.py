@@ -1,0 +1,306 @@
+r"""Trajectories of the flat outputs as piecewise polynomials: a segment table, the C core's ``struct traj``.
+
+On segment :math:`i`, :math:`b_i \le t < b_{i+1}`, with :math:`h_i = b_{i+1} - b_i` and the local time
+:math:`\tau = (t - b_i)\,h_i^{-1} \in [0, 1)`,
+
+.. math::
+    \theta(t) = \sum_{j=0}^{10} c_{ij}\,\tau^{10 - j},\qquad
+    \frac{d^k\theta}{dt^k} = h_i^{-k} \sum_{j=0}^{10-k} c_{ij}\,\frac{(10-j)!}{(10-j-k)!}\,\tau^{10-j-k},
+
+and the second flat output :math:`\rho` likewise (highest power first, as :func:`numpy.polyval`). Before
+:math:`b_0` the flag holds the value at :math:`\tau = 0` of the first segment, from :math:`b_n` on the value at
+:math:`\tau = 1` of the last, with zero derivatives: a :class:`~flatstep.plan.rest_to_rest.RestToRest` is the
+one-segment table :meth:`PiecewisePlan.from_rest_to_rest`.
+
+:meth:`PiecewisePlan.flag` evaluates the table as csrc/trajectory.c's ``traj_flag`` does, operation for operation
+(Horner chains with the falling factorials, then the powers of :math:`h^{-1}`), vectorized over the samples.
+The local time is normalised so that the coefficients stay of the size of the move in any precision (a
+firmware's float); :meth:`PiecewisePlan.to_ppoly` and :meth:`PiecewisePlan.from_ppoly` convert to and from
+:class:`scipy.interpolate.PPoly`, whose local variable is :math:`t - b_i`.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Sequence, Union
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..model.equilibria import equilibrium_currents
+from ..model.flat import FlatFlag
+from .rest_to_rest import _PSI_HORNER, RestToRest
+
+if TYPE_CHECKING:  # SciPy's interpolate is imported where a conversion needs it, not with the package
+    from scipy.interpolate import PPoly
+
+Array = NDArray[np.float64]
+#: Coefficients per segment and output (degree 10, the degree of the paper's psi).
+NCOEF = 11
+#: Highest derivative of theta that :meth:`PiecewisePlan.theta` evaluates.
+MAX_ORDER = 4
+#: ``FALL[k, j] = p! / (p - k)!`` for the power ``p = 10 - j`` of coefficient ``j``: the k-th derivative's factor.
+FALL = np.array([[math.perm(NCOEF - 1 - j, k) for j in range(NCOEF)] for k in range(MAX_ORDER + 1)], dtype=float)
+
+
+def horner(coef: Array, tau: Array, order: int = 0) -> Array:
+    """The ``order``-th tau-derivative of the rows ``coef`` (m, 11) at ``tau`` (m,): Horner over the columns."""
+    d = coef[:, : NCOEF - order] * FALL[order, : NCOEF - order] if order else coef
+    a = d[:, 0].copy()
+    for j in range(1, NCOEF - order):  # a loop over the degree, vectorized over the samples
+        a = a * tau + d[:, j]
+    return a
+
+
+def horner_rows(table: Array, i: NDArray[np.intp], tau: Array, order: int = 0) -> Array:
+    """:func:`horner` on the rows ``table[i]``, gathering one column at a time (the same operations, less memory)."""
+    d = table[:, : NCOEF - order] * FALL[order, : NCOEF - order] if order else table
+    a = d[i, 0]
+    for j in range(1, NCOEF - order):  # a loop over the degree, vectorized over the samples
+        a = a * tau + d[i, j]
+    return a
+
+
+def _table(name: str, value: ArrayLike, n: int) -> Array:
+    """A coefficient table as an (n, 11) float array, or a ValueError naming it."""
+    arr = np.array(value, dtype=float)
+    if arr.ndim == 2 and arr.shape[0] == n and 0 < arr.shape[1] <= NCOEF:
+        arr = np.hstack([np.zeros((n, NCOEF - arr.shape[1])), arr])  # a lower degree: leading zeros
+    if arr.shape != (n, NCOEF):
+        raise ValueError(f"{name} has shape {arr.shape}; expected ({n}, k) with 1 <= k <= {NCOEF} "
+                         "(one row of power coefficients, highest first, per segment)")
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} holds non-finite coefficients in segment(s) "
+                         f"{np.flatnonzero(~np.isfinite(arr).all(axis=1)).tolist()}; every coefficient must be finite")
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class PiecewisePlan:
+    """A plan of the flat outputs (rho, theta) as a table of polynomial segments (module docstring).
+
+    Parameters
+    ----------
+    breaks : array_like
+        The n + 1 increasing segment boundaries [s].
+    theta : array_like
+        (n, k) power coefficients of theta in the local time tau, highest first, k <= 11 [rad].
+    rho : array_like
+        (n, k) power coefficients of the current magnitude rho, likewise [A]; rho must stay > 0.
+    """
+
+    breaks: Array
+    theta: Array
+    rho: Array
+    _c: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        b = np.array(self.breaks, dtype=float).ravel()
+        if b.size < 2 or not np.isfinite(b).all() or not (np.diff(b) > 0).all():
+            raise ValueError(f"breaks={b.tolist()!r} must be at least 2 finite, strictly increasing times [s]")
+        with np.errstate(over="ignore"):
+            ih = 1.0 / np.diff(b)
+            short = not np.isfinite(ih**MAX_ORDER).all()
+        if short:
+            raise ValueError(f"breaks={b.tolist()!r}: a segment is so short that (1/h)^{MAX_ORDER} overflows")
+        n = b.size - 1
+        object.__setattr__(self, "breaks", b)
+        object.__setattr__(self, "theta", _table("theta", self.theta, n))
+        object.__setattr__(self, "rho", _table("rho", self.rho, n))
+        lowest = float(np.min(self.flag(np.linspace(b[0], b[-1], 16 * n + 1)).rho))
+        if not lowest > 0:
+            raise ValueError(f"rho falls to {lowest!r} A on the plan; the current magnitude must stay > 0")
+        for a in (self.breaks, self.theta, self.rho):
+            a.flags.writeable = False
+
+    @property
+    def n(self) -> int:
+        """The number of segments."""
+        return int(self.breaks.size - 1)
+
+    @property
+    def t0(self) -> float:
+        """Start of the move [s]."""
+        return float(self.breaks[0])
+
+    @property
+    def tf(self) -> float:
+        """End of the move [s]."""
+        return float(self.breaks[-1])
+
+    @property
+    def knots(self) -> tuple[float, ...]:
+        """Where the plan's derivatives may jump: every break (an integrator restarts there)."""
+        return tuple(self.breaks.tolist())
+
+    @property
+    def durations(self) -> Array:
+        """Each segment's duration [s]."""
+        return np.diff(self.breaks)
+
+    def _ends(self, coef: Array) -> tuple[float, float]:
+        """The value held before the start (tau = 0 of the first row) and after the end (tau = 1 of the last)."""
+        return float(coef[0, -1]), float(horner(coef[-1:], np.ones(1))[0])
+
+    @property
+    def theta1(self) -> float:
+        """Start angle [rad]."""
+        return self._ends(self.theta)[0]
+
+    @property
+    def theta2(self) -> float:
+        """End angle [rad]."""
+        return self._ends(self.theta)[1]
+
+    @property
+    def rho1(self) -> float:
+        """Start current magnitude [A]."""
+        return self._ends(self.rho)[0]
+
+    @property
+    def rho2(self) -> float:
+        """End current magnitude [A]."""
+        return self._ends(self.rho)[1]
+
+    def _locate(self, t: Array) -> tuple[NDArray[np.intp], Array, Array, NDArray[np.bool_]]:
+        """Per sample: the segment index, 1/h, tau and whether the sample lies inside (b_0, b_n)."""
+        b = self.breaks
+        i = np.clip(np.searchsorted(b, t, side="right") - 1, 0, self.n - 1)
+        inside = (t > b[0]) & (t < b[-1])
+        ih = 1.0 / (b[i + 1] - b[i])
+        return i, ih, np.where(inside, (t - b[i]) * ih, 0.0), inside  # outside: held, tau unused
+
+    def _held(self, coef: Array, t: Array, inside: NDArray[np.bool_], value: Array) -> Array:
+        """``value`` inside the move, the held start or end value outside it (a NaN time holds the start)."""
+        start, end = self._ends(coef)
+        return np.where(inside, value, np.where(t >= self.breaks[-1], end, start))
+
+    def flag(self, t: ArrayLike) -> FlatFlag:
+        """The planned flat flag (rho*, rho*', theta*, theta*', theta*'', theta*''') at times ``t``."""
+        t = np.asarray(t, dtype=float)
+        tv = t.ravel()
+        i, ih, tau, inside = self._locate(tv)
+        th, rh = self.theta, self.rho
+        ih2 = ih * ih
+        out = (self._held(self.rho, tv, inside, horner_rows(rh, i, tau)),
+               np.where(inside, horner_rows(rh, i, tau, 1) * ih, 0.0),
+               self._held(self.theta, tv, inside, horner_rows(th, i, tau)),
+               np.where(inside, horner_rows(th, i, tau, 1) * ih, 0.0),
+               np.where(inside, horner_rows(th, i, tau, 2) * ih2, 0.0),
+               np.where(inside, horner_rows(th, i, tau, 3) * (ih2 * ih), 0.0))
+        return FlatFlag(*(a.reshape(t.shape) for a in out))
+
+    def theta_deriv(self, t: ArrayLike, order: int) -> Array:
+        """The ``order``-th time derivative (0..4) of theta at times ``t`` (C ``traj_theta``)."""
+        if not 0 <= order <= MAX_ORDER:
+            raise ValueError(f"order={order!r} is out of range; the table gives theta's derivatives 0..{MAX_ORDER}")
+        t = np.asarray(t, dtype=float)
+        tv = t.ravel()
+        i, ih, tau, inside = self._locate(tv)
+        scale = np.ones_like(ih)
+        for _ in range(order):
+            scale = scale * ih
+        value = horner_rows(self.theta, i, tau, order) * scale
+        out = self._held(self.theta, tv, inside, value) if order == 0 else np.where(inside, value, 0.0)
+        return out.reshape(t.shape)
+
+    def continuity(self, order: int = 3) -> Array:
+        """The jumps (n - 1, order + 1) of theta's derivatives 0..order at the inner breaks (left minus right)."""
+        if self.n == 1:
+            return np.zeros((0, order + 1))
+        ih = 1.0 / self.durations
+        jumps = []
+        for k in range(order + 1):
+            left = horner(self.theta[:-1], np.ones(self.n - 1), k) * ih[:-1] ** k
+            right = horner(self.theta[1:], np.zeros(self.n - 1), k) * ih[1:] ** k
+            jumps.append(left - right)
+        return np.array(jumps).T
+
+    @classmethod
+    def from_rest_to_rest(cls, plan: RestToRest) -> "PiecewisePlan":
+        """The paper's move (eqs. 16-18) as a one-segment table on [t0, tf]: psi's coefficients times the steps."""
+        psi = _PSI_HORNER[0]
+        theta, rho = psi * (plan.theta2 - plan.theta1), psi * (plan.rho2 - plan.rho1)
+        theta[-1] += plan.theta1
+        rho[-1] += plan.rho1
+        return cls(np.array([plan.t0, plan.tf]), theta[None, :], rho[None, :])
+
+    @classmethod
+    def hold(cls, theta: float, rho: float, t0: float, t1: float) -> "PiecewisePlan":
+        """One segment holding ``theta`` [rad] at the current magnitude ``rho`` [A] over ``[t0, t1]``."""
+        row = np.zeros((1, NCOEF))
+        row[0, -1] = theta
+        rho_row = np.zeros((1, NCOEF))
+        rho_row[0, -1] = rho
+        return cls(np.array([t0, t1]), row, rho_row)
+
+    @classmethod
+    def concatenate(cls, parts: Sequence["PiecewisePlan"]) -> "PiecewisePlan":
+        """One table of consecutive tables, each starting where the one before ends (a ValueError if not)."""
+        if not parts:
+            raise ValueError("no tables to concatenate: give at least one")
+        for k, (a, b) in enumerate(zip(parts[:-1], parts[1:], strict=True)):
+            if abs(b.t0 - a.tf) > 1e-12 * max(1.0, abs(a.tf)):
+                raise ValueError(f"table {k + 1} starts at t0={b.t0!r} s, but table {k} ends at tf={a.tf!r} s: "
+                                 "consecutive tables must meet")
+        return cls(np.concatenate([parts[0].breaks] + [p.breaks[1:] for p in parts[1:]]),
+                   np.vstack([p.theta for p in parts]), np.vstack([p.rho for p in parts]))
+
+    @classmethod
+    def from_ppoly(cls, theta: "PPoly", rho: Union[float, "PPoly"]) -> "PiecewisePlan":
+        r"""A table from a :class:`scipy.interpolate.PPoly` of theta (degree <= 10), with rho constant or a PPoly.
+
+        The coefficients of :math:`(t - b_i)^p` become those of :math:`\tau^p` by the factor :math:`h_i^p`.
+        """
+        b = np.asarray(theta.x, dtype=float)
+        h = np.diff(b)
+
+        def local(pp: "PPoly") -> Array:
+            c = np.asarray(pp.c, dtype=float)
+            if c.shape[0] > NCOEF or not np.array_equal(pp.x, b):
+                raise ValueError(f"a PPoly of degree {c.shape[0] - 1} on {pp.x.size} breaks: the table takes degree "
+                                 f"<= {NCOEF - 1} on the breaks of theta")
+            powers = np.arange(c.shape[0] - 1, -1, -1)[:, None]
+            return (c * h[None, :] ** powers).T
+
+        rh = np.full((b.size - 1, 1), float(rho)) if isinstance(rho, (int, float)) else local(rho)
+        return cls(b, local(theta), rh)
+
+    def to_ppoly(self) -> tuple["PPoly", "PPoly"]:
+        """The table as two :class:`scipy.interpolate.PPoly` (theta, rho) in the local variable ``t - b_i``."""
+        from scipy.interpolate import PPoly
+
+        h = self.durations
+        scale = h[None, :] ** -np.arange(NCOEF - 1, -1, -1)[:, None]
+        return PPoly(self.theta.T * scale, self.breaks), PPoly(self.rho.T * scale, self.breaks)
+
+    def x0(self, Nr: int) -> Array:
+        """Initial equilibrium state (ia, ib, omega, theta), eq. (19)."""
+        return np.array([*equilibrium_currents(self.theta1, self.rho1, Nr), 0.0, self.theta1])
+
+    def xf(self, Nr: int) -> Array:
+        """Final equilibrium state (ia, ib, omega, theta), eqs. (20)-(21)."""
+        return np.array([*equilibrium_currents(self.theta2, self.rho2, Nr), 0.0, self.theta2])
+
+    def as_dict(self) -> dict[str, float]:
+        """The end points as the C ``struct plan`` takes them (the hold's target, a result's ``meta['plan']``)."""
+        return dict(theta1=self.theta1, theta2=self.theta2, rho1=self.rho1, rho2=self.rho2, t0=self.t0, tf=self.tf)
+
+    def segments(self) -> dict[str, list[Any]]:
+        """The table for JSON: breaks and both coefficient tables."""
+        return dict(breaks=self.breaks.tolist(), theta=self.theta.tolist(), rho=self.rho.tolist())
+
+    def c_struct(self) -> Any:
+        """A C ``struct traj *`` (csrc/trajectory.h) over this table, built once and kept alive with the plan."""
+        if "traj" not in self._c:
+            from .._flatstep_core import ffi
+
+            arrays = [np.ascontiguousarray(a) for a in (self.breaks, self.theta, self.rho)]
+            ptrs = [ffi.from_buffer("double[]", a) for a in arrays]
+            self._c["keep"] = (arrays, ptrs)
+            self._c["traj"] = ffi.new("struct traj *", dict(n=self.n, breaks=ptrs[0], theta=ptrs[1], rho=ptrs[2]))
+        return self._c["traj"]
+
+
+#: A plan the controllers track: the paper's rest-to-rest move or a segment table.
+Plan = Union[RestToRest, PiecewisePlan]

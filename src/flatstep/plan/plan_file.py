@@ -1,0 +1,179 @@
+"""Plan files (TOML): a motor, its limits and a list of waypoints -> one piecewise plan and its moves.
+
+::
+
+    name = "ten waypoints"
+    [motor]
+    preset = "nema17"          # or R, L, Km, J, B, Nr
+    [limits]                   # flatstep.plan.limits.MotorLimits
+    v_bus = 24.0
+    i_max = 1.0
+    [plan]
+    planner = "time_optimal"   # or a segment family: "psi", "hermite", "spline", "scurve"
+    t0 = 0.005                 # when the sequence starts [s]
+    rho = 0.4                  # the families' constant current magnitude [A]
+    caps = {v_max = 100.0, a_max = 2e4, j_max = 1e7}   # the families' speed, acceleration and jerk caps
+    durations = [0.05, 0.05]   # or each move's duration (psi, hermite, spline)
+    waypoints = [0.0, {theta = 2.0, dwell = 0.02}, {theta = 5.0, velocity = 10.0}]
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Optional, Union
+
+import numpy as np
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from ..model.motor import MotorParams
+from .limits import MotorLimits
+from .piecewise import PiecewisePlan
+from .time_optimal import time_optimal
+from .waypoints import FAMILIES, Caps, Waypoint, plan_waypoints
+
+PLANNERS = ("time_optimal",) + FAMILIES
+_KEYS = {"": ("name", "description", "motor", "limits", "plan", "simulate"),
+         "plan": ("planner", "t0", "rho", "caps", "durations", "waypoints"),
+         "simulate": ("control_rate", "t_after")}
+
+
+@dataclass(frozen=True)
+class PlanFile:
+    """What a plan file holds, planned: the table, its moves and dwells, the motor and its limits."""
+
+    name: str
+    motor: MotorParams
+    limits: Optional[MotorLimits]
+    plan: PiecewisePlan
+    #: (label, start [s], duration [s]) of each move and dwell, in order
+    steps: list[tuple[str, float, float]]
+    simulate: dict[str, Any]
+
+
+def _check(where: str, table: dict[str, Any], section: str) -> dict[str, Any]:
+    """The section's keys, or a ValueError naming an unknown one."""
+    if not isinstance(table, dict):
+        raise ValueError(f"{where}: [{section}] must be a table")
+    if section in _KEYS:
+        unknown = set(table) - set(_KEYS[section])
+        if unknown:
+            raise ValueError(f"{where}: unknown key(s) {sorted(unknown)} in [{section or 'top level'}]; "
+                             f"valid: {list(_KEYS[section])}")
+    return table
+
+
+def _motor(where: str, table: dict[str, Any]) -> MotorParams:
+    """The [motor] section: a preset, parameters, or a preset with some parameters changed."""
+    table = dict(table)
+    base = MotorParams.preset(str(table.pop("preset", "nema17")))
+    try:
+        return base.replace(**table) if table else base
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: [motor]: {exc}") from None
+
+
+def _waypoint(where: str, i: int, w: Union[float, dict[str, Any]]) -> Waypoint:
+    """One waypoint of the list: a number or a table with theta, velocity, dwell."""
+    try:
+        return Waypoint(**w) if isinstance(w, dict) else Waypoint(float(w))
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: [plan] waypoints[{i}]={w!r}: {exc}") from None
+
+
+def _label(i: int) -> str:
+    """The label of the move from waypoint i to i + 1."""
+    return f"move {i} -> {i + 1}"
+
+
+def _optimal_sequence(points: list[Waypoint], motor: MotorParams, limits: MotorLimits,
+                      t0: float) -> tuple[PiecewisePlan, list[tuple[str, float, float]]]:
+    """Time-optimal moves from rest to rest through the waypoints, with their dwells (velocities: rests)."""
+    parts: list[tuple[str, PiecewisePlan]] = []
+    t = t0
+    for i, p in enumerate(points):
+        if p.velocity not in (None, 0.0):
+            raise ValueError(f"waypoint {i}: velocity={p.velocity!r} rad/s; the time_optimal planner rests at "
+                             "every waypoint: give 0 or None")
+        if p.dwell > 0:
+            parts.append((f"dwell at {i}", PiecewisePlan.hold(p.theta, limits.i_hold, t, t + p.dwell)))
+            t = parts[-1][1].tf
+        if i + 1 < len(points):
+            if points[i + 1].theta == p.theta:
+                raise ValueError(f"waypoints {i} and {i + 1} sit at {p.theta} rad: give the rest as a dwell")
+            parts.append((_label(i), time_optimal(points[i + 1].theta - p.theta, motor, limits, theta1=p.theta,
+                                                  t0=t)))
+            t = parts[-1][1].tf
+    steps = [(label, part.t0, part.tf - part.t0) for label, part in parts]
+    return PiecewisePlan.concatenate([part for _, part in parts]), steps
+
+
+def _family_steps(plan: PiecewisePlan, points: list[Waypoint], family: str) -> list[tuple[str, float, float]]:
+    """Moves and dwells of a family's plan.
+
+    A dwell is a segment of constant theta; a move ends at the first break at its waypoint, at rest there if the
+    family rests there.
+    """
+    dwell = np.all(plan.theta[:, :-1] == 0, axis=1)
+    at, speed = plan.theta_deriv(plan.breaks[1:], 0), plan.theta_deriv(plan.breaks[1:] - 1e-12 * plan.tf, 1)
+    steps: list[tuple[str, float, float]] = []
+    k, start = 0, plan.t0
+    for i in range(plan.n):
+        if dwell[i]:
+            steps.append((f"dwell at {k}", float(plan.breaks[i]), float(plan.durations[i])))
+            start = plan.breaks[i + 1]
+            continue
+        nxt = k + 1
+        rest = nxt == len(points) - 1 or points[min(nxt, len(points) - 1)].dwell > 0 or family in ("psi", "scurve")
+        if nxt < len(points) and abs(at[i] - points[nxt].theta) < 1e-9 and (not rest or abs(speed[i]) < 1e-6):
+            steps.append((_label(k), float(start), float(plan.breaks[i + 1] - start)))
+            k, start = nxt, plan.breaks[i + 1]
+    return steps
+
+
+def load_plan_file(path: Union[str, Path]) -> PlanFile:
+    """Read and plan a plan file (module docstring); ValueErrors name the file and the faulty key."""
+    path = Path(path)
+    where = str(path)
+    try:
+        doc = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{where}: no such plan file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{where}: not valid TOML: {exc}") from None
+    _check(where, doc, "")
+    motor = _motor(where, _check(where, doc.get("motor", {}), "motor"))
+    lim_t = _check(where, doc.get("limits", {}), "limits")
+    try:
+        limits = MotorLimits(**lim_t) if lim_t else None
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: [limits]: {exc}") from None
+    sec = _check(where, doc.get("plan", {}), "plan")
+    planner = sec.get("planner", "time_optimal")
+    if planner not in PLANNERS:
+        raise ValueError(f"{where}: [plan] planner={planner!r}; valid: {PLANNERS}")
+    raw = sec.get("waypoints")
+    if not isinstance(raw, list):
+        raise ValueError(f"{where}: [plan] waypoints must be a list of angles or tables {{theta, velocity, dwell}}")
+    points = [_waypoint(where, i, w) for i, w in enumerate(raw)]
+    t0 = float(sec.get("t0", 0.0))
+    try:
+        if planner == "time_optimal":
+            if limits is None:
+                raise ValueError("the time_optimal planner needs a [limits] section (v_bus, i_max)")
+            if len(points) < 2:
+                raise ValueError(f"{len(points)} waypoint(s): a move needs at least 2")
+            plan, steps = _optimal_sequence(points, motor, limits, t0)
+        else:
+            caps = Caps(**sec["caps"]) if "caps" in sec else None
+            plan = plan_waypoints(points, family=planner, rho=float(sec.get("rho", 0.5)), t0=t0,
+                                  durations=sec.get("durations"), caps=caps)
+            steps = _family_steps(plan, points, planner)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: [plan]: {exc}") from None
+    return PlanFile(str(doc.get("name", path.stem)), motor, limits, plan, steps,
+                    dict(_check(where, doc.get("simulate", {}), "simulate")))
