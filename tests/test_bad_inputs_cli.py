@@ -92,7 +92,7 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], int, list[str]]]:
         ("identify duration nan", ["identify", "--excite", str(tmp / "drive.toml"), "--duration", "nan"], 2,
          ["duration=nan"]),
         ("identify noise", ["identify", "--accuracy", str(tmp / "drive.toml"), "--noise", "-1"], 2, ["--noise"]),
-        ("identify nr", ["identify", "--nr", "0", str(tmp / "missing.csv")], 2, ["Nr=0"]),
+        ("identify nr", ["identify", "--nr", "0", str(tmp / "missing.csv")], 2, ["nr=0"]),
         ("identify confidence", ["identify", "--confidence", "2", str(tmp / "missing.csv")], 2, ["confidence=2.0"]),
         ("identify coulomb speed", ["identify", "--coulomb-speed", "-1", str(tmp / "missing.csv")], 2,
          ["coulomb_speed=-1.0"]),
