@@ -75,7 +75,7 @@ class Calibration:
         Every estimate: ``Km`` [V s/rad] (electrical fit), ``J`` [kg m^2], ``B`` [N m s/rad], ``load`` [N m],
         ``detent_torque`` [N m], ``detent_phase`` [rad], ``coulomb_torque`` [N m].
     std : dict of str to float
-        Standard errors of ``estimates`` (residuals' correlation allowed for; ``Km`` taken as exact).
+        Standard errors of ``estimates`` (the residuals' correlation and Km's own uncertainty allowed for).
     settings : dict
         The move and fit: controller, periods, peak speed, cutoff, samples.
     source : str
@@ -220,11 +220,13 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
                                   detent_harmonic=detent_harmonic)
     Nr, h = scenario.motor.Nr, int(detent_harmonic)
     mech, fc = _torque_fit(rec, Nr, h, peak)
-    km = float(_electrical(rec, Nr, ELECTRICAL_CUTOFF, True, True).values[2])
+    elec = _electrical(rec, Nr, ELECTRICAL_CUTOFF, True, True)
+    km, var_km = float(elec.values[2]), float(elec.covariance[2, 2])
     if not km > 0:
         raise ValueError(f"{rec.source}: the back EMF gives Km = {km!r} V s/rad; a calibration needs Km > 0 (does the "
                          "rotor move? raise peak_speed)")
-    p, cov = km * mech.values, km**2 * mech.covariance
+    p = km * mech.values
+    cov = km**2 * mech.covariance + np.outer(mech.values, mech.values) * var_km  # Km's variance too (delta method)
     v = dict(zip(mech.names, p, strict=True))
     a, b = v.pop("detent_a"), v.pop("detent_b")
     amp = math.hypot(a, b)
@@ -233,7 +235,7 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     estimates = {"Km": km, **{k: float(x) for k, x in v.items()}, "detent_torque": amp,
                  "detent_phase": math.atan2(b, a)}
     std = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(mech.names) if not k.startswith("detent")}
-    std.update(Km=0.0, detent_torque=float(math.sqrt(max(g_amp @ sub @ g_amp, 0.0))),
+    std.update(Km=math.sqrt(max(var_km, 0.0)), detent_torque=float(math.sqrt(max(g_amp @ sub @ g_amp, 0.0))),
                detent_phase=float(math.sqrt(max(g_phase @ sub @ g_phase, 0.0))))
     torques = TorqueModel(detent_torque=amp, detent_harmonic=h, detent_phase=estimates["detent_phase"],
                           coulomb_torque=max(estimates["coulomb_torque"], 0.0), coulomb_speed=coulomb_speed,
