@@ -80,7 +80,8 @@ def add_calibrate_command(sub: argparse._SubParsersAction[argparse.ArgumentParse
     cal = sub.add_parser("calibrate", help="the detent, Coulomb friction and load from the drive's own sensors",
                          description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     cal.add_argument("scenario", help="a scenario file (TOML) with a sampled drive and sensors")
-    cal.add_argument("--controller", choices=[k for k in CONTROLLER_TYPES if k not in FEEDFORWARD_TYPES], default="cascade",
+    types = [k for k in CONTROLLER_TYPES if k not in FEEDFORWARD_TYPES]
+    cal.add_argument("--controller", choices=types, default="cascade",
                      help="the controller that runs the move (default: cascade)")
     cal.add_argument("--periods", type=int, default=16, help="detent periods covered each way (default 16)")
     cal.add_argument("--speed", type=float, default=None,

@@ -198,7 +198,7 @@ def _torque_fit(rec: Recording, Nr: int, h: int, peak_speed: float) -> tuple[Any
 
 def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int = 16, peak_speed: float | None = None,
               detent_harmonic: int = 4, coulomb_speed: float = 0.1) -> Calibration:
-    """Calibrate the detent, the Coulomb friction and the load of ``scenario``'s plant (module docstring).
+    r"""Calibrate the detent, the Coulomb friction and the load of ``scenario``'s plant (module docstring).
 
     Parameters
     ----------
@@ -207,7 +207,7 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     controller, periods, peak_speed, detent_harmonic
         The move (:func:`calibration_moves`).
     coulomb_speed : float
-        :math:`\\omega_s` [rad/s] of the table's smooth sign (a choice for the controllers, not an estimate: 0.1
+        :math:`\omega_s` [rad/s] of the table's smooth sign (a choice for the controllers, not an estimate: 0.1
         rad/s keeps the observer's speed noise at rest from flipping it).
 
     Returns
@@ -246,8 +246,10 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
 
 
 def merged_scenario(text: str, calibration: Calibration) -> str:
-    """A scenario file's ``text`` with its ``[feedforward]`` table (and the comment above it) replaced by the
-    calibrated one, or the calibrated one appended."""
+    """A scenario file's ``text`` with its ``[feedforward]`` table replaced by the calibrated one (or it appended).
+
+    The comment lines right above the old table go with it (they described it).
+    """
     lines = text.splitlines()
     heads = [i for i, line in enumerate(lines) if re.match(r"\s*\[[^\]]+\]\s*(#.*)?$", line)]
     ff = [i for i in heads if lines[i].strip().startswith("[feedforward]")]

@@ -1,9 +1,9 @@
-"""How well :func:`~flatstep.studies.calibrate.calibrate` recovers the plant: errors over a robustness study's plants.
+r"""How well :func:`~flatstep.studies.calibrate.calibrate` recovers the plant: errors over a robustness study's plants.
 
 Each plant of the study (the scenario's ``[robustness]``: every corner of +-10 % in R, L, Km, J, B) is
 calibrated with the controller's nominal model, and its estimates are compared with that plant's true detent
-(phase 0: the plant's detent is :math:`-T_d\\sin hN_r\\theta`, i.e. :math:`E = T_d\\sin(hN_r\\theta + 0)`), Coulomb
-friction and load.
+(phase 0: the plant's detent is :math:`-T_d\sin hN_r\theta`, i.e. :math:`E = T_d\sin(hN_r\theta + 0)`),
+Coulomb friction and load.
 """
 from __future__ import annotations
 
