@@ -22,7 +22,7 @@ def _accuracy(args: argparse.Namespace) -> int:
 
     scenario, study = load_scenario(args.scenario)
     rows = accuracy(scenario, study or Robustness(), controller=args.controller, periods=args.periods,
-                    peak_speed=args.speed, detent_harmonic=args.harmonic)
+                    peak_speed=args.speed, detent_harmonic=args.harmonic, current_noise=args.noise)
     met = meets_targets(rows)
     if args.json:
         print(json.dumps({"scenario": scenario.name, "rows": rows, "worst": worst(rows), "targets_met": met},
@@ -44,7 +44,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
     scenario, _ = load_scenario(args.scenario)
     cal = calibrate(scenario, controller=args.controller, periods=args.periods, peak_speed=args.speed,
-                    detent_harmonic=args.harmonic, coulomb_speed=args.coulomb_speed)
+                    detent_harmonic=args.harmonic, coulomb_speed=args.coulomb_speed, current_noise=args.noise)
     if args.json:
         print(json.dumps(cal.as_dict(), indent=2))
     else:
@@ -89,6 +89,8 @@ def add_calibrate_command(sub: argparse._SubParsersAction[argparse.ArgumentParse
     cal.add_argument("--harmonic", type=int, default=4, help="detent periods per electrical period (default 4)")
     cal.add_argument("--coulomb-speed", type=float, default=0.1,
                      help="omega_s [rad/s] of the table's smooth Coulomb sign (default 0.1)")
+    cal.add_argument("--noise", type=float, default=None,
+                     help="ADC noise [A rms] instead of the scenario's sensors' own")
     cal.add_argument("--out", default=None, help="write the [feedforward] table (TOML) here")
     cal.add_argument("--merge", metavar="NEW.toml", default=None,
                      help="write the scenario file here with its [feedforward] replaced by the calibrated table")

@@ -41,7 +41,7 @@ from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, bandwidths
 from ..engine.simulate import simulate
 from ..model.torque_model import TorqueModel
 from ..plan.rest_to_rest import RestToRest, psi
-from ..validate import check_integer, check_positive
+from ..validate import check_integer, check_nonnegative, check_positive
 from .identify import _electrical
 from .identify_ls import fit
 from .record import Recording, recording_from_result
@@ -123,7 +123,8 @@ def _check_drive(scenario: Scenario) -> None:
 
 
 def calibration_moves(scenario: Scenario, *, controller: str = "cascade", periods: int = 16,
-                      peak_speed: float | None = None, detent_harmonic: int = 4) -> tuple[Recording, float]:
+                      peak_speed: float | None = None, detent_harmonic: int = 4,
+                      current_noise: float | None = None) -> tuple[Recording, float]:
     """Run the calibration's move there and back on ``scenario``'s drive and plant; what its sensors read.
 
     Parameters
@@ -139,6 +140,8 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
         loop's omega_n.
     detent_harmonic : int
         :math:`h`, detent periods per electrical period.
+    current_noise : float, optional
+        The ADC noise [A rms] to use instead of the scenario's sensors' own.
 
     Returns
     -------
@@ -153,6 +156,8 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
     h = check_integer("detent_harmonic", detent_harmonic)
     loop, motor = scenario.loop, scenario.motor
     assert loop is not None and loop.sensors is not None  # _check_drive
+    sensors = loop.sensors if current_noise is None else replace(
+        loop.sensors, current_noise=check_nonnegative("current_noise", current_noise, unit=" A"))
     if peak_speed is None:
         _, wn = bandwidths(loop.control_period, loop.compute_delay)
         peak_speed = DETENT_FRACTION_OF_WN * wn / (h * motor.Nr)
@@ -164,7 +169,7 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
     for k, sign in enumerate((1.0, -1.0)):
         plan = RestToRest(theta1=theta, theta2=theta + sign * distance, rho1=rho, rho2=rho, t0=REST,
                           tf=REST + duration)
-        run_loop = replace(loop, sensors=replace(loop.sensors, seed=loop.sensors.seed + k))
+        run_loop = replace(loop, sensors=replace(sensors, seed=sensors.seed + k))
         run = replace(scenario, plan=plan, loop=run_loop, controller_type=controller, torques=None,
                       t_end=duration + 2 * REST)
         result = simulate(plant, plan, run.controller(), loop=run_loop, t_end=run.t_end, x0=x)
@@ -197,14 +202,14 @@ def _torque_fit(rec: Recording, Nr: int, h: int, peak_speed: float) -> tuple[Any
 
 
 def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int = 16, peak_speed: float | None = None,
-              detent_harmonic: int = 4, coulomb_speed: float = 0.1) -> Calibration:
+              detent_harmonic: int = 4, coulomb_speed: float = 0.1, current_noise: float | None = None) -> Calibration:
     r"""Calibrate the detent, the Coulomb friction and the load of ``scenario``'s plant (module docstring).
 
     Parameters
     ----------
     scenario : Scenario
         A sampled-drive scenario with sensors (its ``[feedforward]`` is not used: the move runs without one).
-    controller, periods, peak_speed, detent_harmonic
+    controller, periods, peak_speed, detent_harmonic, current_noise
         The move (:func:`calibration_moves`).
     coulomb_speed : float
         :math:`\omega_s` [rad/s] of the table's smooth sign (a choice for the controllers, not an estimate: 0.1
@@ -217,7 +222,7 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     """
     coulomb_speed = check_positive("coulomb_speed", coulomb_speed, unit=" rad/s")
     rec, peak = calibration_moves(scenario, controller=controller, periods=periods, peak_speed=peak_speed,
-                                  detent_harmonic=detent_harmonic)
+                                  detent_harmonic=detent_harmonic, current_noise=current_noise)
     Nr, h = scenario.motor.Nr, int(detent_harmonic)
     mech, fc = _torque_fit(rec, Nr, h, peak)
     elec = _electrical(rec, Nr, ELECTRICAL_CUTOFF, True, True)
@@ -240,8 +245,8 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     torques = TorqueModel(detent_torque=amp, detent_harmonic=h, detent_phase=estimates["detent_phase"],
                           coulomb_torque=max(estimates["coulomb_torque"], 0.0), coulomb_speed=coulomb_speed,
                           load=estimates["load"])
-    settings = {"controller": controller, "periods": int(periods), "peak_speed": peak, "cutoff": fc,
-                "samples": int(rec.t.size), "period": rec.period}
+    settings = {"controller": controller, "periods": int(periods), "current_noise": current_noise,
+                "peak_speed": peak, "cutoff": fc, "samples": int(rec.t.size), "period": rec.period}
     return Calibration(torques=torques, estimates=estimates, std=std, settings=settings, source=scenario.name)
 
 
