@@ -134,3 +134,15 @@ def test_cli_refuses_bad_inputs(tmp_path, capsys):
     assert "writes no table" in capsys.readouterr().err
     assert main(["calibrate", str(tmp_path / "missing.toml")]) == 2
     assert "no such scenario file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["compare-nema17-fast", "compare-paper-20khz"])
+def test_the_calibrated_examples_are_what_calibrate_writes(name):
+    source = EXAMPLES / f"{name}.toml"
+    cal = calibrate(load_scenario(source)[0])
+    calibrated = EXAMPLES / f"{name}-calibrated.toml"
+    assert calibrated.read_text() == merged_scenario(source.read_text(), cal)
+    scenario, _ = load_scenario(calibrated)
+    for kind in ("dq_smc_ff", "cascade_ff"):  # the compare rows read the calibrated table
+        read = replace(scenario, controller_type=kind).controller().torques.as_dict()
+        assert read == pytest.approx(cal.torques.as_dict(), rel=1e-5)  # the table's 6 significant digits
