@@ -43,7 +43,7 @@ from ..model.torque_model import TorqueModel
 from ..plan.rest_to_rest import RestToRest, psi
 from ..validate import check_integer, check_nonnegative, check_positive
 from .identify import _electrical
-from .identify_ls import fit
+from .identify_ls import Fit, fit
 from .record import Recording, recording_from_result
 from .scenario import Scenario
 
@@ -59,7 +59,8 @@ ELECTRICAL_CUTOFF = 200.0
 REST = 0.05
 #: The controller types a calibration may run: any that needs no torque model.
 CALIBRATION_TYPES = tuple(k for k in CONTROLLER_TYPES if k not in FEEDFORWARD_TYPES)
-HINT = "calibrate on a scenario with a sampled drive ([drive] control_rate) and its [sensors]"
+HINT = "cover more detent periods (periods) or change the move's peak_speed"
+DRIVE_HINT = "calibrate on a scenario with a sampled drive ([drive] control_rate) and its [sensors]"
 _PSI_PEAK = float(np.max(psi(np.linspace(0.0, 1.0, 2001), 0.0, 1.0, 1)))  # peak speed of a unit move in unit time
 
 
@@ -113,10 +114,10 @@ def _check_drive(scenario: Scenario) -> None:
         raise ValueError(f"scenario={scenario!r} is not a Scenario")
     if scenario.loop is None:
         raise ValueError(f"scenario {scenario.name!r} has no drive loop: a calibration runs on a sampled drive and "
-                         f"reads its sensors; {HINT}")
+                         f"reads its sensors; {DRIVE_HINT}")
     if scenario.loop.sensors is None:
         raise ValueError(f"scenario {scenario.name!r} has no [sensors]: a calibration reads the drive's own encoder "
-                         f"and current ADC, not the plant's state; {HINT}")
+                         f"and current ADC, not the plant's state; {DRIVE_HINT}")
     if scenario.simulated_plant.constant_load is None:
         raise ValueError(f"scenario {scenario.name!r}: the plant's load is a function of time; a calibration "
                          "estimates a constant load (give a constant [load] torque)")
@@ -137,7 +138,8 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
         Detent periods covered each way.
     peak_speed : float, optional
         The move's peak speed [rad/s]; default: the detent frequency at :data:`DETENT_FRACTION_OF_WN` of the
-        loop's omega_n.
+        loop's omega_n. The accuracy of docs/comparison.md ("Calibration") holds at the default; half or twice
+        it loses the Coulomb friction's (slower: the encoder's limit cycle; faster: the loop's bandwidth).
     detent_harmonic : int
         :math:`h`, detent periods per electrical period.
     current_noise : float, optional
@@ -182,7 +184,7 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
     return Recording(**cols, source=f"{scenario.name} calibration"), peak_speed
 
 
-def _torque_fit(rec: Recording, Nr: int, h: int, peak_speed: float) -> tuple[Any, float]:
+def _torque_fit(rec: Recording, Nr: int, h: int, peak_speed: float) -> tuple[Fit, float]:
     """The shaft equation's fit in units of Km (module docstring), and the filter's cutoff [Hz]."""
     fs = 1.0 / rec.period
     fc = min(CUTOFF_OVER_DETENT * h * Nr * peak_speed / (2.0 * math.pi), 0.2 * fs)
@@ -218,7 +220,8 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     Returns
     -------
     Calibration
-        The ``[feedforward]`` table and the estimates.
+        The ``[feedforward]`` table and the estimates. A negative Coulomb estimate (a plant without friction,
+        within the noise) is written to the table as 0; ``estimates`` keeps it as found.
     """
     coulomb_speed = check_positive("coulomb_speed", coulomb_speed, unit=" rad/s")
     rec, peak = calibration_moves(scenario, controller=controller, periods=periods, peak_speed=peak_speed,
