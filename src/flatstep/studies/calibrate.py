@@ -242,9 +242,9 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     g_amp, g_phase = (np.array([a, b]) / amp, np.array([-b, a]) / amp**2) if amp > 0 else (np.zeros(2), np.zeros(2))
     estimates = {"Km": km, **{k: float(x) for k, x in v.items()}, "detent_torque": amp,
                  "detent_phase": math.atan2(b, a)}
-    std = {k: float(math.sqrt(max(cov[i, i], 0.0))) for i, k in enumerate(mech.names) if not k.startswith("detent")}
-    std.update(Km=math.sqrt(max(var_km, 0.0)), detent_torque=float(math.sqrt(max(g_amp @ sub @ g_amp, 0.0))),
-               detent_phase=float(math.sqrt(max(g_phase @ sub @ g_phase, 0.0))))
+    std = {k: math.sqrt(max(float(cov[i, i]), 0.0)) for i, k in enumerate(mech.names) if not k.startswith("detent")}
+    std.update(Km=math.sqrt(max(var_km, 0.0)), detent_torque=math.sqrt(max(float(g_amp @ sub @ g_amp), 0.0)),
+               detent_phase=math.sqrt(max(float(g_phase @ sub @ g_phase), 0.0)))
     torques = TorqueModel(detent_torque=amp, detent_harmonic=h, detent_phase=estimates["detent_phase"],
                           coulomb_torque=max(estimates["coulomb_torque"], 0.0), coulomb_speed=coulomb_speed,
                           load=estimates["load"])
