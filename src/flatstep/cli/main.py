@@ -28,6 +28,7 @@ from ..plan.feasibility import InfeasiblePlanError
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..studies.scenario import PAPER_SCENARIOS, Scenario
 from ..studies.scenario_file import load_scenario
+from .calibrate import add_calibrate_command
 from .compare import add_compare_command
 from .design import add_design_command
 from .flags import count, out_dir, quantity
@@ -133,7 +134,9 @@ DESCRIPTION = """Plan and control stepping motors by differential flatness and s
 
 Commands: reproduce (the paper's figures), simulate (one move), design (gains for a drive), robustness (a
 scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
-from a recording), bench (benchmarks). 'flatstep COMMAND --help' lists a command's flags.
+from a recording), calibrate (detent, friction and load from the drive's own sensors), plan (the fastest
+moves through waypoints under the motor's limits), bench (benchmarks). 'flatstep COMMAND --help' lists a
+command's flags.
 
 Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
 move; 4 a controller faulted; 5 a run stopped before its end (non-finite state, or the continuous law
@@ -192,6 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_compare_command(sub)
     add_identify_command(sub)
     add_plan_command(sub)
+    add_calibrate_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
     ben.add_argument("--which", default="a,b,c,d,e", help="a: planning, b: closed loop, c: controller step, "
