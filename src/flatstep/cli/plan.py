@@ -10,6 +10,7 @@ import numpy as np
 
 from ..model.flat import flat_to_state
 from ..plan.limits import plan_margins
+from .flags import out_dir
 from .status import EXIT_LOST, EXIT_OK, EXIT_REFUSED
 
 if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
@@ -109,8 +110,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         print(f"  on the {tr['control_rate']:g} Hz drive: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
               f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
               f"final error {tr['final_error']:.3g} rad")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = out_dir(args.out)
     plot_plan(pf, out / "plan.png")
     (out / "plan.json").write_text(json.dumps(report, indent=2) + "\n")
     print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")

@@ -31,10 +31,15 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from ..model.motor import MotorParams
+from ..validate import check_quantity
+from ..validate.limits import MAX_OPTIMAL_MOVES
 from .limits import MotorLimits
 from .piecewise import PiecewisePlan
 from .time_optimal import time_optimal
 from .waypoints import FAMILIES, Caps, Waypoint, plan_waypoints
+
+#: The shortest move between two waypoints [rad] (well below an encoder count; a shorter one is a dwell).
+MIN_MOVE = 1e-6
 
 PLANNERS = ("time_optimal",) + FAMILIES
 _KEYS = {"": ("name", "description", "motor", "limits", "plan", "simulate"),
@@ -103,8 +108,9 @@ def _optimal_sequence(points: list[Waypoint], motor: MotorParams, limits: MotorL
             parts.append((f"dwell at {i}", PiecewisePlan.hold(p.theta, limits.i_hold, t, t + p.dwell)))
             t = parts[-1][1].tf
         if i + 1 < len(points):
-            if points[i + 1].theta == p.theta:
-                raise ValueError(f"waypoints {i} and {i + 1} sit at {p.theta} rad: give the rest as a dwell")
+            if abs(points[i + 1].theta - p.theta) < MIN_MOVE:
+                raise ValueError(f"waypoints {i} and {i + 1} sit at {p.theta} and {points[i + 1].theta} rad, less "
+                                 f"than {MIN_MOVE:g} rad apart: give a rest as a dwell, or merge them")
             parts.append((_label(i), time_optimal(points[i + 1].theta - p.theta, motor, limits, theta1=p.theta,
                                                   t0=t)))
             t = parts[-1][1].tf
@@ -160,13 +166,20 @@ def load_plan_file(path: Union[str, Path]) -> PlanFile:
     if not isinstance(raw, list):
         raise ValueError(f"{where}: [plan] waypoints must be a list of angles or tables {{theta, velocity, dwell}}")
     points = [_waypoint(where, i, w) for i, w in enumerate(raw)]
-    t0 = float(sec.get("t0", 0.0))
+    try:
+        t0 = check_quantity("time", sec.get("t0", 0.0), as_name="t0")
+    except ValueError as exc:
+        raise ValueError(f"{where}:plan.t0: {exc}") from None
     try:
         if planner == "time_optimal":
             if limits is None:
                 raise ValueError("the time_optimal planner needs a [limits] section (v_bus, i_max)")
             if len(points) < 2:
                 raise ValueError(f"{len(points)} waypoint(s): a move needs at least 2")
+            if len(points) - 1 > MAX_OPTIMAL_MOVES:
+                raise ValueError(f"{len(points)} waypoints are {len(points) - 1} time-optimal moves, above the limit "
+                                 f"of {MAX_OPTIMAL_MOVES} (flatstep.validate.limits.MAX_OPTIMAL_MOVES, about 0.1 s "
+                                 "of planning each); split the sequence into several files, or use a spline planner")
             plan, steps = _optimal_sequence(points, motor, limits, t0)
         else:
             caps = Caps(**sec["caps"]) if "caps" in sec else None

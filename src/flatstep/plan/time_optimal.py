@@ -38,7 +38,8 @@ from numpy.typing import NDArray
 from scipy.integrate import cumulative_trapezoid
 
 from ..model.motor import MotorParams
-from ..validate import check_finite
+from ..validate import InputError, check_finite
+from ..validate.limits import MAX_PLAN_SAMPLES
 from .limits import MotorLimits, plan_margins
 from .piecewise import PiecewisePlan
 from .segments import hermite_rows
@@ -140,6 +141,11 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
     total = t1 + cruise + t2
     # fine enough for the shortest of speed-up, braking and smoothing, and for the whole move
     dt = min((total + 2 * width) / _FINE, min(t1, t2, width) / 40)
+    if total / dt > MAX_PLAN_SAMPLES:
+        raise InputError("distance", distance, f"the move of {distance:g} rad takes {total:.4g} s at this motor's "
+                         f"speed limit, which the time-optimal planner would sample {total / dt:.3g} times (every "
+                         f"{dt:.3g} s), above the limit of {MAX_PLAN_SAMPLES:.3g} (flatstep.validate.limits."
+                         "MAX_PLAN_SAMPLES); split it into shorter moves with waypoints, or plan it with a spline")
     n_box = max(1, int(round(width / dt)))
     t = np.arange(int(math.ceil(total / dt)) + 1) * dt
     speed = np.where(t <= t1, np.interp(t, t_acc, omega),

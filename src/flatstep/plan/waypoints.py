@@ -25,7 +25,7 @@ from typing import Optional, Sequence, Union
 import numpy as np
 from numpy.typing import NDArray
 
-from ..validate import check_finite, check_nonnegative, check_positive
+from ..validate import check_finite, check_positive, check_quantity
 from .piecewise import NCOEF, PiecewisePlan, horner
 from .segments import dwell_row, hermite_rows, psi_duration, psi_rows, scurve_rows
 
@@ -43,10 +43,10 @@ class Waypoint:
     dwell: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "theta", check_finite("waypoint theta", self.theta))
+        object.__setattr__(self, "theta", check_quantity("angle", self.theta, as_name="waypoint theta"))
         if self.velocity is not None:
             object.__setattr__(self, "velocity", check_finite("waypoint velocity", self.velocity))
-        object.__setattr__(self, "dwell", check_nonnegative("waypoint dwell", self.dwell, unit=" s"))
+        object.__setattr__(self, "dwell", check_quantity("time", self.dwell, as_name="waypoint dwell"))
 
 
 @dataclass(frozen=True)

@@ -32,6 +32,10 @@ MAX_RESULT_BYTES = 1 << 30
 MAX_STEPS = 100_000_000
 #: Most plant integration steps of one run on the Python reference loop (``engine="python"``, about 70 us each: 15 s).
 MAX_STEPS_REFERENCE = 200_000
+#: Most time samples of one move in the time-optimal planner (flatstep.plan.time_optimal; about 1 s of work).
+MAX_PLAN_SAMPLES = 2_000_000
+#: Most moves of one time-optimal waypoint sequence in a plan file (about 0.1 s of planning each).
+MAX_OPTIMAL_MOVES = 50
 #: Segments of one PWM period in switched mode (csrc/drive.h ``DRIVE_PWM_SEGMENTS``).
 PWM_SEGMENTS = 9
 
