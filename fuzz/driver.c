@@ -1,5 +1,5 @@
 // A stand-in for libFuzzer where clang is missing: runs the harness on files given as arguments, or on
-// random inputs (xorshift, fixed seed) for FUZZ_SECONDS seconds (default 20).
+// random inputs of 1 to 1024 bytes (xorshift, fixed seed) for FUZZ_SECONDS seconds (default 20).
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,9 +31,9 @@ int main(int argc, char **argv)
         return 0;
     }
     while (difftime(time(NULL), start) < seconds) {
-        for (int batch = 0; batch < 10000; batch++) {
+        for (int batch = 0; batch < 1000; batch++) {
             s ^= s << 13, s ^= s >> 7, s ^= s << 17;
-            n = 1 + s % 300;
+            n = 1 + s % 1024;
             for (i = 0; i < n; i++) {
                 s ^= s << 13, s ^= s >> 7, s ^= s << 17;
                 buf[i] = (uint8_t)(s >> 56);

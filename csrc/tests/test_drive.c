@@ -139,6 +139,14 @@ static int drive_checks(void)
     p.v_bus = INFINITY;
     drive_saturate(&p, v, out);
     CHECK(out[0] == 30 && out[1] == -12, "no bus: unchanged");
+    // a bus so small that peak / v_bus overflows (fuzz/regressions/sampled/denormal-v-bus): still scaled onto it
+    p.v_bus = 3.4e-313;
+    drive_saturate(&p, v, out);
+    CHECK(out[0] == p.v_bus && fabs(out[1] + 0.4 * p.v_bus) <= 5e-324, "tiny bus: %g %g", out[0], out[1]);
+    p.v_bus = 1e-3, v[0] = -1e308;
+    drive_saturate(&p, v, out);
+    CHECK(out[0] == -1e-3 && out[1] < 0 && out[1] == -12 / 1e308 * 1e-3, "huge command: %g %g", out[0], out[1]);
+    v[0] = 30;
     p.v_bus = 24.0;
     p.compute_delay = true;
     drive_init(&d, &p, start);
