@@ -34,6 +34,12 @@ static int sensors_checks(void)
     CHECK(sensors_angle(&p, 0.0) == -0.5 * q && sensors_angle(&p, q) == 1.5 * q, "offset -0.5: ties to even");
     p.angle_step = 0;
     CHECK(sensors_angle(&p, 0.1234) == 0.1234, "exact angle");
+    // steps so fine that theta / q overflows (fuzz/regressions/sampled/denormal-angle-step): the angle itself
+    p.angle_step = 4.9406564584124654e-324, p.current_step = 1e-310;
+    CHECK(sensors_angle(&p, 1.4839070901462678e-07) == 1.4839070901462678e-07, "denormal encoder step");
+    x[0] = 0.4, x[1] = -3.0;
+    sensors_currents(&p, x, zero, i);
+    CHECK(i[0] == 0.4 && i[1] == -2.0, "denormal ADC step: %g %g", i[0], i[1]);
     // ADC: offset and noise before conversion, clipped to the range
     p = drive_sensors();
     p.current_offset[0] = 0.002;
