@@ -87,14 +87,6 @@ static bool params_ok(const struct sampled_params *p, uint32_t pwm_periods)
            && p->model.B >= 0 && drive;
 }
 
-// Returns the PWM periods per control period drive.h documents: max(1, round(Ts f_pwm)), ties to even, or 0
-// beyond 1e9.
-static uint32_t pwm_periods(const struct drive_params *d, double Ts)
-{
-    double n = rint(Ts / (1 / d->f_pwm));
-    return !(n <= 1e9) ? 0 : (n < 1 ? 1 : (uint32_t)n);
-}
-
 // Returns 0 (libFuzzer's convention); aborts when a contract of the sampled loop is broken.
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -118,7 +110,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     p.Ts = mask & (1u << 14) ? fz_value(&r, 2e-4) : 2e-4;
     p.substeps = mask & (1u << 14) ? fz_byte(&r, 4) : 4;
     run.n = fz_byte(&r, 250);
-    periods = p.drive.pwm == DRIVE_SWITCHED && fz_positive(p.drive.f_pwm) ? pwm_periods(&p.drive, p.Ts) : 0;
+    periods = p.drive.pwm == DRIVE_SWITCHED && fz_positive(p.drive.f_pwm) ? fz_pwm_periods(&p.drive, p.Ts) : 0;
     p.cancel = &cancel;
     rc = sampled_init(&loop, &p);
     if ((rc == SIM_OK) != params_ok(&p, periods) || (rc != SIM_OK && rc != SIM_EARGS))

@@ -72,6 +72,31 @@ bool fz_plant_ok(const struct plant *p)
            && isfinite(e->magnetizing_resistance) && e->magnetizing_resistance >= 0;
 }
 
+// Returns true when plant_acceleration at x is plant.h's formula, eq. (1) with the load and the effects:
+// (Km (ib cos Nr theta - ia sin Nr theta) - B omega - load - T_d sin(h Nr theta) - T_c tanh(omega / omega_s)
+// - Km^2 / R_m omega) / J, up to rounding (not compared where a term is beyond 1e300 or not finite).
+bool fz_acceleration_ok(const struct plant *p, const double x[4])
+{
+    const struct motor_params *m = &p->motor;
+    const struct plant_effects *e = &p->effects;
+    double a = m->Nr * x[3], terms[7], sum = 0, size = 0, acc = plant_acceleration(p, x);
+    int k;
+    terms[0] = m->Km * x[1] * cos(a), terms[1] = -m->Km * x[0] * sin(a), terms[2] = -m->B * x[2];
+    terms[3] = -p->load;
+    terms[4] = e->detent_torque > 0 ? -e->detent_torque * sin((double)e->detent_harmonic * a) : 0;
+    terms[5] = e->coulomb_torque > 0 ? -e->coulomb_torque * tanh(x[2] / e->coulomb_speed) : 0;
+    terms[6] = e->magnetizing_resistance > 0 ? -m->Km * m->Km / e->magnetizing_resistance * x[2] : 0;
+    for (k = 0; k < 7; k++) {
+        if (!(fabs(terms[k]) <= 1e300))
+            return true;
+        sum += terms[k], size += fabs(terms[k]);
+    }
+    if (!(fabs(a) <= 1e5) || !(fabs((double)e->detent_harmonic * a) <= 1e5) || !isfinite(sum / m->J)
+        || !isfinite(size / m->J))
+        return true;  // libm's and fs_sincos's reductions of a huge angle differ by more than rounding
+    return fabs(acc - sum / m->J) <= 1e-12 * size / m->J + 1e-300;
+}
+
 // Returns nothing; aborts unless the call kept controller.h's contract (and the law's own header's).
 static void check_call(const struct fz_law *c, double t, const double *y, uint32_t st, const double *v)
 {

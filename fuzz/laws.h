@@ -58,6 +58,9 @@ void fz_plant(struct fz_reader *r, uint8_t mask, const struct motor_params *m, s
 // Returns true when plant.h's documented ranges hold (motor, load and effects finite and in range).
 bool fz_plant_ok(const struct plant *p);
 
+// Returns true when plant_acceleration at x is plant.h's formula up to rounding (laws.c).
+bool fz_acceleration_ok(const struct plant *p, const double x[4]);
+
 // Returns the law's init status (0: accepted); decodes its gains and limits (hostile or near the nominal) and
 // binds the wrapper. Aborts when a documented requirement is broken and the law accepts it anyway.
 int fz_law_init(struct fz_law *c, int kind, struct fz_reader *r, bool hostile, uint8_t options,

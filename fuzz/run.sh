@@ -52,7 +52,7 @@ for target in $TARGETS; do
         # shellcheck disable=SC2086
         clang $FLAGS -fsanitize=fuzzer $SAN $SRC -lm -o "$OUT/fuzz_$target"
         ASAN_OPTIONS=detect_leaks=0 "$OUT/fuzz_$target" -seed="${FUZZ_SEED:-1}" -max_total_time="$SECONDS_TO_RUN" \
-            -timeout=2 -max_len=2048 -print_final_stats=1 -artifact_prefix="$OUT/" "$OUT/corpus"
+            -timeout=2 -max_len=1024 -len_control=0 -print_final_stats=1 -artifact_prefix="$OUT/" "$OUT/corpus"
     else
         CC="${CC:-cc}"
         echo "fuzz: $target, libFuzzer unavailable, $CC with the random-input driver, $SECONDS_TO_RUN s"

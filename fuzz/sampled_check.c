@@ -9,6 +9,13 @@ static bool same(double a, double b)
     return a == b || (isnan(a) && isnan(b));
 }
 
+// Returns the PWM periods per control period drive.h documents (sampled_check.h).
+uint32_t fz_pwm_periods(const struct drive_params *d, double Ts)
+{
+    double n = rint(Ts / (1 / d->f_pwm));
+    return !(n <= 1e9) ? 0 : (n < 1 ? 1 : (uint32_t)n);
+}
+
 // Returns nothing; decodes the start state and the sensor noise (sampled_check.h).
 void fz_decode_run(struct fz_reader *r, uint32_t mask, struct fz_run *run)
 {
@@ -116,10 +123,18 @@ static void check_outputs(const struct sampled_params *p, const struct fz_law *l
         }
         if (!p->sensed && !p->observed
             && (memcmp(&y[CTRL_Y_LEN * k], &x[4 * k], 4 * sizeof(double)) != 0
-                || !same(y[CTRL_Y_LEN * k + CTRL_Y_ACC], plant_acceleration(&run->plant, &x[4 * k]))))
+                || !same(y[CTRL_Y_LEN * k + CTRL_Y_ACC], plant_acceleration(&run->plant, &x[4 * k]))
+                || !fz_acceleration_ok(&run->plant, &x[4 * k])))
             FZ_FAIL("period %zu: without sensors the controller does not see the plant state", k);
         if (p->sensed && !p->observed)
             check_sensed(&p->sensors, run, pass, k, p->Ts);
+        if (p->observed && k == 0
+            && (y[CTRL_Y_OMEGA] != 0 || (!p->sensed && y[CTRL_Y_THETA] != x[3])
+                || (p->sensed
+                    && !(fabs(y[CTRL_Y_THETA] - x[3])
+                         <= p->sensors.angle_step * (0.5 + 1e-9) + 8 * DBL_EPSILON * fabs(x[3])))))
+            FZ_FAIL("the observer does not start at rest at the first angle read: %g %g", y[CTRL_Y_OMEGA],
+                    y[CTRL_Y_THETA]);
     }
     for (k = calls; k <= run->n; k++)
         if (!isnan(x[4 * k]) || !isnan(v[2 * k]) || run->status[pass][k] != 0xFFFFFFFFu)
@@ -129,8 +144,9 @@ static void check_outputs(const struct sampled_params *p, const struct fz_law *l
                 (unsigned)st->controller_status, (unsigned)st->fault_periods, st->t_first_fault, (unsigned)status_or,
                 (unsigned)faults, t_first);
     done = rc == SIM_OK ? (uint32_t)run->n : (rc == SIM_ENONFINITE ? calls : calls - 1);
-    per = p->drive.pwm == DRIVE_SWITCHED ? drive_pwm_periods(&p->drive, p->Ts) : p->substeps;
-    if (st->rhs_evals != 4 * st->steps || st->steps < done * per
+    per = p->drive.pwm == DRIVE_SWITCHED ? fz_pwm_periods(&p->drive, p->Ts) : p->substeps;
+    // switched: each of the per PWM periods of a control period takes the same 1 to 9 segments
+    if (st->rhs_evals != 4 * st->steps || st->steps < done * per || (per && st->steps % per != 0)
         || st->steps > done * per * (p->drive.pwm == DRIVE_SWITCHED ? DRIVE_PWM_SEGMENTS : 1))
         FZ_FAIL("sim_stats: %u steps %u evaluations for %u periods of %u", (unsigned)st->steps, (unsigned)st->rhs_evals,
                 (unsigned)done, (unsigned)per);

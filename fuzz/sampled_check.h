@@ -24,6 +24,10 @@ struct fz_run {
     int rc[2];
 };
 
+// Returns the PWM periods per control period drive.h documents: max(1, round(Ts f_pwm)), ties to even, or 0
+// beyond 1e9.
+uint32_t fz_pwm_periods(const struct drive_params *d, double Ts);
+
 // Returns nothing; decodes the start state (mask bit 17: hostile, else the plan's start equilibrium) and the
 // sensor noise (bit 18: a scaled uniform sequence with one poisoned sample).
 void fz_decode_run(struct fz_reader *r, uint32_t mask, struct fz_run *run);
