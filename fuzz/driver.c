@@ -17,17 +17,25 @@ int main(int argc, char **argv)
     time_t start = time(NULL);
     size_t n, i;
     int a;
+    double slowest = 0, took;
+    const char *slowest_file = "";
     for (a = 1; a < argc; a++) {
         FILE *f = fopen(argv[a], "rb");
+        clock_t c0;
         if (!f)
             continue;
         n = fread(buf, 1, sizeof buf, f);
         fclose(f);
+        c0 = clock();
         LLVMFuzzerTestOneInput(buf, n);
+        took = (double)(clock() - c0) / CLOCKS_PER_SEC;
+        if (took > slowest)
+            slowest = took, slowest_file = argv[a];
         runs++;
     }
     if (argc > 1) {
-        printf("driver: %llu files ok\n", (unsigned long long)runs);
+        printf("driver: %llu files ok, the slowest %.1f ms (%s)\n", (unsigned long long)runs, 1e3 * slowest,
+               slowest_file);
         return 0;
     }
     while (difftime(time(NULL), start) < seconds) {

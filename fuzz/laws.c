@@ -94,7 +94,12 @@ bool fz_acceleration_ok(const struct plant *p, const double x[4])
     if (!(fabs(a) <= 1e5) || !(fabs((double)e->detent_harmonic * a) <= 1e5) || !isfinite(sum / m->J)
         || !isfinite(size / m->J))
         return true;  // libm's and fs_sincos's reductions of a huge angle differ by more than rounding
-    return fabs(acc - sum / m->J) <= 1e-12 * size / m->J + 1e-300;
+    // rounding: of the sum, and of the angles (an ulp of Nr theta or h Nr theta moves sin by as much)
+    size = 1e-12 * size
+           + 8 * DBL_EPSILON
+                 * ((fabs(terms[0]) + fabs(terms[1]) + fabs(m->Km * x[0]) + fabs(m->Km * x[1])) * fabs(a)
+                    + e->detent_torque * fabs((double)e->detent_harmonic * a));
+    return fabs(acc - sum / m->J) <= size / m->J + 1e-300;
 }
 
 // Returns nothing; aborts unless the call kept controller.h's contract (and the law's own header's).

@@ -125,7 +125,12 @@ static void check_outputs(const struct sampled_params *p, const struct fz_law *l
             && (memcmp(&y[CTRL_Y_LEN * k], &x[4 * k], 4 * sizeof(double)) != 0
                 || !same(y[CTRL_Y_LEN * k + CTRL_Y_ACC], plant_acceleration(&run->plant, &x[4 * k]))
                 || !fz_acceleration_ok(&run->plant, &x[4 * k])))
-            FZ_FAIL("period %zu: without sensors the controller does not see the plant state", k);
+            FZ_FAIL(
+                "period %zu: without sensors the controller sees %.17g %.17g %.17g %.17g %.17g, not the plant's state "
+                "%.17g %.17g %.17g %.17g and acceleration %.17g",
+                k, y[CTRL_Y_LEN * k], y[CTRL_Y_LEN * k + 1], y[CTRL_Y_LEN * k + 2], y[CTRL_Y_LEN * k + 3],
+                y[CTRL_Y_LEN * k + 4], x[4 * k], x[4 * k + 1], x[4 * k + 2], x[4 * k + 3],
+                plant_acceleration(&run->plant, &x[4 * k]));
         if (p->sensed && !p->observed)
             check_sensed(&p->sensors, run, pass, k, p->Ts);
         if (p->observed && k == 0
