@@ -162,6 +162,7 @@ void fz_check_run(struct sampled *loop, const struct sampled_params *p, struct f
                   volatile uint32_t *cancel)
 {
     bool bad_args = !(isfinite(run->x0[0]) && isfinite(run->x0[1]) && isfinite(run->x0[2]) && isfinite(run->x0[3]))
+                    || !isfinite(p->model.R * run->x0[0]) || !isfinite(p->model.R * run->x0[1])
                     || !fz_plant_ok(&run->plant);
     int pass, rc;
     size_t i;
