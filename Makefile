@@ -37,10 +37,10 @@ ctest:
 	cd build/asan && ctest --output-on-failure
 
 # Fuzz the C core (smc_step, the sampled loop, the continuous loop; libFuzzer + ASan/UBSan, installs clang if
-# missing): 16 s per target in CI (fuzz-ci), or FUZZ_SECONDS per target.
+# missing): 12 s per target in CI (fuzz-ci), or FUZZ_SECONDS per target.
 FUZZ_SECONDS ?= 300
 fuzz-ci:
-	./fuzz/run.sh 16
+	./fuzz/run.sh 12
 
 fuzz:
 	./fuzz/run.sh $(FUZZ_SECONDS)

@@ -1,5 +1,5 @@
 #!/usr/bin/env sh
-# Build and run the fuzz targets for $1 seconds each (default 16), all of them or those named after it:
+# Build and run the fuzz targets for $1 seconds each (default 12), all of them or those named after it:
 #   smc         smc_init/smc_step                      (fuzz/fuzz_smc.c)
 #   sampled     sampled_init/sampled_run, every law    (fuzz/fuzz_sampled.c)
 #   continuous  continuous_run, every law              (fuzz/fuzz_continuous.c)
@@ -9,7 +9,7 @@
 # in build/fuzz/<target>/.
 set -eu
 cd "$(dirname "$0")/.."
-SECONDS_TO_RUN="${1:-16}"
+SECONDS_TO_RUN="${1:-12}"
 [ $# -gt 0 ] && shift
 TARGETS="${*:-smc sampled continuous}"
 SAN="-fsanitize=address,undefined,float-divide-by-zero -fno-sanitize-recover=all -fno-omit-frame-pointer"
