@@ -96,7 +96,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     struct sampled_params p = {0};
     struct sampled loop;
     uint8_t head = fz_byte(&r, 0);
-    uint32_t mask = fz_u32(&r, 0), periods, work;
+    uint32_t mask = fz_u32(&r, 0), periods;
+    double work;
     volatile uint32_t cancel = 0;
     int rc;
     fz_motor(&r, mask & 1, &p.model);
@@ -123,8 +124,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                     p.drive.v_bus)
         != 0)
         return 0;
-    work = p.drive.pwm == DRIVE_SWITCHED ? periods * DRIVE_PWM_SEGMENTS : p.substeps;
-    if ((double)work * run.n > FZ_WORK)
+    work = p.drive.pwm == DRIVE_SWITCHED ? (double)periods * DRIVE_PWM_SEGMENTS : (double)p.substeps;
+    if (work * (double)run.n > FZ_WORK)
         return 0;  // a valid run, too long for a fuzz input
     fz_decode_run(&r, mask, &run);
     if (mask & (1u << 19)) {
