@@ -23,13 +23,20 @@ void drive_reset(struct drive *d, const fs_real v_start[2])
     d->v_hold[1] = v_start[1];
 }
 
-// Returns nothing; writes v / max(1, max(|va|, |vb|) / v_bus): the command scaled into the bus, direction kept.
+// Returns nothing; writes v / max(1, max(|va|, |vb|) / v_bus): the command scaled into the bus, direction kept
+// (v / max(|va|, |vb|) v_bus where that ratio overflows, on a bus below the command / DBL_MAX).
 void drive_saturate(const struct drive_params *p, const fs_real v[2], fs_real out[2])
 {
     fs_real peak = fs_fabs(v[0]) > fs_fabs(v[1]) ? fs_fabs(v[0]) : fs_fabs(v[1]);
     fs_real scale = peak / p->v_bus;
     if (!(scale > 1))
         scale = 1;  // dividing by 1 leaves v exact, as NumPy's v / maximum(1, peak / v_bus)
+    // peak / v_bus overflowed (a tiny bus): v / inf would lose the direction
+    if (scale > FS_REAL_MAX) {
+        out[0] = v[0] / peak * p->v_bus;
+        out[1] = v[1] / peak * p->v_bus;
+        return;
+    }
     out[0] = v[0] / scale;
     out[1] = v[1] / scale;
 }

@@ -35,7 +35,8 @@ int drive_init(struct drive *d, const struct drive_params *p, const fs_real v_st
 // Returns nothing; the bridge applies v_start until the first delayed command arrives.
 void drive_reset(struct drive *d, const fs_real v_start[2]);
 
-// Returns nothing; writes v / max(1, max(|va|, |vb|) / v_bus): the command scaled into the bus, direction kept.
+// Returns nothing; writes v / max(1, max(|va|, |vb|) / v_bus): the command scaled into the bus, direction kept
+// (v / max(|va|, |vb|) v_bus where that ratio overflows, on a bus below the command / DBL_MAX).
 void drive_saturate(const struct drive_params *p, const fs_real v[2], fs_real out[2]);
 
 // Returns nothing; saturates the command v_cmd and writes the voltage applied over the coming period (the

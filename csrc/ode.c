@@ -43,7 +43,8 @@ int ode_check_args(const struct ode_params *p, size_t n, fs_real t)
 }
 
 // Returns the first step size for a method of the given order by Hairer's heuristic (one Euler step from
-// (t, x) with slope f0 = f(t, x) estimates the second derivative), or -1 when f fails there.
+// (t, x) with slope f0 = f(t, x) estimates the second derivative), -1 when f fails there, or 0 when the step
+// underflows (a slope so large against the state's scale that no step size fits).
 fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t, const fs_real *x,
                        const fs_real *f0, int order)
 {
@@ -56,6 +57,8 @@ fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void 
     }
     h = (dnf <= FS_C(1e-10) || dny <= FS_C(1e-10)) ? FS_C(1e-6) : fs_sqrt(dny / dnf) * FS_C(0.01);
     h = fs_min(h, p->h_max);
+    if (!(h > 0))
+        return 0;  // dny / dnf underflowed: the slope dwarfs the state's scale, no step size fits
     for (i = 0; i < n; i++)
         x1[i] = x[i] + h * f0[i];
     if (f(ctx, t + h, x1, f1))
@@ -69,8 +72,9 @@ fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void 
     return fs_min(fs_min(100 * h, h1), p->h_max);
 }
 
-// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts an
-// integration at (t, x) and picks the first step size (Hairer's heuristic).
+// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, ODE_ERHS when f fails at (t, x), or ODE_EHMIN when
+// the first step size underflows to 0; starts an integration at (t, x) and picks the first step size (Hairer's
+// heuristic).
 int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
                     const fs_real *x)
 {
@@ -90,7 +94,7 @@ int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, 
         return ODE_ERHS;
     s->rhs_evals++;
     s->h = ode_first_step(p, n, f, ctx, t, s->x, s->k[0], 5);
-    return s->h > 0 ? ODE_OK : ODE_ERHS;
+    return s->h > 0 ? ODE_OK : (s->h < 0 ? ODE_ERHS : ODE_EHMIN);
 }
 
 // Returns the scaled RMS error of a trial step from (x, k) to xn, or -1 when it is not finite.

@@ -38,12 +38,14 @@ struct ode_dopri5 {
 int ode_check_args(const struct ode_params *p, size_t n, fs_real t);
 
 // Returns the first step size for a method of the given order by Hairer's heuristic (one Euler step from
-// (t, x) with slope f0 = f(t, x) estimates the second derivative), or -1 when f fails there.
+// (t, x) with slope f0 = f(t, x) estimates the second derivative), -1 when f fails there, or 0 when the step
+// underflows (a slope so large against the state's scale that no step size fits).
 fs_real ode_first_step(const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t, const fs_real *x,
                        const fs_real *f0, int order);
 
-// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts an
-// integration at (t, x) and picks the first step size (Hairer's heuristic).
+// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, ODE_ERHS when f fails at (t, x), or ODE_EHMIN when
+// the first step size underflows to 0; starts an integration at (t, x) and picks the first step size (Hairer's
+// heuristic).
 int ode_dopri5_init(struct ode_dopri5 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
                     const fs_real *x);
 
@@ -69,8 +71,8 @@ struct ode_dop853 {
     uint32_t steps, rejected, rhs_evals;
 };
 
-// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts a
-// DOP853 integration at (t, x) and picks the first step size.
+// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, ODE_ERHS when f fails at (t, x), or ODE_EHMIN when
+// the first step size underflows to 0; starts a DOP853 integration at (t, x) and picks the first step size.
 int ode_dop853_init(struct ode_dop853 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
                     const fs_real *x);
 

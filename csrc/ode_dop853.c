@@ -124,8 +124,8 @@ static void stage_state(const struct ode_dop853 *s, const fs_real *x_old, fs_rea
     }
 }
 
-// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, or ODE_ERHS when f fails at (t, x); starts a
-// DOP853 integration at (t, x) and picks the first step size.
+// Returns ODE_OK, ODE_EARGS for bad parameters or dimension, ODE_ERHS when f fails at (t, x), or ODE_EHMIN when
+// the first step size underflows to 0; starts a DOP853 integration at (t, x) and picks the first step size.
 int ode_dop853_init(struct ode_dop853 *s, const struct ode_params *p, size_t n, ode_rhs_fn f, void *ctx, fs_real t,
                     const fs_real *x)
 {
@@ -151,7 +151,7 @@ int ode_dop853_init(struct ode_dop853 *s, const struct ode_params *p, size_t n, 
         return ODE_ERHS;
     s->rhs_evals++;
     s->h = ode_first_step(p, n, f, ctx, t, s->x, s->k[12], 8);
-    return s->h > 0 ? ODE_OK : ODE_ERHS;
+    return s->h > 0 ? ODE_OK : (s->h < 0 ? ODE_ERHS : ODE_EHMIN);
 }
 
 // Returns the error norm of a trial step from x to xn (stages k[0..11]), or -1 when it is not finite: the

@@ -125,7 +125,7 @@ int sampled_run(struct sampled *s, const struct controller *ctrl, const struct p
     st->steps = st->rejected = st->rhs_evals = st->fault_periods = 0;
     st->controller_status = CTRL_OK;
     st->t_fail = st->t_first_fault = 0;
-    if (!finite4(x0) || !plant_valid(plant))
+    if (!finite4(x0) || !fs_isfinite(v_start[0]) || !fs_isfinite(v_start[1]) || !plant_valid(plant))
         return SIM_EARGS;
     if (s->sensed)
         sensors_reset(&s->sensors);

@@ -53,13 +53,14 @@ struct sampled {
 // Returns SIM_OK, or SIM_EARGS when a part's parameters are invalid (s is then left unusable).
 int sampled_init(struct sampled *s, const struct sampled_params *p);
 
-// Returns SIM_OK or an error sim_status; resets the parts and the controller and runs n_periods periods from
-// x0 at t_k = k Ts. Period k: read the sensors with noise sample k (noise: (n_periods + 1) x 2, or NULL for
-// none), correct the observer (its acceleration and prediction use the motor torque less the known torques), step the controller (0 V on a fault), saturate and delay in the drive,
-// integrate the plant (plant_rhs: eq. (1), load and effects) by RK4 substeps under the applied voltage (switched
-// PWM: one RK4 step per PWM segment, drive_pwm_period of the applied voltage and the currents at t_k, repeated
-// for each PWM period), predict the observer. Writes, at every t_k, k = 0..n_periods, the plant state into x_out
-// ((n_periods + 1) x 4), the voltage applied from t_k into v_out ((n_periods + 1) x 2), and, unless NULL, what
+// Returns SIM_OK or an error sim_status (SIM_EARGS for a non-finite x0 or start voltage R x0, or an invalid plant);
+// resets the parts and the controller and runs n_periods periods from x0 at t_k = k Ts. Period k: read the sensors
+// with noise sample k (noise: (n_periods + 1) x 2, or NULL for none), correct the observer (its acceleration and
+// prediction use the motor torque less the known torques), step the controller (0 V on a fault), saturate and delay
+// in the drive, integrate the plant (plant_rhs: eq. (1), load and effects) by RK4 substeps under the applied voltage
+// (switched PWM: one RK4 step per PWM segment, drive_pwm_period of the applied voltage and the currents at t_k,
+// repeated for each PWM period), predict the observer. Writes, at every t_k, k = 0..n_periods, the plant state into
+// x_out ((n_periods + 1) x 4), the voltage applied from t_k into v_out ((n_periods + 1) x 2), and, unless NULL, what
 // the controller saw into y_out ((n_periods + 1) x 5) and its status into status_out.
 int sampled_run(struct sampled *s, const struct controller *ctrl, const struct plant *plant, const fs_real *x0,
                 size_t n_periods, const fs_real *noise, fs_real *x_out, fs_real *v_out, fs_real *y_out,

@@ -28,17 +28,19 @@ void sensors_reset(struct sensors *s)
 }
 
 // Returns the encoder reading q (round(theta / q - offset) + offset) of the true angle theta (rounding half to
-// even, as NumPy; theta itself when angle_step is 0).
+// even, as NumPy; theta itself when angle_step is 0 or |theta / q| >= 1 / epsilon, where counts are integers).
 fs_real sensors_angle(const struct sensors_params *p, fs_real theta)
 {
-    fs_real q = p->angle_step;
-    if (q == 0)
+    fs_real q = p->angle_step, counts = q != 0 ? theta / q : 0;
+    // beyond 1 / epsilon counts (or an overflow to inf) every count is an integer: the angle is its own reading
+    if (q == 0 || !(fs_fabs(counts) < 1 / FS_REAL_EPSILON))
         return theta;
-    return q * (fs_rint(theta / q - p->encoder_offset) + p->encoder_offset);
+    return q * (fs_rint(counts - p->encoder_offset) + p->encoder_offset);
 }
 
 // Returns nothing; writes the ADC readings of the phase currents i with the noise sample added:
-// clip(q round((i + offset + noise) / q), +-range), or i + offset + noise when current_step is 0.
+// clip(q round((i + offset + noise) / q), +-range), or i + offset + noise when current_step is 0 (and, clipped,
+// when |(i + offset + noise) / q| >= 1 / epsilon, where steps are integers).
 void sensors_currents(const struct sensors_params *p, const fs_real i[2], const fs_real noise[2], fs_real out[2])
 {
     fs_real q = p->current_step, r = p->current_range, a;
@@ -46,7 +48,8 @@ void sensors_currents(const struct sensors_params *p, const fs_real i[2], const 
     for (k = 0; k < 2; k++) {
         a = i[k] + p->current_offset[k] + noise[k];
         if (q != 0) {
-            a = q * fs_rint(a / q);
+            if (fs_fabs(a / q) < 1 / FS_REAL_EPSILON)  // else a is a whole number of steps (or a / q overflowed)
+                a = q * fs_rint(a / q);
             a = a < -r ? -r : (a > r ? r : a);
         }
         out[k] = a;

@@ -39,11 +39,12 @@ int sensors_init(struct sensors *s, const struct sensors_params *p);
 void sensors_reset(struct sensors *s);
 
 // Returns the encoder reading q (round(theta / q - offset) + offset) of the true angle theta (rounding half to
-// even, as NumPy; theta itself when angle_step is 0).
+// even, as NumPy; theta itself when angle_step is 0 or |theta / q| >= 1 / epsilon, where counts are integers).
 fs_real sensors_angle(const struct sensors_params *p, fs_real theta);
 
 // Returns nothing; writes the ADC readings of the phase currents i with the noise sample added:
-// clip(q round((i + offset + noise) / q), +-range), or i + offset + noise when current_step is 0.
+// clip(q round((i + offset + noise) / q), +-range), or i + offset + noise when current_step is 0 (and, clipped,
+// when |(i + offset + noise) / q| >= 1 / epsilon, where steps are integers).
 void sensors_currents(const struct sensors_params *p, const fs_real i[2], const fs_real noise[2], fs_real out[2]);
 
 // Returns nothing; reads the plant state x = (ia, ib, omega, theta) with the noise sample, stores the reading,

@@ -34,6 +34,12 @@ static int sensors_checks(void)
     CHECK(sensors_angle(&p, 0.0) == -0.5 * q && sensors_angle(&p, q) == 1.5 * q, "offset -0.5: ties to even");
     p.angle_step = 0;
     CHECK(sensors_angle(&p, 0.1234) == 0.1234, "exact angle");
+    // steps so fine that theta / q overflows (fuzz/regressions/sampled/denormal-angle-step): the angle itself
+    p.angle_step = 4.9406564584124654e-324, p.current_step = 1e-310;
+    CHECK(sensors_angle(&p, 1.4839070901462678e-07) == 1.4839070901462678e-07, "denormal encoder step");
+    x[0] = 0.4, x[1] = -3.0;
+    sensors_currents(&p, x, zero, i);
+    CHECK(i[0] == 0.4 && i[1] == -2.0, "denormal ADC step: %g %g", i[0], i[1]);
     // ADC: offset and noise before conversion, clipped to the range
     p = drive_sensors();
     p.current_offset[0] = 0.002;
@@ -139,6 +145,14 @@ static int drive_checks(void)
     p.v_bus = INFINITY;
     drive_saturate(&p, v, out);
     CHECK(out[0] == 30 && out[1] == -12, "no bus: unchanged");
+    // a bus so small that peak / v_bus overflows (fuzz/regressions/sampled/denormal-v-bus): still scaled onto it
+    p.v_bus = 3.4e-313;
+    drive_saturate(&p, v, out);
+    CHECK(out[0] == p.v_bus && fabs(out[1] + 0.4 * p.v_bus) <= 5e-324, "tiny bus: %g %g", out[0], out[1]);
+    p.v_bus = 1e-3, v[0] = -1e308;
+    drive_saturate(&p, v, out);
+    CHECK(out[0] == -1e-3 && out[1] < 0 && out[1] == -12 / 1e308 * 1e-3, "huge command: %g %g", out[0], out[1]);
+    v[0] = 30;
     p.v_bus = 24.0;
     p.compute_delay = true;
     drive_init(&d, &p, start);

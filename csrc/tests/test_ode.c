@@ -20,6 +20,14 @@ static int wall(void *ctx, double t, const double *x, double *dx)
     return t > 0.5;
 }
 
+// Returns 0; a slope of 1e300 (fuzz/regressions/continuous/first-step-underflow): (f0 / sk)^2 overflows.
+static int steep(void *ctx, double t, const double *x, double *dx)
+{
+    (void)ctx, (void)t, (void)x;
+    dx[0] = 1e300;
+    return 0;
+}
+
 // Returns the largest error of the oscillator state at t against the exact solution.
 static double osc_error(const double *x, double t)
 {
@@ -96,6 +104,7 @@ int test_ode(void)
 {
     struct ode_params p = {1e-10, 1e-12, 1.0};
     struct ode_dopri5 s;
+    struct ode_dop853 s853;
     double x0[3] = {1, 0, 1}, x[3], worst_dense = 0, e1, e2, t;
     int rc = ODE_OK, k, n;
     CHECK(ode_dopri5_init(&s, &p, 3, osc, NULL, 0.0, x0) == ODE_OK, "init");
@@ -127,6 +136,9 @@ int test_ode(void)
         rc = ode_dopri5_step(&s, 1.0);
     CHECK(rc == ODE_ERHS && s.t <= 0.5, "failing rhs: rc %d at t %g", rc, s.t);
     CHECK(ode_dopri5_init(&s, &p, 0, osc, NULL, 0.0, x0) == ODE_EARGS, "n = 0");
+    // a slope that dwarfs the state's scale: no first step fits, ODE_EHMIN (not a failing right-hand side)
+    CHECK(ode_dopri5_init(&s, &p, 1, steep, NULL, 0.0, x0) == ODE_EHMIN && s.h == 0, "steep: h %g", s.h);
+    CHECK(ode_dop853_init(&s853, &p, 1, steep, NULL, 0.0, x0) == ODE_EHMIN && s853.h == 0, "steep 853: h %g", s853.h);
     p.rtol = 0;
     CHECK(ode_dopri5_init(&s, &p, 3, osc, NULL, 0.0, x0) == ODE_EARGS, "rtol = 0");
     // RK4 is 4th order: halving the step divides the error by ~16.

@@ -156,6 +156,10 @@ static int sampled_checks(void)
     CHECK(rc == SIM_ECANCELLED && st.t_fail == 0 && st.steps == 0, "cancelled sampled run: rc %d", rc);
     cancel_flag = 0;
     CHECK(run_ideal(&s, &plant, x0, -1e-4, 4, 600, &st) == SIM_EARGS, "Ts < 0");
+    // a finite x0 whose start voltage R x0 overflows (fuzz/regressions/sampled/start-voltage-overflow)
+    x0[0] = 1.7e308;
+    CHECK(run_ideal(&s, &plant, x0, 1e-4, 4, 0, &st) == SIM_EARGS, "R x0 overflows");
+    x0[0] = 0.4;
     plant.effects.detent_torque = -1;
     CHECK(run_ideal(&s, &plant, x0, 1e-4, 4, 600, &st) == SIM_EARGS, "negative detent torque");
     plant.effects.detent_torque = 0;
