@@ -80,7 +80,12 @@ def cmd_design(args: argparse.Namespace) -> int:
 
 def add_design_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``flatstep design`` to the subcommands ``sub``."""
-    des = sub.add_parser("design", help="design sliding gains and observer for a sampled drive")
+    des = sub.add_parser("design", help="design sliding gains and observer for a sampled drive",
+                         description="Design the sliding gains, boundary layers, error dynamics and observer for a "
+                         "sampled drive (a scenario file's [drive], or the paper's motor and move on the flags' "
+                         "drive), print them with their rationale; with --out, also run the paper's and the designed "
+                         "gains on that drive (design.png: tracking error in encoder counts, current norm [A], "
+                         "phase voltage [V]).")
     des.add_argument("scenario", nargs="?", default=None, help="a scenario file with a [drive] (default: "
                      "the paper's motor and move on the flags' drive)")
     des.add_argument("--control-rate", type=quantity("rate", "--control-rate"), default=20e3,

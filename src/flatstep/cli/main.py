@@ -1,10 +1,9 @@
 """flatstep: plan and control stepping motors by differential flatness and sliding modes.
 
-Commands: ``reproduce`` (the paper's figures), ``simulate`` (one move), ``design`` (gains for a drive),
-``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``bench``
-(benchmarks). ``flatstep COMMAND --help`` lists a command's flags. Exit codes: 0 every run ok, 1 an unexpected
-error, 2 a refused input, 3 a lost move, 4 a controller fault, 5 a run stopped early, 130 interrupted
-(docs/errors.md).
+The command line: ``reproduce`` (the paper's figures), ``simulate`` (one move), ``design`` (gains for a drive),
+``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``identify``
+(motor parameters from a recording), ``bench`` (benchmarks). ``flatstep --help`` prints :data:`DESCRIPTION` (the
+commands and the exit codes, docs/errors.md); ``flatstep COMMAND --help`` lists a command's flags.
 """
 from __future__ import annotations
 
@@ -37,14 +36,17 @@ from .plan import add_plan_command
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
 
-TABLE_KEYS = ("theta_final", "max_abs_theta_error", "max_abs_rho_error", "max_abs_va", "max_abs_vb", "omega_final")
+#: The summary table's columns and their units.
+TABLE_KEYS = {"theta_final": "rad", "max_abs_theta_error": "rad", "max_abs_rho_error": "A", "max_abs_va": "V",
+              "max_abs_vb": "V", "omega_final": "rad/s"}
 
 
 def _table(summaries: dict[str, dict[str, Any]]) -> str:
-    """The runs' summaries as a fixed-width table, one row per run (the columns of :data:`TABLE_KEYS`)."""
+    """The runs' summaries as a fixed-width table, one row per run (the columns of :data:`TABLE_KEYS`, units below)."""
     head = f"{'run':<6}" + "".join(f"{k:>21}" for k in TABLE_KEYS)
+    units = f"{'':<6}" + "".join(f"{f'[{u}]':>21}" for u in TABLE_KEYS.values())
     rows = [f"{name:<6}" + "".join(f"{s[k]:>21.6e}" for k in TABLE_KEYS) for name, s in summaries.items()]
-    return "\n".join([head, *rows])
+    return "\n".join([head, units, *rows])
 
 
 def _write(out: Path, name: str, scenario: Scenario, result: SimResult, title: str) -> None:
@@ -158,11 +160,18 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="print the traceback of an unexpected error")
     sub: Any = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    rep = sub.add_parser("reproduce", help="run the paper's Fig. 1 and Fig. 2 scenarios")
+    rep = sub.add_parser("reproduce", help="run the paper's Fig. 1 and Fig. 2 scenarios",
+                         description="Run the paper's two simulations (Fig. 1: no load, W1 = W2 = 100; Fig. 2: "
+                         "load 1e-5 N m, W1 = W2 = 300) with continuous control; write fig1.png, fig2.png, their "
+                         "series (CSV) and summary.json, and print the summary table.")
     rep.add_argument("--out", default="out", help="output directory (default: out)")
     rep.set_defaults(func=cmd_reproduce)
 
-    sim = sub.add_parser("simulate", help="simulate one closed-loop move (defaults: the paper's Fig. 1)")
+    sim = sub.add_parser("simulate", help="simulate one closed-loop move (defaults: the paper's Fig. 1)",
+                         description="Simulate one closed-loop move: a scenario file (a whole drive: motor, plant, "
+                         "plan, controller, sensors, observer), or the paper's motor with the move and gains given by "
+                         "the flags (continuous control). Prints the summary and the run's status; the exit code "
+                         "says whether it kept its move (flatstep --help).")
     sim.add_argument("scenario", nargs="?", default=None,
                      help="a scenario file (TOML, see examples/); or give the move and gains by flags")
     p, g = PAPER_PLAN, SMCGains()
@@ -181,7 +190,11 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--hold-damping", type=quantity("damping", "--hold-damping"), default=None,
                      help="from tf on, hold the target's detent with this damping ratio (default: track the plan)")
     sim.add_argument("--measurement", choices=MEASUREMENTS, default=None,
-                     help="ideal: true theta'' known (the paper); model: theta'' from the zero-load model")
+                     help="where the law's acceleration theta'' comes from. ideal: the plant's true value (the "
+                     "paper's assumption; default); model: the zero-load model of the measured state, J theta'' = Km "
+                     "(ib cos Nr theta - ia sin Nr theta) - B omega; observer: a drive's speed and load observer (a "
+                     "scenario file's [observer]; without a drive, as here, it reads the true value like ideal). A "
+                     "scenario file picks the mode its drive can give ([controller] measurement)")
     sim.add_argument("--x0", type=float, nargs=4, metavar=("IA", "IB", "OMEGA", "THETA"), default=None,
                      help="initial plant state (default: the plan's start equilibrium)")
     sim.add_argument("--out", default=None, help="write run.png, run.csv and summary.json here")
@@ -197,7 +210,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_plan_command(sub)
     add_calibrate_command(sub)
 
-    ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)")
+    ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)",
+                         description="Benchmarks side by side in one run: medians and their ratios against each "
+                         "benchmark's baseline, with the targets (docs/benchmarks.md). Needs a source checkout for "
+                         "the C drivers, and valgrind for instruction counts.")
     ben.add_argument("--which", default="a,b,c,d,e", help="a: planning, b: closed loop, c: controller step, "
                      "d: batch throughput, e: one engine for every run (default: a,b,c,d,e)")
     ben.add_argument("--repeat", type=count("repeat", "--repeat"), default=None,

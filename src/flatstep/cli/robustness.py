@@ -54,7 +54,12 @@ def cmd_robustness(args: argparse.Namespace) -> int:
 
 def add_robustness_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     """Add ``flatstep robustness`` to the subcommands ``sub``."""
-    rob = sub.add_parser("robustness", help="a scenario under plant parameter errors ([robustness] of the file)")
+    rob = sub.add_parser("robustness", help="a scenario under plant parameter errors ([robustness] of the file)",
+                         description="Run a scenario on plants whose parameters are off (every sign combination "
+                         "of the file's [robustness] relative_error on its parameters, default +-10 % on R, L, Km, "
+                         "J, B), the controller keeping the nominal model; with its own gains and the paper's. "
+                         "Prints each gain set's runs ok, lost and faulted, and its worst errors (encoder counts, or "
+                         "rad without an encoder) and peak voltage [V].")
     rob.add_argument("scenario", help="a scenario file (TOML)")
     rob.add_argument("--samples", type=count("samples", "--samples"), default=None,
                      help="random plants instead of all sign combinations")
