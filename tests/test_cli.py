@@ -120,8 +120,11 @@ def test_ctrl_c_stops_a_long_c_run_quickly(tmp_path):
     path = tmp_path / "long.toml"
     path.write_text("t_end = 10.0\n[drive]\ncontrol_rate = 20000.0\nsubsteps = 200\n[controller]\n"
                     "measurement = \"model\"\n")
+    # SIGINT at its default in the child, so Python installs its Ctrl-C handler even when this test runs in a
+    # background job (which starts with SIGINT ignored)
     proc = subprocess.Popen([sys.executable, "-m", "flatstep", "simulate", str(path)], stderr=subprocess.PIPE,
-                            stdout=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     # wait until the process has used 2 s of CPU: its imports take under 1 s, so the C run is under way (a fixed
     # sleep is not enough on a loaded machine)
     deadline = time.monotonic() + 60.0
