@@ -14,17 +14,56 @@ import pytest
 
 SIM_FLAGS = ["--theta1", "--theta2", "--rho1", "--rho2", "--t0", "--tf", "--t-end", "--load-torque", "--W1", "--W2",
              "--eps1", "--eps2", "--xi", "--wn", "--hold-damping"]
-NOT_A_NUMBER = ["nan", "-inf", "abc", "1e400", ""]
+NOT_A_NUMBER = ["nan", "inf", "-inf", "abc", "1e400", "", "0x10", "1,5"]
 #: (flag, values out of its range)
 SIM_RANGES = [("--rho1", ["0", "-1", "1e300"]), ("--rho2", ["0", "-0.4"]), ("--t0", ["-0.01", "1e300"]),
               ("--tf", ["1e300", "0.01", "-1"]), ("--t-end", ["0", "-1", "0.03", "1e9"]),
               ("--load-torque", ["1e300", "-1e300", "1e4"]), ("--theta1", ["1e300"]), ("--theta2", ["-1e300"]),
               ("--W1", ["0", "-100"]), ("--W2", ["0"]), ("--eps1", ["-1"]), ("--eps2", ["0"]), ("--xi", ["0", "-1"]),
               ("--wn", ["0"]), ("--hold-damping", ["0", "-0.7"])]
-DESIGN = [("--control-rate", ["0", "-20000", "nan", "abc", "1e12"]), ("--v-bus", ["0", "-24", "inf", "x"]),
-          ("--current-range", ["0", "-2", "nan"]), ("--uncertainty", ["-0.1", "0.5", "nan", "2"]),
-          ("--load-torque", ["nan", "1e300"]), ("--encoder-counts", ["0", "3", "1.5", "abc", "-16384"]),
-          ("--current-bits", ["1", "64", "12.5", "x"])]
+DESIGN = [("--control-rate", ["0", "-20000", "nan", "abc", "1e12", "inf", ""]),
+          ("--v-bus", ["0", "-24", "inf", "x", "nan", ""]), ("--current-range", ["0", "-2", "nan", "inf"]),
+          ("--uncertainty", ["-0.1", "0.5", "nan", "2", "inf"]), ("--load-torque", ["nan", "1e300", "inf", "x"]),
+          ("--encoder-counts", ["0", "3", "1.5", "abc", "-16384", ""]), ("--current-bits", ["1", "64", "12.5", "x"])]
+
+
+CALIBRATE = [("--periods", ["0", "-1", "1e9", "abc", "100000"]), ("--harmonic", ["0", "2.5", "x"]),
+             ("--coulomb-speed", ["0", "-1", "nan"]), ("--noise", ["-1", "nan", "x"]),
+             ("--controller", ["smc_ff", "pid"])]
+#: (plan file key, bad value, what the error must show)
+PLAN_CASES = [("waypoints", "[0.0, nan]", "nan"), ("waypoints", "[0.0]", "1 waypoint"),
+              ("waypoints", "[]", "0 waypoint"),
+              ("waypoints", "[0.0, 1e9]", "1000000000.0"), ("waypoints", '[0.0, "x"]', "'x'"),
+              ("waypoints", "[0.0, 1e-9]", "1e-09"), ("waypoints", "[0.0, 1e5]", "100000"),
+              ("waypoints", "[0.0, {theta = 1.0, dwell = -1}]", "dwell=-1.0"),
+              ("waypoints", "[0.0, {theta = 1.0, dwell = 1e9}]", "dwell=1000000000.0"),
+              ("waypoints", "5.0", "waypoints"), ("planner", '"bogus"', "'bogus'"), ("t0", "-1", "t0=-1.0"),
+              ("t0", "nan", "t0=nan"), ("t0", "true", "t0=True"),
+              ("waypoints", "[" + ", ".join(str(float(i % 2)) for i in range(60)) + "]", "59 time-optimal moves")]
+
+
+#: (scenario file text, what the error must show), run through ``flatstep simulate``
+SIM_FILES = [(f"[{t}]\n{k} = {v}\n", f"{t}.{k}") for t, k, v in [
+    ("motor", "R", "nan"), ("motor", "L", "-1"), ("motor", "Km", '"0.05"'), ("motor", "J", "true"),
+    ("motor", "B", "[1]"),
+    ("motor", "Nr", "50.5"), ("plan", "rho1", "0"), ("plan", "theta2", "inf"), ("plan", "tf", "1e300"),
+    ("controller", "W1", "-1"), ("controller", "xi", "0"), ("controller", "measurement", '"perfect"'),
+    ("load", "torque", "1e300"), ("load", "torque", '"1e-5"'), ("plant", "detent_torque", "-1"),
+    ("plant", "coulomb_speed", "0"), ("robustness", "relative_error", "0.7")]] + [
+    ("[drive]\ncontrol_rate = 20000.0\n" + (f"[{t}]\n" if t != "drive" else "") + f"{k} = {v}\n", f"{t}.{k}")
+    for t, k, v in [
+        ("drive", "v_bus", "0"), ("drive", "substeps", "0"), ("drive", "f_pwm", "1e12"), ("drive", "pwm", '"pwm"'),
+        ("drive", "compute_delay", "1"), ("sensors", "encoder_counts", "3"), ("sensors", "current_bits", "64"),
+        ("sensors", "delay", "-1"), ("sensors", "seed", "1.5"), ("sensors", "current_noise", "-1"),
+        ("observer", "load_states", "3"), ("observer", "bandwidth", "0")]]
+
+
+def _plan_file(key: str, value: str) -> str:
+    """A plan file on the NEMA 17 preset with ``key = value`` in its [plan] table."""
+    plan = {"waypoints": "[0.0, 2.0]"}
+    plan[key] = value
+    body = "".join(f"{k} = {v}\n" for k, v in plan.items())
+    return f"[motor]\npreset = \"nema17\"\n[limits]\nv_bus = 24.0\ni_max = 1.0\n[plan]\n{body}"
 
 
 def _named(flag: str) -> tuple[str, str]:
@@ -97,6 +136,26 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], int, list[str]]]:
         ("identify coulomb speed", ["identify", "--coulomb-speed", "-1", str(tmp / "missing.csv")], 2,
          ["coulomb_speed=-1.0"]),
     ]
+    nema = str(tmp / "nema.toml")
+    for flag, values in CALIBRATE:
+        for v in values:
+            cases.append((f"calibrate {flag}={v}", ["calibrate", nema, f"{flag}={v}"], 2, [_named(flag)]))
+    cases += [
+        ("calibrate no drive", ["calibrate", str(tmp / "nodrive.toml")], 2, ["no drive loop"]),
+        ("calibrate out dir", ["calibrate", nema, "--out", str(tmp)], 2, ["--out"]),
+        ("calibrate merge dir", ["calibrate", nema, "--merge", str(tmp)], 2, ["--merge"]),
+        ("calibrate missing", ["calibrate", str(tmp / "missing.toml")], 2, ["missing.toml"]),
+        ("reproduce out file", ["reproduce", "--out", str(tmp / "afile")], 2, ["--out", "afile"]),
+        ("plan missing", ["plan", str(tmp / "missing.toml")], 2, ["missing.toml"]),
+        ("plan out file", ["plan", str(tmp / "plan_ok.toml"), "--out", str(tmp / "afile")], 2, ["--out"]),
+    ]
+    for i, (key, value, needle) in enumerate(PLAN_CASES):
+        name = f"plan_{i}.toml"
+        cases.append((f"plan {key}={value}"[:70], ["plan", str(tmp / name), "--out", str(tmp / "plots")], 2,
+                      [name, needle]))
+    for i, (text, needle) in enumerate(SIM_FILES):
+        name = f"sim_{i}.toml"
+        cases.append((f"simulate file {text!r}"[:70], ["simulate", str(tmp / name)], 2, [name, needle]))
     for flag, values in DESIGN:
         for v in values:
             cases.append((f"design {flag}={v}", ["design", f"{flag}={v}"], 2, [_named(flag)]))
@@ -117,6 +176,8 @@ FILES = {
     "drive.toml": "[drive]\ncontrol_rate = 20000.0\n",
     "broken.toml": "t_end = = 1\n",
     "afile": "not a directory\n",
+    "nema.toml": "[motor]\npreset = \"nema17\"\n[drive]\ncontrol_rate = 20000.0\n[sensors]\nencoder_counts = 16384\n",
+    "plan_ok.toml": "[motor]\npreset = \"nema17\"\n[limits]\nv_bus = 24.0\ni_max = 1.0\n[plan]\nwaypoints = [0.0, 2.0]\n",
 }
 
 
@@ -126,6 +187,10 @@ def outcomes(tmp_path_factory):
     for name, text in FILES.items():
         (tmp / name).write_text(text)
     (tmp / "binary.toml").write_bytes(b"\x00\xff\xfe\x80")
+    for i, (key, value, _) in enumerate(PLAN_CASES):
+        (tmp / f"plan_{i}.toml").write_text(_plan_file(key, value))
+    for i, (text, _) in enumerate(SIM_FILES):
+        (tmp / f"sim_{i}.toml").write_text(text)
     cases = _cases(tmp)
 
     def run(argv):
@@ -151,4 +216,4 @@ def test_the_command_line_refuses_bad_input(outcomes, case_id):
 
 
 def test_the_table_is_large():
-    assert len(CASE_IDS) >= 150
+    assert len(CASE_IDS) >= 300

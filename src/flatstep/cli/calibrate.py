@@ -13,6 +13,7 @@ from pathlib import Path
 
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES
 from ..studies.scenario_file import Robustness, load_scenario
+from .flags import count, quantity
 from .status import EXIT_REFUSED
 
 
@@ -36,6 +37,9 @@ def _accuracy(args: argparse.Namespace) -> int:
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """``flatstep calibrate``: one of the two uses of the module docstring."""
+    for flag, path in (("--out", args.out), ("--merge", args.merge)):
+        if path is not None and Path(path).is_dir():
+            raise ValueError(f"{flag} {path}: is a directory; give a file name")
     if args.accuracy:
         if args.out or args.merge:
             raise ValueError("--accuracy calibrates every plant of the study: it writes no table (drop --out/--merge)")
@@ -83,13 +87,15 @@ def add_calibrate_command(sub: argparse._SubParsersAction[argparse.ArgumentParse
     types = [k for k in CONTROLLER_TYPES if k not in FEEDFORWARD_TYPES]
     cal.add_argument("--controller", choices=types, default="cascade",
                      help="the controller that runs the move (default: cascade)")
-    cal.add_argument("--periods", type=int, default=16, help="detent periods covered each way (default 16)")
+    cal.add_argument("--periods", type=count("periods", "--periods"),
+                     default=16, help="detent periods covered each way (default 16)")
     cal.add_argument("--speed", type=float, default=None,
                      help="peak speed [rad/s] (default: the detent frequency at a quarter of the loop's omega_n)")
-    cal.add_argument("--harmonic", type=int, default=4, help="detent periods per electrical period (default 4)")
-    cal.add_argument("--coulomb-speed", type=float, default=0.1,
+    cal.add_argument("--harmonic", type=count("detent_harmonic", "--harmonic"),
+                     default=4, help="detent periods per electrical period (default 4)")
+    cal.add_argument("--coulomb-speed", type=quantity("coulomb_speed", "--coulomb-speed"), default=0.1,
                      help="omega_s [rad/s] of the table's smooth Coulomb sign (default 0.1)")
-    cal.add_argument("--noise", type=float, default=None,
+    cal.add_argument("--noise", type=quantity("current_noise", "--noise"), default=None,
                      help="ADC noise [A rms] instead of the scenario's sensors' own")
     cal.add_argument("--out", default=None, help="write the [feedforward] table (TOML) here")
     cal.add_argument("--merge", metavar="NEW.toml", default=None,

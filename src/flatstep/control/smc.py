@@ -46,7 +46,7 @@ from ..model.motor import acceleration as motor_acceleration
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.loss_aware import LossAwareRho
 from ..plan.piecewise import PiecewisePlan, Plan
-from ..validate import check_finite, check_quantity
+from ..validate import InputError, check_finite, check_quantity
 from .protocol import check_parts
 
 MEASUREMENTS = ("ideal", "model", "observer")
@@ -73,7 +73,8 @@ class SMCGains:
                                check_quantity("damping", self.hold_damping, as_name="hold_damping"))
         xi = check_finite("xi", self.xi)
         if xi <= 0:
-            raise ValueError(f"xi={xi!r} must be > 0 for the error dynamics e'' + 2 xi wn e' + wn^2 e = 0 to be stable")
+            raise InputError("xi", xi,
+                             f"xi={xi!r} must be > 0 for the error dynamics e'' + 2 xi wn e' + wn^2 e = 0 to be stable")
         object.__setattr__(self, "xi", check_quantity("damping", xi, as_name="xi"))
 
     @property

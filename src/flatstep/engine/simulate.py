@@ -19,7 +19,6 @@ from typing import Any, Callable, NamedTuple, Optional, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import solve_ivp
 
 from .. import _core
 from ..control.protocol import Controller, SlidingController, StaticController, check_plan, is_static
@@ -208,6 +207,7 @@ def _continuous_c(plant: Plant, plan: Plan, controller: Controller, solver: Cont
 def _continuous_scipy(plant: Plant, plan: Plan, controller: Controller, solver: Continuous, t_end: float,
                       x0: Array) -> Run:
     """:func:`scipy.integrate.solve_ivp`, restarted at the plan's knots."""
+    from scipy.integrate import solve_ivp  # here: only the scipy engine needs it
     method = solver.method or "LSODA"
     if method not in SCIPY_METHODS:
         raise ValueError(f"method={method!r} is not a solve_ivp method; valid: {SCIPY_METHODS}")

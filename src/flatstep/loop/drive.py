@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_choice, check_finite, check_quantity
+from ..validate import InputError, check_choice, check_finite, check_quantity
 
 PWM_MODES = ("averaged", "switched")
 
@@ -41,7 +41,8 @@ class Drive:
         check_choice("pwm", self.pwm, PWM_MODES)
         dt = check_finite("dead_time", self.dead_time)
         if not 0.0 <= dt < 0.25 / self.f_pwm:
-            raise ValueError(f"dead_time={dt!r} s must be in [0, {0.25 / self.f_pwm:.3g}) s (a quarter PWM period)")
+            raise InputError("dead_time", dt,
+                             f"dead_time={dt!r} s must be in [0, {0.25 / self.f_pwm:.3g}) s (a quarter PWM period)")
         object.__setattr__(self, "dead_time", dt)
 
     def saturate(self, v: ArrayLike) -> NDArray[np.float64]:

@@ -6,9 +6,7 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import NDArray
-from scipy.signal import place_poles
 
 from ..model.motor import MotorParams
 from ..validate import check_count, check_positive, check_quantity
@@ -67,7 +65,9 @@ def _matrices(obs: Observer, J: float, B: float,
         A[2, 3] = 1.0
     Bc = np.zeros((n, 1))
     Bc[1, 0] = 1.0 / J
-    M = scipy.linalg.expm(np.block([[A, Bc], [np.zeros((1, n + 1))]]) * Ts)
+    from scipy.linalg import expm  # here: scipy.linalg is a large import that most commands never use
+
+    M = expm(np.block([[A, Bc], [np.zeros((1, n + 1))]]) * Ts)
     Ad, Bd = M[:n, :n], M[:n, n]
     C = np.zeros((1, n))
     C[0, 0] = 1.0
@@ -75,6 +75,8 @@ def _matrices(obs: Observer, J: float, B: float,
     if np.any(poles < 1e-6):
         raise ValueError(f"bandwidth={obs.bandwidth!r} rad/s is too high for control_period={Ts!r} s; "
                          f"keep bandwidth * control_period below about 1")
+    from scipy.signal import place_poles  # here: scipy.signal takes 0.7 s to import, on every command otherwise
+
     L = place_poles(Ad.T, C.T, poles).gain_matrix.T[:, 0]
     # current-estimator form: correct with the new angle, then predict; L_c = Ad^-1 L
     return Ad, Bd, np.linalg.solve(Ad, L)

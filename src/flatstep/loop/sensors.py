@@ -8,7 +8,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_count, check_finite, check_quantity
+from ..validate import InputError, check_count, check_finite, check_quantity
 
 
 @dataclass(frozen=True)
@@ -54,10 +54,11 @@ class Sensors:
         object.__setattr__(self, "seed", check_count("seed", self.seed, why="the noise's seed"))
         off = check_finite("encoder_offset", self.encoder_offset)
         if not -0.5 <= off < 0.5:
-            raise ValueError(f"encoder_offset={off!r} must be in [-0.5, 0.5) counts")
+            raise InputError("encoder_offset", off, f"encoder_offset={off!r} must be in [-0.5, 0.5) counts")
         object.__setattr__(self, "current_range", check_quantity("current_range", self.current_range))
         if not isinstance(self.current_offset, (tuple, list)) or len(self.current_offset) != 2:
-            raise ValueError(f"current_offset={self.current_offset!r} must be two offsets (ia, ib) in A")
+            raise InputError("current_offset", self.current_offset,
+                             f"current_offset={self.current_offset!r} must be two offsets (ia, ib) in A")
         object.__setattr__(self, "current_offset",
                            tuple(check_quantity("current_offset", o) for o in self.current_offset))
         object.__setattr__(self, "current_noise", check_quantity("current_noise", self.current_noise))

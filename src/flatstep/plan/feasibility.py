@@ -7,7 +7,6 @@ from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import minimize_scalar
 
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
@@ -97,6 +96,8 @@ def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: floa
     margin = _torque_margin(plan, motor, load_torque, t)
     i = int(np.argmin(margin))
     lo, hi = t[max(i - 1, 0)], t[min(i + 1, n - 1)]
+    from scipy.optimize import minimize_scalar  # here: scipy.optimize takes most of a command's start-up
+
     res = minimize_scalar(lambda s: float(_torque_margin(plan, motor, load_torque, s)), bounds=(lo, hi),
                           method="bounded", options={"xatol": 1e-12 * max(1.0, abs(plan.tf))})
     worst_t, worst = (float(res.x), float(res.fun)) if res.fun < margin[i] else (float(t[i]), float(margin[i]))

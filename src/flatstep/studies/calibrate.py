@@ -41,7 +41,7 @@ from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, bandwidths
 from ..engine.simulate import simulate
 from ..model.torque_model import TorqueModel
 from ..plan.rest_to_rest import RestToRest, psi
-from ..validate import check_integer, check_nonnegative, check_positive
+from ..validate import check_count, check_integer, check_nonnegative, check_positive
 from .identify import _electrical
 from .identify_ls import Fit, fit
 from .record import Recording, recording_from_result
@@ -154,7 +154,7 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
     if controller not in CALIBRATION_TYPES:
         raise ValueError(f"controller={controller!r} cannot run a calibration; valid: {list(CALIBRATION_TYPES)} "
                          "(a type that needs no torque model: the torques are what is calibrated)")
-    periods = check_integer("periods", periods, why="detent periods each way")
+    periods = check_count("periods", periods, why="detent periods each way")
     h = check_integer("detent_harmonic", detent_harmonic)
     loop, motor = scenario.loop, scenario.motor
     assert loop is not None and loop.sensors is not None  # _check_drive

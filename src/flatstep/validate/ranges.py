@@ -94,6 +94,7 @@ INTEGER_RANGES: dict[str, tuple[int, int]] = {
     "load_states": (0, 2),
     "repeat": (1, 100_000),
     "seeds": (1, 100_000),
+    "periods": (1, 256),
 }
 
 
