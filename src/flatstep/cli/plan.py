@@ -121,7 +121,11 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 def add_plan_command(sub: Any) -> None:
     """Register ``flatstep plan`` on the subcommand parser ``sub``."""
-    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)")
+    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)",
+                       description="Plan a waypoint sequence from a plan file (a motor, its bus and current limits, "
+                       "the waypoints): print each move's duration and the plan's worst margins, write plan.png "
+                       "(angle, speed, voltage demand against the bus, current against its limit) and plan.json; "
+                       "with --simulate, also run it on the 20 kHz drive (docs/planning.md).")
     p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml)")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
