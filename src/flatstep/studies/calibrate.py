@@ -175,6 +175,12 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
         run = replace(scenario, plan=plan, loop=run_loop, controller_type=controller, torques=None,
                       t_end=duration + 2 * REST)
         result = simulate(plant, plan, run.controller(), loop=run_loop, t_end=run.t_end, x0=x)
+        if result.status != "ok":  # a lost or faulted move does not follow the planned speed: no calibration
+            summary = result.summary()
+            raise ValueError(f"scenario {scenario.name!r}: the calibration move {k + 1} of 2 ({controller}) ended "
+                             f"with status {result.status!r} (lost at {summary['lost_at']}, "
+                             f"{summary['controller_faults']} faulted periods): lower --speed, or check the drive "
+                             "(bus, load) and the controller")
         part = recording_from_result(result, source=f"{scenario.name} calibration").columns()
         part["t"] = part["t"] + elapsed
         parts.append({c: v[:-1] for c, v in part.items()})  # the last sample is the next run's first
