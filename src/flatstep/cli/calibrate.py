@@ -8,10 +8,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES
+from ..json_out import strict_json
 from ..studies.scenario_file import Robustness, load_scenario
 from .flags import count, quantity
 from .status import EXIT_REFUSED
@@ -26,7 +26,7 @@ def _accuracy(args: argparse.Namespace) -> int:
                     peak_speed=args.speed, detent_harmonic=args.harmonic, current_noise=args.noise)
     met = meets_targets(rows)
     if args.json:
-        print(json.dumps({"scenario": scenario.name, "rows": rows, "worst": worst(rows), "targets_met": met},
+        print(strict_json({"scenario": scenario.name, "rows": rows, "worst": worst(rows), "targets_met": met},
                          indent=2))
     else:
         print(f"{scenario.name}: calibration errors on {len(rows)} plants (the nominal model calibrates each)")
@@ -50,7 +50,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     cal = calibrate(scenario, controller=args.controller, periods=args.periods, peak_speed=args.speed,
                     detent_harmonic=args.harmonic, coulomb_speed=args.coulomb_speed, current_noise=args.noise)
     if args.json:
-        print(json.dumps(cal.as_dict(), indent=2))
+        print(strict_json(cal.as_dict(), indent=2))
     else:
         s = cal.settings
         print(f"{scenario.name}: {s['samples']} samples, {s['controller']} over {s['periods']} detent periods each "

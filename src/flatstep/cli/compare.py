@@ -2,13 +2,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from dataclasses import replace
 from typing import Any, Literal, Optional
 
 from ..control.tuning import CONTROLLER_TYPES, LABELS, SMC_TYPES
+from ..json_out import strict_json
 from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band, scenario_kinds
 from ..studies.robustness import encoder_count
 from ..studies.scenario_file import load_scenario
@@ -136,13 +136,13 @@ def cmd_compare(args: argparse.Namespace) -> int:
             plot_plants(worst, LABELS, scenario.plan, count, path=out / "plants.png",
                         title=f"{scenario.name}: {report['robustness']['plants']} plants, parameters off by "
                               f"+-{report['robustness']['relative_error']:.0%}")
-        (out / "compare.json").write_text(json.dumps(report, indent=2) + "\n")
+        (out / "compare.json").write_text(strict_json(report, indent=2) + "\n")
     statuses = [v["status"] for v in nominal.values()]
     if worst is not None:
         statuses += [s for v in worst.values() for s, n in v["statuses"].items() for _ in range(n)]
     code = exit_code(statuses)
     if args.json:
-        print(json.dumps(report, indent=2))
+        print(strict_json(report, indent=2))
         return code
     print(f"{scenario.name}: the scenario's plant (settling band {band:.3g} rad)")
     rows = {k: v["metrics"] for k, v in nominal.items()}

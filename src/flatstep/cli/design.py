@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 from dataclasses import replace
 
 from ..control.design import design_gains
 from ..control.smc import SMCGains
+from ..json_out import strict_json
 from ..loop.drive import Drive
 from ..loop.reference import DriveLoop
 from ..loop.sensors import Sensors
@@ -57,10 +57,10 @@ def cmd_design(args: argparse.Namespace) -> int:
         report["runs"] = {k: r.summary() for k, r in runs.items()}
         plot_overlay(runs, base.plan, encoder_count(base), title=f"{base.name}: {1 / loop.control_period:g} Hz "
                      f"control, load {load:g} N m", path=out / "design.png")
-        (out / "design.json").write_text(json.dumps(report, indent=2) + "\n")
+        (out / "design.json").write_text(strict_json(report, indent=2) + "\n")
     designed_status = [report["runs"]["designed gains"]["status"]] if "runs" in report else []
     if args.json:
-        print(json.dumps(report, indent=2))
+        print(strict_json(report, indent=2))
         return exit_code(designed_status)
     print("designed gains: " + ", ".join(f"{k}={v:.6g}" for k, v in report["gains"].items() if v is not None))
     print("observer: " + ", ".join(f"{k}={v:.6g}" for k, v in report["observer"].items()))

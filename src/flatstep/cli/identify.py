@@ -8,10 +8,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any, Optional
 
+from ..json_out import strict_json
 from ..model.motor import MotorParams
 from ..studies.scenario_file import load_scenario
 from .flags import count, quantity
@@ -30,7 +30,7 @@ def _identify(args: argparse.Namespace, data: Any, truth: Optional[MotorParams] 
         out = result.as_dict()
         if truth is not None:
             out["errors"] = result.errors(truth)
-        print(json.dumps(out, indent=2))
+        print(strict_json(out, indent=2))
     else:
         rate = 1.0 / result.settings["period"]
         print(f"{result.source}: {result.settings['samples']} samples at {rate:.6g} Hz, Nr = {result.Nr}")
@@ -52,7 +52,7 @@ def _accuracy(args: argparse.Namespace) -> int:
     rows = accuracy(scenarios, range(args.seeds), current_noise=args.noise, duration=args.duration,
                     noise_compensation=not args.no_noise_compensation)
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(strict_json(rows, indent=2))
     else:
         print(accuracy_table(rows))
     ok = meets_targets(rows)

@@ -8,7 +8,6 @@ commands and the exit codes, docs/errors.md); ``flatstep COMMAND --help`` lists 
 from __future__ import annotations
 
 import argparse
-import json
 import re
 import signal
 import sys
@@ -21,6 +20,7 @@ from ..control.smc import MEASUREMENTS, SMCGains
 from ..engine.result import SimResult
 from ..engine.simulate import simulate
 from ..errors import REASONS, RunError
+from ..json_out import strict_json
 from ..model.motor import MotorParams
 from ..model.plant import Plant
 from ..plan.feasibility import InfeasiblePlanError
@@ -67,7 +67,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         result = scenario.run()
         _write(out, name, scenario, result, titles[name])
         summaries[name] = result.summary()
-    (out / "summary.json").write_text(json.dumps(summaries, indent=2) + "\n")
+    (out / "summary.json").write_text(strict_json(summaries, indent=2) + "\n")
     print(_table(summaries))
     print(f"wrote {out / 'fig1.png'}, {out / 'fig2.png'}, {out / 'summary.json'}")
     for name, summary in summaries.items():
@@ -117,8 +117,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         plan = scenario.plan
         _write(out, "run", scenario, result, f"{scenario.name}: theta {plan.theta1:g} -> {plan.theta2:g} rad, "
                f"load {scenario.simulated_plant.load:g} N m, {scenario.measurement} measurement")
-        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    print(json.dumps(summary, indent=2) if args.json else _table({"run": summary}))
+        (out / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
+    print(strict_json(summary, indent=2) if args.json else _table({"run": summary}))
     if not args.json:
         print(f"status: {summary['status']}")
     warn(scenario.name, summary)

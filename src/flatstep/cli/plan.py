@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
+from ..json_out import strict_json
 from ..model.flat import flat_to_state
 from ..plan.limits import plan_margins
 from .flags import out_dir
@@ -112,7 +112,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
               f"final error {tr['final_error']:.3g} rad")
     out = out_dir(args.out)
     plot_plan(pf, out / "plan.png")
-    (out / "plan.json").write_text(json.dumps(report, indent=2) + "\n")
+    (out / "plan.json").write_text(strict_json(report, indent=2) + "\n")
     print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
     if not report.get("feasible", True):
         return EXIT_REFUSED

@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from dataclasses import replace
 from typing import Any
 
+from ..json_out import strict_json
 from ..studies.robustness import REST_AFTER, encoder_count, run_study
 from ..studies.scenario_file import Robustness, load_scenario
 from .flags import count, out_dir
@@ -31,11 +31,11 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         out = out_dir(args.out)
         plot_robustness(result, count, scenario.plan, title=f"{scenario.name}: plant parameters off by "
                         f"+-{study.relative_error:.0%} ({len(result['errors'])} plants)", path=out / "robustness.png")
-        (out / "robustness.json").write_text(json.dumps(report, indent=2) + "\n")
+        (out / "robustness.json").write_text(strict_json(report, indent=2) + "\n")
     own = report["sets"]["scenario"]
     code = exit_code(["lost"] * own["statuses"]["lost"] + ["fault"] * own["statuses"]["fault"])
     if args.json:
-        print(json.dumps(report, indent=2))
+        print(strict_json(report, indent=2))
         return code
     unit = "counts" if count else "rad"
     print(f"{scenario.name}: {len(result['errors'])} plants, parameters off by +-{study.relative_error:.0%}")

@@ -17,6 +17,8 @@ from contextlib import ExitStack
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
+from ..json_out import strict_json
+
 #: The version of the file format, the value of the header's ``"flatstep_batch"`` key.
 FORMAT = 1
 
@@ -213,7 +215,7 @@ def _rewrite(path: Path, head: dict[str, Any], rest: bytes) -> None:
     tmp = path.with_name(path.name + ".tmp")
     try:
         with open(tmp, "wb") as f:
-            f.write(json.dumps(head).encode() + b"\n" + rest)
+            f.write(strict_json(head).encode() + b"\n" + rest)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
@@ -260,7 +262,7 @@ class RowWriter:
             return
         try:
             for row in rows:
-                line = json.dumps({"index": row["index"], "fingerprint": self.fingerprints[row["index"]], **row})
+                line = strict_json({"index": row["index"], "fingerprint": self.fingerprints[row["index"]], **row})
                 data = line.encode() + b"\n"
                 self._write(data)
                 self.size += len(data)
