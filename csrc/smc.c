@@ -170,7 +170,8 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     }
     a.sdelta = sN * a.cphi + cN * a.sphi;
     a.cdelta = cN * a.cphi - sN * a.sphi;
-    // theta'' measured or the model's (smc_acceleration) under the known torques E; E' / J joins the jerk's torque below (0 without the model's calls when E is the constant load).
+    // theta'' measured or the model's (smc_acceleration) under the known torques E; E' / J joins the jerk's torque
+    // below (0 without the model's calls when E is the constant load).
     if (s->torques_constant) {
         E = s->p.torques.load;
         acc = smc_acceleration(s, y, sN, cN, E);
@@ -228,7 +229,8 @@ SMC_INLINE uint32_t smc_guarded(struct smc *s, fs_real t, const fs_real y[5], co
     if (s->p.measurement == SMC_IDEAL)
         z += y[4] - y[4];
     status = z == 0 ? smc_law(s, t, y, nr_trig, v, w) : SMC_NONFINITE;
-    if (status == SMC_OK && !(fs_isfinite(v[0]) && fs_isfinite(v[1])))
+    // (v0 - v0) + (v1 - v1) is 0 when both are finite and NaN otherwise, as for the inputs.
+    if (status == SMC_OK && !((v[0] - v[0]) + (v[1] - v[1]) == 0))
         status = SMC_OVERFLOW;
     if (status != SMC_OK) {
         v[0] = v[1] = 0;

@@ -121,7 +121,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 def add_plan_command(sub: Any) -> None:
     """Register ``flatstep plan`` on the subcommand parser ``sub``."""
-    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)")
+    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)",
+                       description="Plan the waypoint sequence of a plan file under the motor's voltage and current "
+                       "limits, write plan.png and plan.json, and optionally run it on the 20 kHz drive.")
     p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml)")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
