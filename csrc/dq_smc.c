@@ -22,6 +22,9 @@ void dq_smc_params_default(struct dq_smc_params *p)
     p->torques = tm;
     p->measurement = SMC_IDEAL;
     p->v_limit = FS_C(1e3);
+    p->integral.ki = 0;
+    p->integral.Ts = 0;
+    p->integral.v_hold = 0;
 }
 
 // Returns DQ_SMC_PARAMS_OK, or the dq_smc_param_error naming the invalid group (s is then left unusable).
@@ -45,6 +48,9 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
         return DQ_SMC_ELIMITS;
     if (!torque_model_valid(&p->torques))
         return DQ_SMC_ETORQUES;
+    if (!(fs_isfinite(p->integral.ki) && p->integral.ki >= 0
+          && (p->integral.ki == 0 || (positive(p->integral.Ts) && positive(p->integral.v_hold)))))
+        return DQ_SMC_EINTEGRAL;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
@@ -55,10 +61,11 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
     return DQ_SMC_PARAMS_OK;
 }
 
-// Returns nothing; clears the accumulated status.
+// Returns nothing; clears the accumulated status and the integral.
 void dq_smc_reset(struct dq_smc *s)
 {
     s->status_seen = CTRL_OK;
+    s->z = 0;
 }
 
 // Returns nothing; writes the planned d current and its rate at time t, for the planned speed w and acceleration a.
@@ -86,7 +93,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
     fs_real ref[PLAN_FLAG_LEN], sn, cs, i_d, i_q, E, acc, e, de, dde, s1, s2, gamma1, gamma2, dE, v_d, v_q, id_ref,
-        did_ref, norm, z;
+        did_ref, norm, vn, z, ki = s->p.integral.ki;
     uint32_t status = CTRL_OK;
     v[0] = v[1] = 0;
     // x - x is 0 for a finite x and NaN otherwise: one test covers every input used.
@@ -116,6 +123,8 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     s2 = dde + s->alpha2 * de + s->alpha1 * e;
     gamma1 = did_ref - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
     gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
+    if (ki != 0)
+        gamma2 -= ki * s->z;
     dE = torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc);
     v_d = m->L * gamma1 + m->R * i_d - m->L * m->Nr * y[2] * i_q;
     v_q = m->L * ((m->J * gamma2 + m->B * acc + dE) / m->Km) + m->R * i_q + m->L * m->Nr * y[2] * i_d + m->Km * y[2];
@@ -123,8 +132,14 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     v[1] = v_d * sn + v_q * cs;
     if (!(fs_isfinite(v[0]) && fs_isfinite(v[1]))) {
         v[0] = v[1] = 0;
-        status = CTRL_OVERFLOW;
-    } else if (fs_hypot(v[0], v[1]) > s->p.v_limit) {
+        s->status_seen |= CTRL_OVERFLOW;
+        return CTRL_OVERFLOW;
+    }
+    vn = fs_hypot(v[0], v[1]);
+    // Anti-windup: z advances only inside the boundary layer and below the bus.
+    if (ki != 0 && fs_fabs(s2) <= g->eps2 && vn <= s->p.integral.v_hold)
+        s->z += s->p.integral.Ts * s2;
+    if (vn > s->p.v_limit) {
         // Scale by the larger component first so that hypot cannot overflow.
         norm = fs_fabs(v[0]) > fs_fabs(v[1]) ? fs_fabs(v[0]) : fs_fabs(v[1]);
         v[0] /= norm;
@@ -150,11 +165,12 @@ static void dq_smc_reset_any(void *self)
     dq_smc_reset(self);
 }
 
-// Returns nothing; binds s into the run loops' interface (a stateless law: the continuous loop may run it).
+// Returns nothing; binds s into the run loops' interface (stateless without integral action: the continuous loop
+// may run it).
 void dq_smc_controller(struct dq_smc *s, struct controller *c)
 {
     c->self = s;
     c->step = dq_smc_step_any;
     c->reset = dq_smc_reset_any;
-    c->stateless = true;
+    c->stateless = s->p.integral.ki == 0;
 }

@@ -20,6 +20,15 @@ enum dq_smc_param_error {
     DQ_SMC_EMEASUREMENT,  // not SMC_IDEAL or SMC_MODEL
     DQ_SMC_ELIMITS,       // v_limit not finite and >= 1e-3
     DQ_SMC_ETORQUES,      // torque_model_valid fails
+    DQ_SMC_EINTEGRAL,     // ki not finite and >= 0, or with ki > 0: Ts or v_hold not finite and > 0
+};
+
+// Integral action on s2 (off with ki = 0): Gamma2 -= ki z, z += Ts s2 after each step, held (anti-windup) while
+// |s2| > eps2 (outside the boundary layer), while hypot(v) > v_hold (the bus) and on a step that faults.
+struct dq_smc_integral {
+    fs_real ki;      // >= 0 [1/s^2]
+    fs_real Ts;      // the control period [s]
+    fs_real v_hold;  // the bus voltage the anti-windup knows [V]
 };
 
 // The planned d current i_d*(t) = i_d1 + psi(t, t0, tf) (i_d2 - i_d1) - weakening max(|theta*'| - weakening_speed, 0),
@@ -32,13 +41,14 @@ struct dq_smc_current {
 };
 
 struct dq_smc_params {
-    struct motor_params motor;      // the controller's model of the motor
-    struct plan plan;               // the planned angle (its rho channel is not read)
-    struct dq_smc_current current;  // the planned d current
-    struct smc_gains gains;         // W1, eps1 act on s1 = i_d - i_d*; W2, eps2, xi, wn on s2 as in smc
-    struct torque_model torques;    // the torques the law knows beyond eq. (1)
-    int measurement;                // enum smc_measurement: theta'' from y[4] or from the model with E
-    fs_real v_limit;                // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3
+    struct motor_params motor;        // the controller's model of the motor
+    struct plan plan;                 // the planned angle (its rho channel is not read)
+    struct dq_smc_current current;    // the planned d current
+    struct smc_gains gains;           // W1, eps1 act on s1 = i_d - i_d*; W2, eps2, xi, wn on s2 as in smc
+    struct torque_model torques;      // the torques the law knows beyond eq. (1)
+    int measurement;                  // enum smc_measurement: theta'' from y[4] or from the model with E
+    fs_real v_limit;                  // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3
+    struct dq_smc_integral integral;  // integral action on s2 (ki = 0: none, a stateless law)
 };
 
 // Caller-owned state of the law (stateless between steps but for the accumulated status).
@@ -46,6 +56,7 @@ struct dq_smc {
     struct dq_smc_params p;
     struct plan_coef plan;   // p.plan ready to evaluate
     fs_real alpha1, alpha2;  // wn^2, 2 xi wn
+    fs_real z;               // the integral of s2 [rad/s]
     uint32_t status_seen;    // OR of every status since the last reset
 };
 
@@ -56,17 +67,19 @@ void dq_smc_params_default(struct dq_smc_params *p);
 // Returns DQ_SMC_PARAMS_OK, or the dq_smc_param_error naming the invalid group (s is then left unusable).
 int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p);
 
-// Returns nothing; clears the accumulated status.
+// Returns nothing; clears the accumulated status and the integral.
 void dq_smc_reset(struct dq_smc *s);
 
 // Returns ctrl_status bits; writes finite voltages v with hypot(v) <= v_limit for any t and y = (ia, ib, omega,
 // theta, theta'') (y[4] read in SMC_IDEAL mode only): s1 = i_d - i_d*, s2 = e'' + a2 e' + a1 e (e = theta -
-// theta*), Gamma1 = i_d*' - W1 s1/(|s1| + eps1), Gamma2 = theta*''' - a2 e'' - a1 e' - W2 s2/(|s2| + eps2), and
+// theta*), Gamma1 = i_d*' - W1 s1/(|s1| + eps1), Gamma2 = theta*''' - a2 e'' - a1 e' - W2 s2/(|s2| + eps2) - ki z, and
 // v = inverse Park of (L Gamma1 + R i_d - L Nr omega i_q, L (J Gamma2 + B theta'' + E')/Km + R i_q + L Nr omega
-// i_d + Km omega). CTRL_NONFINITE: a used input is not finite; CTRL_OVERFLOW: v would not be; both give v = 0.
+// i_d + Km omega); then z advances (struct dq_smc_integral). CTRL_NONFINITE: a used input is not finite;
+// CTRL_OVERFLOW: v would not be; both give v = 0.
 uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[2]);
 
-// Returns nothing; binds s into the run loops' interface (a stateless law: the continuous loop may run it).
+// Returns nothing; binds s into the run loops' interface (stateless without integral action: the continuous loop
+// may run it).
 void dq_smc_controller(struct dq_smc *s, struct controller *c);
 // cffi:end
 

@@ -68,6 +68,9 @@ int smc_init(struct smc *s, const struct smc_params *p)
     s->plan.traj = p->traj;
     s->alpha1 = fs_pow(g->wn, 2);
     s->alpha2 = 2 * g->xi * g->wn;
+    s->torques_constant = torque_model_constant(&p->torques);
+    s->loss_aware = p->loss_aware.rho_hold > 0;
+    s->hold = g->hold_damping > 0;
     if (g->hold_damping > 0) {  // rho2 > 0 (plan_valid); Km rho2 may still underflow, the gain and rate overflow
         if (!(p->motor.Km * p->plan.rho2 > 0))
             return SMC_EGAINS;
@@ -105,13 +108,32 @@ SMC_INLINE void smc_hold(const struct smc *s, const fs_real y[5], fs_real sN, fs
     v[1] = m->R * ib + m->L * s->hold_lambda * (ib - y[1]) + emf * cN;
 }
 
+// Returns the known torque E (torque_model_torque; the constant load without the call when that is all it is).
+SMC_INLINE fs_real smc_torque(const struct smc *s, fs_real t, fs_real theta, fs_real omega)
+{
+    return s->torques_constant ? s->p.torques.load : torque_model_torque(&s->p.torques, s->p.motor.Nr, t, theta, omega);
+}
+
+// Returns E' (torque_model_rate; 0 without the call when the known torque is constant).
+SMC_INLINE fs_real smc_torque_rate(const struct smc *s, fs_real t, fs_real theta, fs_real omega, fs_real acc)
+{
+    return s->torques_constant ? 0 : torque_model_rate(&s->p.torques, s->p.motor.Nr, t, theta, omega, acc);
+}
+
+// Returns theta'': y[4] measured, or the model's under the known torque E in motor_acceleration's operation order.
+SMC_INLINE fs_real smc_acceleration(const struct smc *s, const fs_real y[5], fs_real sN, fs_real cN, fs_real E)
+{
+    const struct motor_params *m = &s->p.motor;
+    return s->p.measurement == SMC_IDEAL ? y[4] : (m->Km * (y[1] * cN - y[0] * sN) - m->B * y[2] - E) / m->J;
+}
+
 // Returns nothing; replaces rho and rho' of the flag ref at time t by the loss-aware rho*(t) (smc.h).
 static void smc_loss_aware_rho(const struct smc *s, fs_real t, fs_real ref[PLAN_FLAG_LEN])
 {
     const struct motor_params *m = &s->p.motor;
     fs_real th = ref[PLAN_THETA], w = ref[PLAN_DTHETA], a = ref[PLAN_DDTHETA], A, dA, c, h = s->p.loss_aware.rho_hold;
-    A = m->J * a + m->B * w + torque_model_torque(&s->p.torques, m->Nr, t, th, w);
-    dA = m->J * ref[PLAN_DDDTHETA] + m->B * a + torque_model_rate(&s->p.torques, m->Nr, t, th, w, a);
+    A = m->J * a + m->B * w + smc_torque(s, t, th, w);
+    dA = m->J * ref[PLAN_DDDTHETA] + m->B * a + smc_torque_rate(s, t, th, w, a);
     c = m->Km * fs_cos(s->p.loss_aware.margin);
     ref[PLAN_RHO] = fs_sqrt(h * h + (A / c) * (A / c));
     ref[PLAN_DRHO] = A * dA / (c * c) / ref[PLAN_RHO];
@@ -124,11 +146,11 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
 {
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
-    fs_real own[PLAN_FLAG_LEN], *ref = w ? w->flag : own, rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2, E;
+    fs_real own[PLAN_FLAG_LEN], *ref = w ? w->flag : own, rho, sN, cN, acc, e, de, dde, s1, s2, gamma1, gamma2, E, dE_J;
     struct flat_angles a;
     int flat;
     plan_flag(&s->plan, t, ref);
-    if (s->p.loss_aware.rho_hold > 0)
+    if (s->loss_aware)
         smc_loss_aware_rho(s, t, ref);
     if (w)
         w->have = SMC_HAVE_FLAG;
@@ -148,22 +170,30 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     }
     a.sdelta = sN * a.cphi + cN * a.sphi;
     a.cdelta = cN * a.cphi - sN * a.sphi;
-    // theta'' measured, or from the model under the known torques E in motor_acceleration's operation order.
-    E = torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]);
-    acc = s->p.measurement == SMC_IDEAL ? y[4] : (m->Km * (y[1] * cN - y[0] * sN) - m->B * y[2] - E) / m->J;
+    // theta'' measured or the model's (smc_acceleration) under the known torques E; E' / J joins the jerk's torque
+    // below (0 without the model's calls when E is the constant load).
+    if (s->torques_constant) {
+        E = s->p.torques.load;
+        acc = smc_acceleration(s, y, sN, cN, E);
+        dE_J = 0;
+    } else {
+        E = torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]);
+        acc = smc_acceleration(s, y, sN, cN, E);
+        dE_J = torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc) / m->J;
+    }
     e = y[3] - ref[PLAN_THETA];
     de = y[2] - ref[PLAN_DTHETA];
     dde = acc - ref[PLAN_DDTHETA];
     s1 = rho - ref[PLAN_RHO];
     s2 = dde + s->alpha2 * de + s->alpha1 * e;
-    if (g->hold_damping > 0 && t >= s->p.plan.tf) {
+    if (s->hold && t >= s->p.plan.tf) {
         flat = FLAT_OK;
         smc_hold(s, y, sN, cN, v);
     } else {
         gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
         gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);
         // The known torques: A = J theta'' + B theta' + E, and E' joins the jerk's torque as gamma2 + E' / J.
-        gamma2 = gamma2 + torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc) / m->J;
+        gamma2 = gamma2 + dE_J;
         flat = flat_voltages_trig(m, rho, gamma1, y[2], acc, gamma2, &a, m->J * acc + m->B * y[2] + E, v);
     }
     if (w) {
@@ -199,7 +229,8 @@ SMC_INLINE uint32_t smc_guarded(struct smc *s, fs_real t, const fs_real y[5], co
     if (s->p.measurement == SMC_IDEAL)
         z += y[4] - y[4];
     status = z == 0 ? smc_law(s, t, y, nr_trig, v, w) : SMC_NONFINITE;
-    if (status == SMC_OK && !(fs_isfinite(v[0]) && fs_isfinite(v[1])))
+    // (v0 - v0) + (v1 - v1) is 0 when both are finite and NaN otherwise, as for the inputs.
+    if (status == SMC_OK && !((v[0] - v[0]) + (v[1] - v[1]) == 0))
         status = SMC_OVERFLOW;
     if (status != SMC_OK) {
         v[0] = v[1] = 0;

@@ -77,6 +77,9 @@ struct smc {
     fs_real hold_gain;         // 2 hold_damping sqrt(J Nr / (Km rho2)): sin of the hold's torque angle per rad/s
     fs_real hold_s2, hold_c2;  // sin and cos of Nr theta2
     fs_real hold_lambda;       // W1 / eps1: the rate of the hold's current loop [1/s]
+    bool torques_constant;     // torque_model_constant(&p.torques): E = load, E' = 0 without the model's calls
+    bool loss_aware;           // p.loss_aware.rho_hold > 0: the plan's rho replaced by rho*(t)
+    bool hold;                 // p.gains.hold_damping > 0: the detent hold from tf on
     uint32_t status_seen;      // OR of every status since the last reset
 };
 

@@ -18,6 +18,12 @@ bool torque_model_valid(const struct torque_model *m)
            && (m->load_step == 0 || m->load_tf > m->load_t0);
 }
 
+// Returns true when E is the constant load alone: every term but m->load is skipped (torque_model.h).
+bool torque_model_constant(const struct torque_model *m)
+{
+    return m->load_step == 0 && !(m->detent_torque > 0) && !(m->coulomb_torque > 0);
+}
+
 // Returns E [N m] at time t, angle theta and speed omega for a motor of Nr rotor teeth.
 fs_real torque_model_torque(const struct torque_model *m, int Nr, fs_real t, fs_real theta, fs_real omega)
 {

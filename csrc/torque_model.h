@@ -24,6 +24,10 @@ struct torque_model {
 // Returns true when every field is finite and in range.
 bool torque_model_valid(const struct torque_model *m);
 
+// Returns true when E is the constant load alone (no load change, detent or Coulomb term): torque_model_torque
+// then returns m->load and torque_model_rate 0, bit for bit.
+bool torque_model_constant(const struct torque_model *m);
+
 // Returns E [N m] at time t, angle theta and speed omega for a motor of Nr rotor teeth.
 fs_real torque_model_torque(const struct torque_model *m, int Nr, fs_real t, fs_real theta, fs_real omega);
 

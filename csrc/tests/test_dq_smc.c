@@ -227,6 +227,67 @@ static int loss_aware_checks(void)
     return 0;
 }
 
+// Returns 0; the integral action: its guards, Gamma2 -= ki z, z += Ts s2 inside the boundary layer and below
+// v_hold, held outside either, cleared by reset, and the binding stateful only with it.
+static int integral_checks(void)
+{
+    struct dq_smc_params p, q;
+    struct dq_smc s, r;
+    struct controller c;
+    double y[5] = {0.05, 0.3, 2.0, 0.011, 0}, v[2], w[2], f[PLAN_FLAG_LEN], sn, cs, vq, wq, s2, t = 0.027;
+    dq_smc_params_default(&p);
+    p.gains = (struct smc_gains){70, 300, 0.01, 1e9, 0.7, 40, 0};
+    p.measurement = SMC_IDEAL;
+    q = p;
+    q.integral = (struct dq_smc_integral){-1, 5e-5, 24};
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EINTEGRAL, "ki < 0");
+    q.integral = (struct dq_smc_integral){NAN, 5e-5, 24};
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EINTEGRAL, "ki = NaN");
+    q.integral = (struct dq_smc_integral){1e5, 0, 24};
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EINTEGRAL, "ki > 0, Ts = 0");
+    q.integral = (struct dq_smc_integral){1e5, 5e-5, INFINITY};
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EINTEGRAL, "v_hold infinite");
+    q.integral = (struct dq_smc_integral){0, 0, 0};
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_PARAMS_OK, "ki = 0 needs neither Ts nor v_hold");
+    dq_smc_controller(&s, &c);
+    CHECK(c.stateless, "without integral the law is stateless");
+
+    q.integral = (struct dq_smc_integral){1e5, 5e-5, 1e3};
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_PARAMS_OK && dq_smc_init(&r, &p) == DQ_SMC_PARAMS_OK, "init");
+    dq_smc_controller(&s, &c);
+    CHECK(!c.stateless, "with integral the law has state");
+    dq_smc_step(&s, t, y, v);
+    dq_smc_step(&r, t, y, w);
+    CHECK(v[0] == w[0] && v[1] == w[1], "z = 0: the plain law's voltages bit for bit");
+    plan_eval(&p.plan, t, f);
+    s2 = (y[4] - f[PLAN_DDTHETA]) + s.alpha2 * (y[2] - f[PLAN_DTHETA]) + s.alpha1 * (y[3] - f[PLAN_THETA]);
+    CHECK(rel_diff(s.z, 5e-5 * s2) < 1e-12 && s2 != 0, "z = Ts s2: %.17g vs %.17g", s.z, 5e-5 * s2);
+    dq_smc_step(&s, t, y, v);
+    dq_smc_step(&r, t, y, w);
+    sn = sin(50 * y[3]), cs = cos(50 * y[3]);
+    vq = -v[0] * sn + v[1] * cs, wq = -w[0] * sn + w[1] * cs;
+    CHECK(rel_diff(vq - wq, -p.motor.L * p.motor.J * 1e5 * 5e-5 * s2 / p.motor.Km) < 1e-6,
+          "v_q shifts by -L J ki z/Km: %.12g", vq - wq);
+    CHECK(rel_diff(s.z, 2 * 5e-5 * s2) < 1e-12, "z advances again: %.17g", s.z);
+
+    q.gains.eps2 = fabs(s2) / 2;
+    dq_smc_init(&s, &q);
+    dq_smc_step(&s, t, y, v);
+    CHECK(s.z == 0, "held outside the boundary layer: %g", s.z);
+    q.gains.eps2 = 1e9;
+    q.integral.v_hold = hypot(w[0], w[1]) / 2;
+    dq_smc_init(&s, &q);
+    dq_smc_step(&s, t, y, v);
+    CHECK(s.z == 0, "held above v_hold: %g", s.z);
+    q.integral.v_hold = 1e3;
+    dq_smc_init(&s, &q);
+    dq_smc_step(&s, t, y, v);
+    CHECK(s.z != 0, "advancing");
+    dq_smc_reset(&s);
+    CHECK(s.z == 0, "reset clears z");
+    return 0;
+}
+
 // Returns 0 after running every check of the d-q law.
 int test_dq_smc(void)
 {
@@ -236,5 +297,6 @@ int test_dq_smc(void)
     closed_loop_checks();
     contract_checks();
     loss_aware_checks();
+    integral_checks();
     return 0;
 }

@@ -1,5 +1,6 @@
 // smc_init / smc_reset / smc_step: parameter errors, the law on the reference, and the output guards.
 #include <float.h>
+#include <string.h>
 #include "check.h"
 #include "flat.h"
 #include "smc.h"
@@ -214,6 +215,42 @@ static int hold_checks(void)
 }
 
 // Returns 0 after running the controller checks.
+// Returns 0; a constant known torque (the load alone) skips the torque model's calls and gives, bit for bit, what
+// the calls give, in both measurement modes, on and off the plan, at rest and in the move, with rho*(t) as well.
+static int constant_torque_checks(void)
+{
+    struct smc_params p;
+    struct smc fast, called;
+    double y[5], v[2], w[2], t;
+    int i, mode, la, same = 0, ok = 0;
+    smc_params_default(&p);
+    p.torques.load = 1e-5;
+    p.torques.coulomb_speed = 0.3;  // read only with a Coulomb amplitude
+    for (la = 0; la <= 1; la++) {
+        p.loss_aware.rho_hold = la ? 0.2 : 0;
+        p.loss_aware.margin = la ? 0.7 : 0;
+        for (mode = SMC_IDEAL; mode <= SMC_MODEL; mode++) {
+            p.measurement = mode;
+            CHECK(smc_init(&fast, &p) == SMC_PARAMS_OK && smc_init(&called, &p) == SMC_PARAMS_OK, "init");
+            CHECK(fast.torques_constant, "the load alone is constant");
+            called.torques_constant = false;
+            for (i = 0; i < 64; i++) {
+                t = 0.001 * i;
+                y[0] = 0.4 * sin(3.1 * i), y[1] = 0.4 * cos(1.7 * i) + 0.1, y[2] = sin(0.7 * i);
+                y[3] = 0.02 * sin(0.3 * i), y[4] = 100 * cos(0.9 * i);
+                ok += smc_step(&fast, t, y, v) == SMC_OK;
+                smc_step(&called, t, y, w);
+                same += memcmp(v, w, sizeof v) == 0;
+            }
+        }
+    }
+    CHECK(same == 4 * 64 && ok > 2 * 64, "%d of %d steps bit for bit, %d without a status bit", same, 4 * 64, ok);
+    p.torques.detent_torque = 1e-3;
+    smc_init(&fast, &p);
+    CHECK(!fast.torques_constant, "a detent term is not constant");
+    return 0;
+}
+
 int test_smc(void)
 {
     init_checks();
@@ -221,5 +258,6 @@ int test_smc(void)
     guard_checks();
     terms_checks();
     hold_checks();
+    constant_torque_checks();
     return 0;
 }

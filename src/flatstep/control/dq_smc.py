@@ -18,9 +18,15 @@ With :math:`i_d^* = 0` (the default) every ampere makes torque, and the copper l
 move needs. The gains are :class:`~flatstep.control.smc.SMCGains`, from the same
 :func:`~flatstep.control.design.design_gains` (``W1``, ``eps1`` act on :math:`s_1` in amperes as they do on
 :math:`\rho`); the detent hold (``hold_damping``) belongs to the paper's law and is refused here.
+
+Integral action on :math:`s_2` (:class:`DQIntegral`, off by default) adds :math:`-k_i z`, :math:`\dot z = s_2`, to
+:math:`\Gamma_2`: inside the boundary layer :math:`\dot s_2 = -\lambda s_2 - k_i z + d`, so a slowly varying
+disturbance :math:`d` (the back EMF a wrong :math:`K_m` misses) no longer leaves :math:`s_2 = d/\lambda`.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from typing import Any, Optional
 
 import numpy as np
@@ -31,11 +37,50 @@ from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.rest_to_rest import RestToRest
+from ..validate import check_positive
 from .smc import MEASUREMENTS, SMCGains
 
 Array = NDArray[np.float64]
 #: The paper's gains (Section 3), the default.
 PAPER_GAINS = SMCGains()
+
+
+@dataclass(frozen=True)
+class DQIntegral:
+    """Integral action on ``s2``: ``Gamma2 -= ki z``, ``z += Ts s2`` after each control period.
+
+    ``z`` holds (anti-windup) while ``|s2| > eps2`` (outside the boundary layer, where the law is not linear) and
+    while ``hypot(va, vb) > v_hold`` (the bus). :meth:`designed` takes ``ki`` from the design quantities.
+
+    Parameters
+    ----------
+    ki : float
+        The integral gain [1/s^2], > 0.
+    control_period : float
+        The period ``Ts`` the integral advances by [s], > 0.
+    v_hold : float
+        The bus voltage the anti-windup knows [V], > 0.
+    """
+
+    ki: float
+    control_period: float
+    v_hold: float
+
+    def __post_init__(self) -> None:
+        check_positive("DQIntegral.ki", self.ki, unit=" 1/s^2")
+        check_positive("DQIntegral.control_period", self.control_period, unit=" s")
+        check_positive("DQIntegral.v_hold", self.v_hold, unit=" V")
+
+    @classmethod
+    def designed(cls, gains: SMCGains, control_period: float, v_hold: float) -> "DQIntegral":
+        r"""The integral by the cascade's rule: its pole at :math:`\omega_n/4`, beside the boundary layer's.
+
+        Inside the boundary layer :math:`\dot s_2 = -\lambda s_2 - k_i z`, :math:`\lambda = W_2/\epsilon_2`; with
+        :math:`k_i = \lambda\,\omega_n/4` its poles are near :math:`\lambda` and :math:`\omega_n/4`, the pole the
+        cascade gives its velocity integral (:mod:`flatstep.control.cascade`). An infinite ``v_hold`` (a drive
+        without a bus limit) holds only outside the boundary layer.
+        """
+        return cls(gains.W2 / gains.eps2 * gains.wn / 4, control_period, v_hold if math.isfinite(v_hold) else 1e300)
 
 
 class DQFlatnessSMC:
@@ -56,6 +101,8 @@ class DQFlatnessSMC:
         The planned d current (default 0).
     torques : TorqueModel
         The torques the law knows beyond eq. (1) (default none).
+    integral : DQIntegral or None
+        Integral action on ``s2`` (default none: a static law).
     """
 
     #: The C twin: csrc/dq_smc.h.
@@ -65,7 +112,7 @@ class DQFlatnessSMC:
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = PAPER_GAINS,
                  measurement: str = "ideal", *, d_current: DCurrentPlan = ZERO_D_CURRENT,
-                 torques: TorqueModel = NO_TORQUES) -> None:
+                 torques: TorqueModel = NO_TORQUES, integral: Optional[DQIntegral] = None) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
         if gains.hold_damping is not None:
@@ -75,8 +122,10 @@ class DQFlatnessSMC:
         for name, value, kind in (("d_current", d_current, DCurrentPlan), ("torques", torques, TorqueModel)):
             if not isinstance(value, kind):
                 raise ValueError(f"{name}={value!r} is not a {kind.__name__}")
+        if integral is not None and not isinstance(integral, DQIntegral):
+            raise ValueError(f"integral={integral!r} is not a DQIntegral (or None for no integral action)")
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
-        self.d_current, self.torques = d_current, torques
+        self.d_current, self.torques, self.integral = d_current, torques, integral
 
     def dq_currents(self, x: ArrayLike) -> tuple[Array, Array]:
         """The measured ``(i_d, i_q)``: the Park transform by the measured electrical angle."""
@@ -107,7 +156,11 @@ class DQFlatnessSMC:
                 acc - ref.ddtheta + g.alpha2 * (omega - ref.dtheta) + g.alpha1 * (theta - ref.theta))
 
     def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> Array:
-        """Phase voltages (va, vb) of the law, vectorized over time."""
+        """Phase voltages (va, vb) of the law with the integral at 0, vectorized over time."""
+        return self._law(t, x, ddtheta, 0.0)[0]
+
+    def _law(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike], z: float) -> tuple[Array, Array]:
+        """Phase voltages (va, vb) and ``s2`` at the integral ``z``, in the C step's operation order."""
         _, _, omega, theta = np.asarray(x, dtype=float)
         m, g = self.motor, self.gains
         ref = self.plan.flag(t)
@@ -119,26 +172,34 @@ class DQFlatnessSMC:
         s2 = dde + g.alpha2 * de + g.alpha1 * e
         gamma1 = did_ref - g.W1 * s1 / (np.abs(s1) + g.eps1)
         gamma2 = ref.dddtheta - g.alpha2 * dde - g.alpha1 * de - g.W2 * s2 / (np.abs(s2) + g.eps2)
+        if self.integral is not None:
+            gamma2 = gamma2 - self.integral.ki * z
         dE = self.torques.torque_rate(t, theta, omega, acc, m.Nr)
         v_d, v_q = dq_voltages(m, i_d, i_q, omega, acc, gamma1, gamma2, dE)
-        return np.array(inverse_park(v_d, v_q, m.Nr * theta))
+        return np.array(inverse_park(v_d, v_q, m.Nr * theta)), s2
 
     @property
     def observer_torques(self) -> TorqueModel:
         """The torques the drive loop's observer predicts with: the law's own (the observer shares its model)."""
         return self.torques
 
-    def initial_state(self) -> None:
-        """Return ``None``: the law is static, no state between steps."""
-        return None
+    def initial_state(self) -> Optional[float]:
+        """Return ``None`` for the static law, the integral ``z = 0`` with integral action."""
+        return None if self.integral is None else 0.0
 
-    def step(self, state: None, measurement: ArrayLike, t: float) -> tuple[Array, None]:
-        """Controller step ``(state, measurement, t) -> (voltages, new state)``; this law is static.
+    def step(self, state: Optional[float], measurement: ArrayLike, t: float) -> tuple[Array, Optional[float]]:
+        """Controller step ``(state, measurement, t) -> (voltages, new state)``; the state is the integral or None.
 
         ``measurement`` is ``(ia, ib, omega, theta, ddtheta)``; ``ddtheta`` is not read in ``model`` mode.
         """
         y = np.asarray(measurement, dtype=float)
-        return self.voltages(t, y[:4], None if self.measurement == "model" else y[4]), state
+        z = 0.0 if state is None else float(state)
+        v, s2 = self._law(t, y[:4], None if self.measurement == "model" else y[4], z)
+        if self.integral is None:
+            return v, None
+        if np.all(np.isfinite(v)) and abs(float(s2)) <= self.gains.eps2 and np.hypot(*v) <= self.integral.v_hold:
+            z = z + self.integral.control_period * float(s2)
+        return v, z
 
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct dq_smc_params`` (csrc/dq_smc.h) for this controller."""
@@ -146,4 +207,7 @@ class DQFlatnessSMC:
         return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(), current=self.d_current.as_dict(),
                     gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn, hold_damping=0.0),
                     torques=self.torques.as_dict(), measurement=1 if self.measurement == "model" else 0,
-                    v_limit=self.c_v_limit)
+                    v_limit=self.c_v_limit,
+                    integral={} if self.integral is None else dict(ki=self.integral.ki,
+                                                                   Ts=self.integral.control_period,
+                                                                   v_hold=self.integral.v_hold))

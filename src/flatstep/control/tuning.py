@@ -25,7 +25,7 @@ from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
 from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
-from .dq_smc import DQFlatnessSMC
+from .dq_smc import DQFlatnessSMC, DQIntegral
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .smc import FlatnessSMC, SMCGains
@@ -34,17 +34,20 @@ from .smc import FlatnessSMC, SMCGains
 #: flatness laws and the cascade with the scenario's torque model (``[feedforward]``, a
 #: :class:`~flatstep.model.torque_model.TorqueModel`): the flatness laws' feedforward, the cascade's anti-cogging.
 CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff",
-                    "smc_la_ff", "cascade_ff", "cascade_model")
+                    "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i", "dq_smc_i_ff")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
           "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q SMC + ff",
           "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
-          "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff"}
+          "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff",
+          "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff"}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
-SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff")
+SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff", "dq_smc_i", "dq_smc_i_ff")
+#: The flatness types that can run in continuous time (no integral advancing by the control period).
+CONTINUOUS_TYPES = tuple(k for k in SMC_TYPES if k not in ("dq_smc_i", "dq_smc_i_ff"))
 #: The types that need a torque model.
-FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model")
+FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i_ff")
 #: The sliding controller's default gains, the paper's.
 _PAPER_SMC_GAINS = SMCGains()
 #: What :func:`make_controller` returns.
@@ -76,6 +79,9 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     them except the cascade's (anti-cogging as firmware does it); ``cascade_model`` gives them to its observer too.
     The d-q flatness types track the planned ``d_current``; ``smc_la`` and ``smc_la_ff`` are the paper's law on the
     ``loss_aware`` rho*(t) (:mod:`flatstep.plan.loss_aware`; default ``LossAwareRho.for_plan(plan)``).
+    ``dq_smc_i`` and ``dq_smc_i_ff`` are the d-q law with integral action on ``s2``
+    (:meth:`~flatstep.control.dq_smc.DQIntegral.designed`: its pole at ``omega_n/4`` as the cascade's velocity
+    integral, held while the bus ``v_limit`` limits); they need ``control_period``.
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
@@ -91,8 +97,11 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:
         raise ValueError(f"controller type {kind!r} is tuned from the control period (lambda = 0.3/Ts): give one "
-                         f"([drive] control_rate); only the flatness types {SMC_TYPES} have gains of their own for "
-                         "continuous time")
+                         f"([drive] control_rate); only the flatness types {CONTINUOUS_TYPES} have gains of their own "
+                         "for continuous time")
+    if kind in ("dq_smc_i", "dq_smc_i_ff"):
+        return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current,
+                             integral=DQIntegral.designed(smc_gains, control_period, v_limit))
     scale = check_positive("bandwidth_scale", bandwidth_scale)
     lam, wn = (scale * w for w in bandwidths(control_period, compute_delay))
     if kind == "microstep":
