@@ -195,9 +195,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     sim = sub.add_parser("simulate", help="simulate one closed-loop move (defaults: the paper's Fig. 1)",
                          description="Simulate one closed-loop move: a scenario file (a whole drive: motor, plant, "
-                         "plan, controller, sensors, observer), or the paper's motor with the move and gains given by "
-                         "the flags (continuous control). Prints the summary and the run's status; the exit code "
-                         "says whether it kept its move (flatstep --help).")
+                         "plan, controller, sensors, observer), a waypoint plan file (its whole sequence on the "
+                         "drive, as 'flatstep plan --simulate' runs it), or the paper's motor with the move and "
+                         "gains given by the flags (continuous control). Prints the summary and the run's status; "
+                         "the exit code says whether it kept its move (flatstep --help).")
     sim.add_argument("scenario", nargs="?", default=None,
                      help="a scenario file (TOML, see examples/), or a waypoint plan file (examples/plans/*.toml, "
                      "run on the drive of its [limits] bus and [simulate] rate, as 'flatstep plan --simulate'); "

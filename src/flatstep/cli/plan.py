@@ -168,7 +168,12 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 def add_plan_command(sub: Any) -> None:
     """Register ``flatstep plan`` on the subcommand parser ``sub``."""
-    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)")
+    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)",
+                       description="Plan a plan file's waypoints (the fastest moves its motor's limits allow, or a "
+                       "segment family): print each move's and dwell's start and duration and the worst use of each "
+                       "limit, write plan.png and plan.json; with --simulate, also run the plan on the 20 kHz drive "
+                       "('flatstep simulate FILE.toml' runs it alone and prints the run's summary and status). Exit "
+                       "2 when the plan exceeds a limit, 3 when the drive loses the move.")
     p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml)")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
