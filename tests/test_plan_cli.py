@@ -3,10 +3,12 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from flatstep.cli.main import main
-from flatstep.plan.plan_file import load_plan_file
+from flatstep.model.motor import MotorParams
+from flatstep.plan.plan_file import is_plan_file, load_plan_file
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -65,3 +67,68 @@ def test_bad_plan_files_are_refused(tmp_path, capsys, text, match):
     assert "bad.toml" in err or "preset" in err
     with pytest.raises(ValueError, match=match):
         load_plan_file(path)
+
+
+# ``flatstep simulate PLAN.toml``: the waypoint plan on the drive, through the same path as ``plan --simulate``
+
+SHORT = "[limits]\nv_bus = 24.0\ni_max = 1.0\ni_run = 0.1\nv_use = 0.87\n[plan]\nt0 = 0.005\nwaypoints = [0.0, 1.0]\n"
+
+
+def test_simulate_runs_the_ten_waypoints_end_to_end(tmp_path, capsys):
+    path = next(p for p in EXAMPLES if "ten" in p.stem)
+    assert main(["simulate", str(path), "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "move 8 -> 9" in out and out.strip().endswith("status: ok")
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    full_step = 2 * np.pi / (4 * MotorParams.preset("nema17").Nr)
+    assert summary["status"] == "ok" and summary["controller_faults"] == 0
+    assert abs(summary["theta_final"] - 6.5) < 0.1 * full_step  # the last waypoint
+    assert summary["max_abs_theta_error"] < 0.1 * full_step
+    assert max(summary["max_abs_va"], summary["max_abs_vb"]) <= 24.0  # the file's bus
+    assert (tmp_path / "run.png").stat().st_size > 10_000 and (tmp_path / "run.csv").stat().st_size > 10_000
+
+
+def test_simulate_a_plan_reports_a_lost_move(tmp_path, capsys):
+    path = tmp_path / "short.toml"
+    path.write_text(SHORT)
+    assert main(["simulate", str(path), "--x0", "0", "0", "0", "0.5"]) == 3  # starts 0.5 rad off the plan
+    captured = capsys.readouterr()
+    assert captured.out.strip().endswith("status: lost") and "lost its move" in captured.err
+
+
+def test_simulate_json_matches_the_plan_command(tmp_path, capsys):
+    path = tmp_path / "short.toml"
+    path.write_text(SHORT + "[simulate]\ncontrol_rate = 20000\nt_after = 0.01\n")
+    assert main(["simulate", str(path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)  # JSON alone
+    assert main(["plan", str(path), "--out", str(tmp_path), "--simulate"]) == 0
+    tracking = json.loads((tmp_path / "plan.json").read_text())["tracking"]
+    assert tracking["control_rate"] == 20000.0
+    assert summary["max_abs_theta_error"] == pytest.approx(tracking["max_abs_theta_error"], rel=1e-12)
+    assert summary["theta_final"] == pytest.approx(1.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("text, where", [
+    ('[limits]\nv_bus = -1\ni_max = 1\n[plan]\nwaypoints = [0.0, 1.0]\n', "bad.toml:limits.v_bus"),
+    ('[limits]\nv_bus = 24\ni_max = "1"\n[plan]\nwaypoints = [0.0, 1.0]\n', "bad.toml:limits.i_max"),
+    (SHORT + '[simulate]\ncontrol_rate = -5\n', "bad.toml:simulate.control_rate"),
+    (SHORT + '[simulate]\nt_after = nan\n', "bad.toml:simulate.t_after"),
+    (SHORT + '[simulate]\nrate = 5\n', "unknown key(s) ['rate'] in [simulate]"),
+    (SHORT + '[motor]\nR = -2.0\n', "bad.toml:motor.R"),
+    ('[plan]\nplanner = "psi"\ndurations = [0.05]\nwaypoints = [0.0, 1.0]\n', "bad.toml:limits: a plan runs"),
+    ('[limits]\nv_bus = 24\ni_max = 1\n[plan]\nplanner = "psi"\nrho = 0.5\ndurations = [0.005]\n'
+     'waypoints = [0.0, 5.0]\n', "bad.toml: the plan exceeds its limits (voltage"),
+])
+def test_simulate_refuses_a_bad_plan_file(tmp_path, capsys, text, where):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    assert main(["simulate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert where in err and "Traceback" not in err
+
+
+def test_plan_files_and_scenario_files_are_told_apart():
+    scenarios = sorted((Path(__file__).parents[1] / "examples").glob("*.toml"))
+    assert scenarios and not any(is_plan_file(p) for p in scenarios)
+    assert all(is_plan_file(p) for p in EXAMPLES)
+    assert not is_plan_file(Path(__file__).parents[1] / "no-such-file.toml")

@@ -1,8 +1,10 @@
 """The planning comparison (flatstep.plan.compare) on one move: plans, durations, tracking on the drive."""
 import math
 
+import pytest
+
 from flatstep.model.motor import PRESETS
-from flatstep.plan.compare import PLANNERS, _row, plans_for
+from flatstep.plan.compare import I_RUN, PLANNERS, TORQUE_ANGLE, V_USE, _row, plans_for
 from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal import bang_bang_time
 
@@ -21,3 +23,13 @@ def test_one_move_compared_and_tracked():
         assert row[name]["max_error"] < 0.1 * FULL_STEP and row[name]["faults"] == 0
         assert row[name]["v_peak"] <= 24.0 and row[name]["saturated"] == 0.0
     assert row["flatstep"]["voltage"] <= 0.87 * 1.005 and row["ruckig"]["voltage"] <= 0.9 * 1.005
+
+
+def test_the_default_is_20_percent_shorter_than_ruckig_at_5_rad_without_clipping():
+    limits = MotorLimits(v_bus=24.0, i_max=1.0, i_run=I_RUN, v_use=V_USE, torque_angle_max=TORQUE_ANGLE)
+    plans = plans_for(5.0, MOTOR, limits)
+    row = _row("5 rad", plans, MOTOR, limits, None)
+    assert row["ratio_ruckig"] <= 0.8  # the target (docs/planning.md)
+    assert row["flatstep"]["saturated"] == 0.0 and row["flatstep"]["v_peak"] < 24.0  # never clipped at the bus
+    assert row["flatstep"]["max_error"] < 0.1 * FULL_STEP and row["flatstep"]["faults"] == 0
+    assert plans["ruckig"].tf - plans["ruckig"].t0 == pytest.approx(0.09818, abs=2e-5)  # the baseline unchanged

@@ -13,7 +13,14 @@ from flatstep.loop.reference import DriveLoop
 from flatstep.loop.sensors import Sensors
 from flatstep.model.motor import PRESETS
 from flatstep.plan.limits import MotorLimits, plan_margins
-from flatstep.plan.time_optimal import bang_bang_time, iq_bounds, time_optimal, time_optimal_sequence
+from flatstep.plan.time_optimal import (
+    bang_bang_time,
+    iq_bounds,
+    smoothed_duration,
+    smoothed_plan,
+    time_optimal,
+    time_optimal_sequence,
+)
 
 MOTOR = PRESETS["nema17"]
 FULL_STEP = 2 * math.pi / 200
@@ -90,3 +97,13 @@ def test_impossible_requests_are_refused():
         time_optimal(1.0, MOTOR, MotorLimits(v_bus=0.5, i_max=1.0))
     with pytest.raises(ValueError, match="sit at"):
         time_optimal_sequence([(0.0, 0.0), (0.0, 0.0)], MOTOR, MotorLimits(v_bus=24.0, i_max=1.0))
+
+
+@pytest.mark.parametrize("distance, gamma, k", [(0.1, 0.7, 0.0625), (5.0, 0.86, 0.5), (-2.0, 1.0, 4.0)])
+def test_the_search_prunes_on_the_tables_own_duration(distance, gamma, k):
+    # the search skips a candidate whose smoothed_duration is not shorter than the best: it must be the table's
+    limits = MotorLimits(v_bus=24.0, i_max=1.0, i_run=0.05)
+    width = k * MOTOR.L / MOTOR.R
+    plan = smoothed_plan(distance, MOTOR, limits, gamma, width)
+    assert smoothed_duration(distance, MOTOR, limits, gamma, width) == pytest.approx(plan.tf - plan.t0, rel=1e-12)
+    assert smoothed_duration(distance, MOTOR, limits, 0.9 * gamma, width) > plan.tf  # slower at less bus

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, Optional, Sequence, cast
 
 import numpy as np
 
@@ -14,6 +14,7 @@ from .flags import out_dir
 from .status import EXIT_LOST, EXIT_OK, EXIT_REFUSED
 
 if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
+    from ..engine.result import SimResult
     from ..plan.plan_file import PlanFile
 
 MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
@@ -55,8 +56,12 @@ def plot_plan(pf: "PlanFile", path: Path) -> None:
     plt.close(fig)
 
 
-def _simulate(pf: "PlanFile") -> dict[str, Any]:
-    """Run the plan on the 20 kHz drive (bus, sensors, observer, designed gains); tracking figures."""
+def _run_on_drive(pf: "PlanFile", x0: Optional[Sequence[float]] = None) -> "SimResult":
+    """The plan on the file's drive (its [simulate] control rate, 20 kHz by default): bus, sensors, observer, gains.
+
+    The gains are :func:`~flatstep.control.design.design_gains`' for this plan, motor, rate and bus; the run goes on
+    ``t_after`` past the move. ``x0``: the plant's initial state (default: the plan's start at rest).
+    """
     from ..control.design import design_gains
     from ..control.smc import FlatnessSMC
     from ..engine.simulate import simulate
@@ -65,20 +70,66 @@ def _simulate(pf: "PlanFile") -> dict[str, Any]:
     from ..loop.sensors import Sensors
 
     if pf.limits is None:
-        raise ValueError("--simulate needs a [limits] section: the drive's bus is v_bus")
-    rate = float(pf.simulate.get("control_rate", 20000.0))
-    plan, v_bus = pf.plan, pf.limits.v_bus
+        raise ValueError(f"{pf.name}: running a plan on the drive needs a [limits] section: the drive's bus is v_bus")
+    rate, plan, v_bus = pf.simulate["control_rate"], pf.plan, pf.limits.v_bus
     d = design_gains(pf.motor, cast(Any, plan), control_period=1.0 / rate, v_bus=v_bus)
     loop = DriveLoop(control_period=1.0 / rate, substeps=4, drive=Drive(v_bus=v_bus), sensors=Sensors(),
                      observer=d.observer)
-    r = simulate(pf.motor, plan, FlatnessSMC(pf.motor, plan, d.gains, "observer"), loop=loop,
-                 t_end=plan.tf + float(pf.simulate.get("t_after", 0.02)))
+    return simulate(pf.motor, plan, FlatnessSMC(pf.motor, plan, d.gains, "observer"), loop=loop,
+                    t_end=plan.tf + pf.simulate["t_after"], x0=None if x0 is None else list(x0))
+
+
+def _tracking(pf: "PlanFile", r: "SimResult") -> dict[str, Any]:
+    """The tracking figures of a run of the plan (plan.json's ``tracking``)."""
+    assert pf.limits is not None  # a run needs the bus (_run_on_drive)
     err = np.abs(r.theta - r.theta_ref)
     full_step = 2 * np.pi / (4 * pf.motor.Nr)
-    return dict(control_rate=rate, max_abs_theta_error=float(err.max()), full_step=full_step,
-                lost_step=bool(err.max() >= full_step), final_error=float(r.theta[-1] - plan.theta2),
-                peak_phase_voltage=float(np.max(np.abs([r.va, r.vb]))), v_bus=v_bus,
-                controller_faults=int(r.meta.get("controller_faults", 0)))
+    return dict(control_rate=pf.simulate["control_rate"], max_abs_theta_error=float(err.max()), full_step=full_step,
+                lost_step=bool(err.max() >= full_step), final_error=float(r.theta[-1] - pf.plan.theta2),
+                peak_phase_voltage=float(np.max(np.abs([r.va, r.vb]))), v_bus=pf.limits.v_bus,
+                controller_faults=int(r.meta.get("controller_faults", 0)), status=r.status)
+
+
+def _margins_line(pf: "PlanFile") -> tuple[dict[str, float], list[str]]:
+    """The plan's margins against its limits and the names of the limits it exceeds (none: feasible)."""
+    assert pf.limits is not None
+    m = plan_margins(pf.plan, pf.motor, pf.limits)
+    return m, [k for k in MARGINS if m[k] > 1]
+
+
+def _print_steps(pf: "PlanFile") -> None:
+    """The plan's one-line summary and its moves and dwells."""
+    plan = pf.plan
+    print(f"{pf.name}: {len(pf.steps)} steps in {plan.n} segments, {plan.tf - plan.t0:.6g} s "
+          f"(t = {plan.t0:g} .. {plan.tf:.6g} s)")
+    for label, start, duration in pf.steps:
+        print(f"  {label:<14} start {start:10.6f} s  duration {duration:10.6f} s")
+
+
+def run_plan_file(path: str, x0: Optional[Sequence[float]] = None,
+                  show_steps: bool = True) -> tuple["PlanFile", "SimResult"]:
+    """``flatstep simulate PLAN.toml``: plan the file, refuse it beyond its limits, run it on the drive.
+
+    ``show_steps``: print the plan's moves and dwells before the run. ``x0``: the plant's initial state.
+
+    Raises
+    ------
+    ValueError
+        The file is bad, has no [limits] (no bus to run on), or its plan exceeds a limit (nothing is run).
+    """
+    from ..plan.plan_file import load_plan_file
+
+    pf = load_plan_file(path)
+    if pf.limits is None:
+        raise ValueError(f"{path}:limits: a plan runs on a drive whose bus is [limits] v_bus; the file has no "
+                         "[limits] section")
+    if show_steps:
+        _print_steps(pf)
+    _, over = _margins_line(pf)
+    if over:
+        raise ValueError(f"{path}: the plan exceeds its limits ({', '.join(over)}): nothing was run; "
+                         "'flatstep plan' shows the margins")
+    return pf, _run_on_drive(pf, x0)
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
@@ -87,26 +138,22 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     pf = load_plan_file(args.file)
     plan = pf.plan
-    print(f"{pf.name}: {len(pf.steps)} steps in {plan.n} segments, {plan.tf - plan.t0:.6g} s "
-          f"(t = {plan.t0:g} .. {plan.tf:.6g} s)")
-    for label, start, duration in pf.steps:
-        print(f"  {label:<14} start {start:10.6f} s  duration {duration:10.6f} s")
+    _print_steps(pf)
     report: dict[str, Any] = dict(name=pf.name, total_duration=plan.tf - plan.t0, t0=plan.t0, tf=plan.tf,
                                   segments=plan.n,
                                   steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps])
     if pf.limits is not None:
-        m = plan_margins(plan, pf.motor, pf.limits)
+        m, over = _margins_line(pf)
         report["limits"], report["margins"] = pf.limits.as_dict(), m
         print("  worst use of each limit (1 = at the limit): " +
               ", ".join(f"{k} {m[k]:.3f}" for k in MARGINS if m[k] > 0))
         print(f"  peaks: voltage demand |v| {m['v_peak']:.4g} V of {pf.limits.v_bus:g} V, "
               f"current {m['rho_peak']:.4g} A of {pf.limits.i_max:g} A, speed {m['speed_peak']:.4g} rad/s")
-        report["feasible"] = bool(m["worst"] <= 1.0)
-        if not report["feasible"]:
-            over = [k for k in MARGINS if m[k] > 1]
+        report["feasible"] = not over
+        if over:
             print(f"  infeasible: the plan exceeds {', '.join(over)} (not simulated)")
     if args.simulate and report.get("feasible", True):
-        report["tracking"] = tr = _simulate(pf)
+        report["tracking"] = tr = _tracking(pf, _run_on_drive(pf))
         print(f"  on the {tr['control_rate']:g} Hz drive: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
               f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
               f"final error {tr['final_error']:.3g} rad")
@@ -122,10 +169,11 @@ def cmd_plan(args: argparse.Namespace) -> int:
 def add_plan_command(sub: Any) -> None:
     """Register ``flatstep plan`` on the subcommand parser ``sub``."""
     p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)",
-                       description="Plan a waypoint sequence from a plan file (a motor, its bus and current limits, "
-                       "the waypoints): print each move's duration and the plan's worst margins, write plan.png "
-                       "(angle, speed, voltage demand against the bus, current against its limit) and plan.json; "
-                       "with --simulate, also run it on the 20 kHz drive (docs/planning.md).")
+                       description="Plan a plan file's waypoints (the fastest moves its motor's limits allow, or a "
+                       "segment family): print each move's and dwell's start and duration and the worst use of each "
+                       "limit, write plan.png and plan.json; with --simulate, also run the plan on the 20 kHz drive "
+                       "('flatstep simulate FILE.toml' runs it alone and prints the run's summary and status). Exit "
+                       "2 when the plan exceeds a limit, 3 when the drive loses the move.")
     p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml)")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",

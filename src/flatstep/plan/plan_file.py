@@ -31,7 +31,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from ..model.motor import MotorParams
-from ..validate import check_quantity
+from ..validate import InputError, check_quantity
 from ..validate.limits import MAX_OPTIMAL_MOVES
 from .limits import MotorLimits
 from .piecewise import PiecewisePlan
@@ -57,7 +57,8 @@ class PlanFile:
     plan: PiecewisePlan
     #: (label, start [s], duration [s]) of each move and dwell, in order
     steps: list[tuple[str, float, float]]
-    simulate: dict[str, Any]
+    #: the [simulate] settings: control_rate [Hz], t_after [s]
+    simulate: dict[str, float]
 
 
 def _check(where: str, table: dict[str, Any], section: str) -> dict[str, Any]:
@@ -78,8 +79,45 @@ def _motor(where: str, table: dict[str, Any]) -> MotorParams:
     base = MotorParams.preset(str(table.pop("preset", "nema17")))
     try:
         return base.replace(**table) if table else base
+    except InputError as exc:
+        raise exc.at(f"{where}:motor.{exc.name}") from None
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}: [motor]: {exc}") from None
+
+
+def _limits(where: str, table: dict[str, Any]) -> Optional[MotorLimits]:
+    """The [limits] section (:class:`MotorLimits`), or None when the file has none."""
+    try:
+        return MotorLimits(**table) if table else None
+    except InputError as exc:
+        raise exc.at(f"{where}:limits.{exc.name}") from None
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: [limits]: {exc}") from None
+
+
+def _simulate_settings(where: str, table: dict[str, Any]) -> dict[str, float]:
+    """The [simulate] section: the drive's control rate [Hz] and the time simulated after the move [s]."""
+    out = {"control_rate": 20000.0, "t_after": 0.02}
+    for key, kind in (("control_rate", "rate"), ("t_after", "time")):
+        if key in table:
+            try:
+                out[key] = check_quantity(kind, table[key], as_name=key)
+            except InputError as exc:
+                raise exc.at(f"{where}:simulate.{key}") from None
+    return out
+
+
+def is_plan_file(path: Union[str, Path]) -> bool:
+    """Whether ``path`` reads as a plan file, not a scenario file: it has [limits] or waypoints in [plan].
+
+    A file that cannot be read or parsed is not one (the scenario reader then says why).
+    """
+    try:
+        doc = tomllib.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
+    plan = doc.get("plan")
+    return "limits" in doc or (isinstance(plan, dict) and ("waypoints" in plan or "planner" in plan))
 
 
 def _waypoint(where: str, i: int, w: Union[float, dict[str, Any]]) -> Waypoint:
@@ -153,11 +191,8 @@ def load_plan_file(path: Union[str, Path]) -> PlanFile:
         raise ValueError(f"{where}: not valid TOML: {exc}") from None
     _check(where, doc, "")
     motor = _motor(where, _check(where, doc.get("motor", {}), "motor"))
-    lim_t = _check(where, doc.get("limits", {}), "limits")
-    try:
-        limits = MotorLimits(**lim_t) if lim_t else None
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: [limits]: {exc}") from None
+    limits = _limits(where, _check(where, doc.get("limits", {}), "limits"))
+    settings = _simulate_settings(where, _check(where, doc.get("simulate", {}), "simulate"))
     sec = _check(where, doc.get("plan", {}), "plan")
     planner = sec.get("planner", "time_optimal")
     if planner not in PLANNERS:
@@ -188,5 +223,4 @@ def load_plan_file(path: Union[str, Path]) -> PlanFile:
             steps = _family_steps(plan, points, planner)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}: [plan]: {exc}") from None
-    return PlanFile(str(doc.get("name", path.stem)), motor, limits, plan, steps,
-                    dict(_check(where, doc.get("simulate", {}), "simulate")))
+    return PlanFile(str(doc.get("name", path.stem)), motor, limits, plan, steps, settings)

@@ -132,9 +132,12 @@ def _box(x: Array, n: int) -> Array:
     return (c[n:] - c[:-n]) / n
 
 
-def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float, *,
-                  theta1: float = 0.0, t0: float = 0.0) -> PiecewisePlan:
-    """The bang-bang move on the envelope at ``gamma``, smoothed twice by a box of ``width`` [s], as a table."""
+def _timing(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
+            width: float) -> tuple[float, float, float, float, int, int]:
+    """Of the smoothed move: speed-up, cruise and braking times [s], the sample step [s], box and profile samples.
+
+    The table :func:`smoothed_plan` builds lasts ``(n + 2 (n_box - 1) - 1) dt`` (:func:`smoothed_duration`).
+    """
     d = abs(distance)
     omega, t_acc, t_dec, _, w_peak, cruise = _bang_bang(d, motor, limits, gamma)
     t1, t2 = float(np.interp(w_peak, omega, t_acc)), float(np.interp(w_peak, omega, t_dec))
@@ -146,8 +149,23 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
                          f"speed limit, which the time-optimal planner would sample {total / dt:.3g} times (every "
                          f"{dt:.3g} s), above the limit of {MAX_PLAN_SAMPLES:.3g} (flatstep.validate.limits."
                          "MAX_PLAN_SAMPLES); split it into shorter moves with waypoints, or plan it with a spline")
-    n_box = max(1, int(round(width / dt)))
-    t = np.arange(int(math.ceil(total / dt)) + 1) * dt
+    return t1, cruise, t2, dt, max(1, int(round(width / dt))), int(math.ceil(total / dt)) + 1
+
+
+def smoothed_duration(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float) -> float:
+    """The duration [s] of :func:`smoothed_plan`'s table, without building it (the envelope is cached)."""
+    *_, dt, n_box, n = _timing(distance, motor, limits, gamma, width)
+    return (n + 2 * (n_box - 1) - 1) * dt
+
+
+def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float, *,
+                  theta1: float = 0.0, t0: float = 0.0) -> PiecewisePlan:
+    """The bang-bang move on the envelope at ``gamma``, smoothed twice by a box of ``width`` [s], as a table."""
+    d = abs(distance)
+    t1, cruise, t2, dt, n_box, n = _timing(distance, motor, limits, gamma, width)
+    omega, t_acc, t_dec, _, w_peak, _ = _bang_bang(d, motor, limits, gamma)
+    total = t1 + cruise + t2
+    t = np.arange(n) * dt
     speed = np.where(t <= t1, np.interp(t, t_acc, omega),
                      np.where(t < t1 + cruise, w_peak, np.interp(total - t, t_dec, omega)))
     speed[-1] = 0.0
@@ -200,6 +218,10 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
     tau_e = motor.L / motor.R
     best: Optional[PiecewisePlan] = None
     for w in widths or tuple(k * tau_e for k in _WIDTHS):
+        # the duration falls as gamma rises: a width whose full-bus move is not shorter than the best cannot win,
+        # and below a gamma whose move is not shorter, neither can any (feasibility falls as gamma rises)
+        if best is not None and smoothed_duration(d, motor, limits, 1.0, w) >= best.tf:
+            continue
         lo, hi = 0.0, 1.0
         found: Optional[PiecewisePlan] = None
         top = smoothed_plan(d, motor, limits, hi, w)
@@ -208,6 +230,9 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
         else:
             for _ in range(_BISECT):
                 mid = 0.5 * (lo + hi)
+                if best is not None and mid > 0.05 and smoothed_duration(d, motor, limits, mid, w) >= best.tf:
+                    lo = mid  # no shorter feasible move at or below mid: search above
+                    continue
                 try:  # a table that cannot be built (rho of a too coarse fit below 0) is a rejected candidate
                     candidate = smoothed_plan(d, motor, limits, mid, w) if mid > 0.05 else None
                 except ValueError:
