@@ -143,8 +143,8 @@ def _simulate_plan(args: argparse.Namespace) -> int:
         plot_run(result, title=f"{pf.name}: {len(pf.steps)} steps on the {pf.simulate['control_rate']:g} Hz drive",
                  path=out / "run.png")
         result.to_csv(out / "run.csv")
-        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    print(json.dumps(summary, indent=2) if args.json else _table({"run": summary}))
+        (out / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
+    print(strict_json(summary, indent=2) if args.json else _table({"run": summary}))
     if not args.json:
         print(f"status: {summary['status']}")
     warn(pf.name, summary)
