@@ -5,14 +5,16 @@ import argparse
 import sys
 import time
 from dataclasses import replace
-from typing import Any, Literal, Optional
+from typing import Any, Literal, Optional, Sequence
 
 from ..control.tuning import CONTROLLER_TYPES, LABELS, SMC_TYPES
 from ..json_out import strict_json
 from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band, scenario_kinds
-from ..studies.robustness import encoder_count
-from ..studies.scenario_file import load_scenario
+from ..studies.robustness import encoder_count, plant_errors
+from ..studies.scenario import Scenario
+from ..studies.scenario_file import Robustness, load_scenario
 from ..validate import check_quantity
+from ..validate.limits import check_study, estimate
 from .flags import count, out_dir, quantity
 from .status import exit_code, warn
 
@@ -87,6 +89,22 @@ def _scales(text: str) -> list[float]:
         raise ValueError(f"--scales {text!r}: give factors in (0, 1000] separated by commas ({exc})") from None
 
 
+def _check_work(scenario: Scenario, study: Optional[Robustness], kinds: Sequence[str],
+                args: argparse.Namespace) -> None:
+    """Refuse a comparison whose runs would exceed the study limit (:func:`flatstep.validate.limits.check_study`)."""
+    loop = scenario.loop
+    assert loop is not None  # checked by the caller
+    drive = loop.drive
+    pwm = drive.pwm_periods(loop.control_period) if drive is not None and drive.pwm == "switched" else 0
+    cost = estimate(scenario.t_end, control_period=loop.control_period, substeps=loop.substeps, pwm_per_period=pwm)
+    if study is not None and not args.no_robustness:
+        study = replace(study, samples=args.samples) if args.samples is not None else study
+    plants = len(plant_errors(study)) if study is not None and not args.no_robustness else 0
+    scales = len(args.scales.split(",")) if args.scales else 0
+    runs = len(kinds) * (1 + plants) + scales * len(kinds) * max(plants, 1)
+    check_study(runs, cost, engine=args.engine, what=f"the comparison of {len(kinds)} controllers on {plants} plants")
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
     scenario, study = load_scenario(args.scenario)
@@ -102,6 +120,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.band is not None and args.band <= 0:
         raise ValueError(f"--band {args.band!r}: the settling band must be > 0 rad")
     band = args.band if args.band is not None else default_band(scenario)
+    _check_work(scenario, study, kinds, args)
     count = encoder_count(scenario)
     log = _Log(enabled=not args.quiet)
     nominal = compare(scenario, kinds, band=band, engine=args.engine)

@@ -7,8 +7,9 @@ from dataclasses import replace
 from typing import Any
 
 from ..json_out import strict_json
-from ..studies.robustness import REST_AFTER, encoder_count, run_study
+from ..studies.robustness import REST_AFTER, encoder_count, plant_errors, run_study
 from ..studies.scenario_file import Robustness, load_scenario
+from ..validate.limits import check_study, estimate
 from .flags import count, out_dir
 from .status import exit_code
 
@@ -19,6 +20,11 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     study = study or Robustness()
     if args.samples is not None:
         study = replace(study, samples=args.samples)
+    if scenario.loop is not None:
+        loop = scenario.loop
+        check_study(len(plant_errors(study)) * (1 if args.no_paper_gains else 2),
+                    estimate(scenario.t_end, control_period=loop.control_period, substeps=loop.substeps),
+                    what=f"the robustness study of {len(plant_errors(study))} plants")
     result = run_study(scenario, study, with_paper_gains=not args.no_paper_gains, progress=args.progress)
     count = encoder_count(scenario)
     sets = {label: {k: v for k, v in s.items() if k != "rows"} for label, s in result["sets"].items()}

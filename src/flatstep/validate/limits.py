@@ -112,3 +112,25 @@ def check_resources(cost: RunEstimate, *, engine: str = "c", series: bool = True
         raise InputError("substeps", cost.steps,
                          f"{what} would take {cost.steps:.4g} plant integration steps{detail} on engine={engine!r}, "
                          f"above the limit of {limit:.4g} (flatstep.validate.limits.{name}); {how}")
+
+
+#: Most plant integration steps of one command-line study (compare, robustness) on the C core (about 20 s on 2
+#: cores: a batch step with sensors, observer and summaries costs about 0.4 us of one core); larger studies go
+#: through :func:`flatstep.run_batch` (docs/scaling.md).
+MAX_STUDY_STEPS = 50_000_000
+
+
+def check_study(runs: int, cost: RunEstimate, *, engine: str = "c", what: str = "the study") -> None:
+    """Raise an :class:`InputError` if ``runs`` runs of cost ``cost`` exceed the study limit of ``engine``.
+
+    On the C core the limit is :data:`MAX_STUDY_STEPS`; on the Python reference loop it is
+    :data:`MAX_STEPS_REFERENCE`, for the whole study.
+    """
+    limit = MAX_STEPS_REFERENCE if engine == "python" else MAX_STUDY_STEPS
+    total = runs * cost.steps
+    if total > limit:
+        name = "MAX_STEPS_REFERENCE" if engine == "python" else "MAX_STUDY_STEPS"
+        raise InputError("samples", runs, f"{what} is {runs} runs of {cost.steps:.4g} plant integration steps "
+                         f"({total:.4g} in all) on engine={engine!r}, above the limit of {limit:.4g} "
+                         f"(flatstep.validate.limits.{name}); lower --samples, skip the study (--no-robustness), "
+                         "use the C engine, or run it through flatstep.run_batch (docs/scaling.md)")
