@@ -12,9 +12,13 @@ from pathlib import Path
 
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES
 from ..json_out import strict_json
+from ..studies.robustness import plant_errors
 from ..studies.scenario_file import Robustness, load_scenario
 from .flags import count, quantity
 from .status import EXIT_REFUSED
+
+#: Most plants ``--accuracy`` calibrates (about 0.15 s each: 20 s).
+MAX_CALIBRATED_PLANTS = 128
 
 
 def _accuracy(args: argparse.Namespace) -> int:
@@ -22,6 +26,10 @@ def _accuracy(args: argparse.Namespace) -> int:
     from ..studies.calibrate_accuracy import accuracy, accuracy_table, meets_targets, worst
 
     scenario, study = load_scenario(args.scenario)
+    plants = len(plant_errors(study or Robustness()))
+    if plants > MAX_CALIBRATED_PLANTS:
+        raise ValueError(f"{args.scenario}: [robustness] has {plants} plants; --accuracy calibrates at most "
+                         f"{MAX_CALIBRATED_PLANTS} (about 0.15 s each): lower [robustness] samples")
     rows = accuracy(scenario, study or Robustness(), controller=args.controller, periods=args.periods,
                     peak_speed=args.speed, detent_harmonic=args.harmonic, current_noise=args.noise)
     met = meets_targets(rows)

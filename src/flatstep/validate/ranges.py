@@ -93,7 +93,7 @@ INTEGER_RANGES: dict[str, tuple[int, int]] = {
     "samples": (0, 100_000),
     "load_states": (0, 2),
     "repeat": (1, 100_000),
-    "seeds": (1, 100_000),
+    "seeds": (1, 50),
     "periods": (1, 256),
 }
 
