@@ -1,6 +1,6 @@
 """Planner timings of docs/planning.md: median of repeated runs, side by side.
 
-    .venv/bin/python benchmarks/plan_timing.py
+Run ``.venv/bin/python benchmarks/plan_timing.py``.
 """
 import statistics
 import time
@@ -15,6 +15,7 @@ from flatstep.plan.waypoints import Caps, plan_waypoints
 
 
 def median_ms(fn, repeat=7):
+    """Median wall time of ``fn()`` over ``repeat`` calls [ms]."""
     runs = []
     for _ in range(repeat):
         t = time.perf_counter()
@@ -27,11 +28,13 @@ motor = PRESETS["nema17"]
 limits = MotorLimits(v_bus=24.0, i_max=1.0, i_run=0.1, v_use=0.87)
 for d in (0.1, 5.0):
     # a fresh limits object each call, so that the envelope cache does not carry over between repeats
-    print(f"time_optimal {d:g} rad: {median_ms(lambda: time_optimal(d, motor, limits.__class__(**limits.as_dict()))):.1f} ms")
+    ms = median_ms(lambda d=d: time_optimal(d, motor, limits.__class__(**limits.as_dict())))
+    print(f"time_optimal {d:g} rad: {ms:.1f} ms")
 waypoints = np.cumsum(np.random.default_rng(0).uniform(-3, 5, 100))
 caps = Caps(60.0, 8000.0, 2e6)
 for family in ("psi", "hermite", "spline", "scurve"):
-    print(f"plan_waypoints 100 waypoints, {family}: {median_ms(lambda: plan_waypoints(waypoints, family=family, caps=caps)):.1f} ms")
+    ms = median_ms(lambda family=family: plan_waypoints(waypoints, family=family, caps=caps))
+    print(f"plan_waypoints 100 waypoints, {family}: {ms:.1f} ms")
 plan = plan_waypoints(waypoints, family="hermite", caps=caps)
 t = np.linspace(plan.t0, plan.tf, 1_000_000)
 c_ms, py_ms = median_ms(lambda: traj_flag(plan, t), 5), median_ms(lambda: plan.flag(t), 3)

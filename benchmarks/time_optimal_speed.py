@@ -1,9 +1,8 @@
 """The time-optimal planner against an earlier version of itself, medians side by side in one run.
 
-    python benchmarks/time_optimal_speed.py 9e98b41
-
-loads ``src/flatstep/plan/time_optimal.py`` as it was at the given git revision (its relative imports made
-absolute), plans the same moves with both, checks the plans are equal, and prints the median times.
+Run ``python benchmarks/time_optimal_speed.py 9e98b41``: it loads ``src/flatstep/plan/time_optimal.py`` as it
+was at the given git revision (its relative imports made absolute), plans the same moves with both, checks the
+plans are equal, and prints the median times.
 """
 import importlib.util
 import re
@@ -47,13 +46,13 @@ def main(rev):
     """Plan 0.1, 1, 5 and 20 rad at 24 V and 12 V with both versions (the limits of flatstep.plan.compare)."""
     old, motor = load_old(rev), PRESETS["nema17"]
     for bus in (24.0, 12.0):
-        def limits():  # a fresh object per call, as a caller would pass (equal limits share the envelope cache)
+        def limits(bus=bus):  # a fresh object per call, as a caller would pass (equal limits share the cache)
             return MotorLimits(v_bus=bus, i_max=1.0, i_run=0.025, v_use=0.84, torque_angle_max=1.1)
         for d in (0.1, 1.0, 5.0, 20.0):
             a, b = old.time_optimal(d, motor, limits()), new.time_optimal(d, motor, limits())
             same = a.tf == b.tf and bool((a.theta == b.theta).all())
-            t_old = median_ms(lambda: old.time_optimal(d, motor, limits()))
-            t_new = median_ms(lambda: new.time_optimal(d, motor, limits()))
+            t_old = median_ms(lambda d=d: old.time_optimal(d, motor, limits()))
+            t_new = median_ms(lambda d=d: new.time_optimal(d, motor, limits()))
             print(f"{bus:g} V {d:g} rad: {rev} {t_old:.1f} ms, now {t_new:.1f} ms ({t_old / t_new:.2f} x faster), "
                   f"same plan: {same} ({1e3 * b.tf:.3f} ms)", flush=True)
 

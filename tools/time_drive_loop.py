@@ -21,6 +21,7 @@ KEYS = ("move", "rest", "final", "peak_voltage")
 
 
 def main() -> None:
+    """Time the scenario's robustness study on the C and Python engines; print the ratio and the differences."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenario")
     ap.add_argument("--repeats", type=int, default=3)
@@ -48,11 +49,11 @@ def main() -> None:
             print(f"  {label:<14}{engine:<8}{w['move'] / count:>12.3f}{w['rest'] / count:>12.3f}"
                   f"{w['final'] / count:>10.3f}{w['peak_voltage']:>10.3g}")
         d = {"theta_error": 0.0, "v": 0.0}
-        for rc, rp in zip(results["c"]["sets"][label]["rows"], results["python"]["sets"][label]["rows"]):
+        for rc, rp in zip(results["c"]["sets"][label]["rows"], results["python"]["sets"][label]["rows"], strict=True):
             for name in ("theta_error", "va", "vb"):
                 a, b = rc[f"series_{name}"], rp[f"series_{name}"]
                 key = name if name == "theta_error" else "v"
-                d[key] = max(d[key], max(abs(x - y) for x, y in zip(a, b)))
+                d[key] = max(d[key], max(abs(x - y) for x, y in zip(a, b, strict=True)))
         print(f"  {label:<14}largest C - Python difference over every sample of every run: theta "
               f"{d['theta_error']:.2e} rad ({d['theta_error'] / count:.2e} counts), voltage {d['v']:.2e} V")
 

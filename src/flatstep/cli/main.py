@@ -50,7 +50,7 @@ def _table(summaries: dict[str, dict[str, Any]]) -> str:
     return "\n".join([head, units, *rows])
 
 
-def _write(out: Path, name: str, scenario: Scenario, result: SimResult, title: str) -> None:
+def _write(out: Path, name: str, result: SimResult, title: str) -> None:
     """Write a run's figure (``<name>.png``) and series (``<name>.csv``) to ``out``."""
     from .plots import plot_run
 
@@ -66,7 +66,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     summaries: dict[str, dict[str, Any]] = {}
     for name, scenario in PAPER_SCENARIOS.items():
         result = scenario.run()
-        _write(out, name, scenario, result, titles[name])
+        _write(out, name, result, titles[name])
         summaries[name] = result.summary()
     (out / "summary.json").write_text(strict_json(summaries, indent=2) + "\n")
     print(_table(summaries))
@@ -110,45 +110,34 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         scenario.feasibility().raise_if_infeasible()
         result = simulate(scenario.simulated_plant, scenario.plan, scenario.controller(), loop=scenario.loop,
                           solver=scenario.solver, t_end=scenario.t_end, x0=args.x0)
+    plan = scenario.plan
+    return _report(args, scenario.name, result, f"{scenario.name}: theta {plan.theta1:g} -> {plan.theta2:g} rad, "
+                   f"load {scenario.simulated_plant.load:g} N m, {scenario.measurement} measurement")
+
+
+def _report(args: argparse.Namespace, name: str, result: SimResult, title: str) -> int:
+    """Record, write (``--out``) and print one run of ``flatstep simulate``; its exit code by status."""
     summary = result.summary()
     if args.record:
         from ..studies.record import recording_from_result, write_recording
 
-        write_recording(args.record, recording_from_result(result, source=scenario.name))
+        write_recording(args.record, recording_from_result(result, source=name))
     if args.out:
         out = out_dir(args.out)
-        plan = scenario.plan
-        _write(out, "run", scenario, result, f"{scenario.name}: theta {plan.theta1:g} -> {plan.theta2:g} rad, "
-               f"load {scenario.simulated_plant.load:g} N m, {scenario.measurement} measurement")
+        _write(out, "run", result, title)
         (out / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
     print(strict_json(summary, indent=2) if args.json else _table({"run": summary}))
     if not args.json:
         print(f"status: {summary['status']}")
-    warn(scenario.name, summary)
+    warn(name, summary)
     return exit_code([summary["status"]])
 
 
 def _simulate_plan(args: argparse.Namespace) -> int:
     """``flatstep simulate PLAN.toml``: the whole waypoint sequence on the drive (:func:`.plan.run_plan_file`)."""
-    from .plots import plot_run
-
     pf, result = run_plan_file(args.scenario, args.x0, show_steps=not args.json)
-    summary = result.summary()
-    if args.record:
-        from ..studies.record import recording_from_result, write_recording
-
-        write_recording(args.record, recording_from_result(result, source=pf.name))
-    if args.out:
-        out = out_dir(args.out)
-        plot_run(result, title=f"{pf.name}: {len(pf.steps)} steps on the {pf.simulate['control_rate']:g} Hz drive",
-                 path=out / "run.png")
-        result.to_csv(out / "run.csv")
-        (out / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
-    print(strict_json(summary, indent=2) if args.json else _table({"run": summary}))
-    if not args.json:
-        print(f"status: {summary['status']}")
-    warn(pf.name, summary)
-    return exit_code([summary["status"]])
+    return _report(args, pf.name, result,
+                   f"{pf.name}: {len(pf.steps)} steps on the {pf.simulate['control_rate']:g} Hz drive")
 
 
 def cmd_bench(args: argparse.Namespace) -> int:

@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
-from ..plan.piecewise import Plan
+from ..plan.piecewise import Plan, check_plan
 
 
 @runtime_checkable
@@ -79,13 +79,6 @@ class SlidingController(StaticController, Protocol):
 def is_static(controller: Any) -> TypeGuard[StaticController]:
     """Whether ``controller`` can run in the continuous loop (it has no state between steps)."""
     return isinstance(controller, StaticController) and controller.initial_state() is None
-
-
-def check_plan(plan: object) -> None:
-    """Raise a ValueError unless ``plan`` is a move a controller can track (it has ``flag``, ``x0``, ``t0``, ``tf``)."""
-    if not all(hasattr(plan, a) for a in ("flag", "x0", "t0", "tf")):
-        raise ValueError(f"plan={plan!r} is not a flatstep plan (a RestToRest from point_to_point, or a trajectory "
-                         "with flag(t), x0(Nr), t0 and tf)")
 
 
 def check_parts(motor: object, plan: object, gains: object, gains_type: type) -> None:

@@ -21,14 +21,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .. import _core
-from ..control.protocol import Controller, SlidingController, StaticController, check_plan, is_static
+from ..control.protocol import Controller, SlidingController, StaticController, is_static
 from ..control.smc import FlatnessSMC
 from ..errors import RunError
 from ..loop.reference import DriveLoop, run_reference
 from ..model.flat import flat_to_state, polar
 from ..model.motor import MotorParams, rhs
 from ..model.plant import Plant
-from ..plan.piecewise import Plan
+from ..plan.piecewise import Plan, check_plan
 from ..validate import check_quantity
 from ..validate.limits import check_resources, check_timing, estimate
 from .result import SimResult

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
 from ..validate import check_integer, check_quantity
+from .piecewise import check_plan
 from .rest_to_rest import RestToRest
 
 
@@ -82,9 +83,9 @@ def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: floa
     voltages against ``v_max`` and phase currents against ``i_max``. The plan is sampled at ``n`` points over
     [t0, tf] and the worst torque margin is refined by a bounded scalar minimisation around the worst sample.
     """
-    if not all(hasattr(plan, a) for a in ("flag", "t0", "tf")) or not isinstance(motor, MotorParams):
-        raise ValueError(f"check_feasibility takes a plan (RestToRest, PiecewisePlan) and a MotorParams, got "
-                         f"{type(plan).__name__} and {type(motor).__name__}")
+    check_plan(plan)
+    if not isinstance(motor, MotorParams):
+        raise ValueError(f"check_feasibility takes a MotorParams, got motor={motor!r}")
     n = check_integer("n", n, low=3, high=10_000_000, why="samples of the plan")
     load_torque = check_quantity("load", load_torque, as_name="load_torque")
     if v_max is not None:

@@ -304,3 +304,10 @@ class PiecewisePlan:
 
 #: A plan the controllers track: the paper's rest-to-rest move or a segment table.
 Plan = Union[RestToRest, PiecewisePlan]
+
+
+def check_plan(plan: object) -> None:
+    """Raise a ValueError unless ``plan`` is a move a controller can track (it has ``flag``, ``x0``, ``t0``, ``tf``)."""
+    if not all(hasattr(plan, a) for a in ("flag", "x0", "t0", "tf")):
+        raise ValueError(f"plan={plan!r} is not a flatstep plan (a RestToRest from point_to_point, or a trajectory "
+                         "with flag(t), x0(Nr), t0 and tf)")
