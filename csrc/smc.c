@@ -71,6 +71,7 @@ int smc_init(struct smc *s, const struct smc_params *p)
     s->torques_constant = torque_model_constant(&p->torques);
     s->loss_aware = p->loss_aware.rho_hold > 0;
     s->hold = g->hold_damping > 0;
+    s->hold_torques = s->hold && !(s->torques_constant && p->torques.load == 0);
     if (g->hold_damping > 0) {  // rho2 > 0 (plan_valid); Km rho2 may still underflow, the gain and rate overflow
         if (!(p->motor.Km * p->plan.rho2 > 0))
             return SMC_EGAINS;
@@ -93,25 +94,37 @@ void smc_reset(struct smc *s)
     s->status_seen = SMC_OK;
 }
 
-// Returns nothing; writes the detent hold's voltages (smc.h) for y = (ia, ib, omega, theta) with sN, cN the sine
-// and cosine of Nr theta.
-SMC_INLINE void smc_hold(const struct smc *s, const fs_real y[5], fs_real sN, fs_real cN, fs_real v[2])
-{
-    const struct motor_params *m = &s->p.motor;
-    fs_real rho2 = s->p.plan.rho2, sp = -s->hold_gain * y[2], cp, ia, ib, emf;
-    sp = sp > 1 ? 1 : sp < -1 ? -1 : sp;  // a NaN cannot reach here: the inputs were checked finite
-    cp = fs_sqrt(1 - sp * sp);
-    ia = rho2 * (s->hold_c2 * cp - s->hold_s2 * sp);
-    ib = rho2 * (s->hold_s2 * cp + s->hold_c2 * sp);
-    emf = m->Km * y[2];
-    v[0] = m->R * ia + m->L * s->hold_lambda * (ia - y[0]) - emf * sN;
-    v[1] = m->R * ib + m->L * s->hold_lambda * (ib - y[1]) + emf * cN;
-}
-
 // Returns the known torque E (torque_model_torque; the constant load without the call when that is all it is).
 SMC_INLINE fs_real smc_torque(const struct smc *s, fs_real t, fs_real theta, fs_real omega)
 {
     return s->torques_constant ? s->p.torques.load : torque_model_torque(&s->p.torques, s->p.motor.Nr, t, theta, omega);
+}
+
+// Returns x clipped to [-1, 1] (x finite).
+SMC_INLINE fs_real smc_clip1(fs_real x)
+{
+    return x > 1 ? 1 : x < -1 ? -1 : x;
+}
+
+// Returns nothing; writes the detent hold's voltages (smc.h) at time t for y = (ia, ib, omega, theta) with sN, cN
+// the sine and cosine of Nr theta.
+SMC_INLINE void smc_hold(const struct smc *s, fs_real t, const fs_real y[5], fs_real sN, fs_real cN, fs_real v[2])
+{
+    const struct motor_params *m = &s->p.motor;
+    fs_real rho2 = s->p.plan.rho2, sp = smc_clip1(-s->hold_gain * y[2]), cp, s2 = s->hold_s2, c2 = s->hold_c2, sl, cl,
+            ia, ib, emf;
+    cp = fs_sqrt(1 - sp * sp);  // a NaN cannot reach here: the inputs were checked finite
+    if (s->hold_torques) {      // the load angle of the known torque on theta2 at rest (no Coulomb term at rest)
+        sl = smc_clip1(smc_torque(s, t, s->p.plan.theta2, 0) / (m->Km * rho2));
+        cl = fs_sqrt(1 - sl * sl);
+        s2 = s->hold_s2 * cl + s->hold_c2 * sl;
+        c2 = s->hold_c2 * cl - s->hold_s2 * sl;
+    }
+    ia = rho2 * (c2 * cp - s2 * sp);
+    ib = rho2 * (s2 * cp + c2 * sp);
+    emf = m->Km * y[2];
+    v[0] = m->R * ia + m->L * s->hold_lambda * (ia - y[0]) - emf * sN;
+    v[1] = m->R * ib + m->L * s->hold_lambda * (ib - y[1]) + emf * cN;
 }
 
 // Returns E' (torque_model_rate; 0 without the call when the known torque is constant).
@@ -188,7 +201,7 @@ SMC_INLINE uint32_t smc_law(const struct smc *s, fs_real t, const fs_real y[5], 
     s2 = dde + s->alpha2 * de + s->alpha1 * e;
     if (s->hold && t >= s->p.plan.tf) {
         flat = FLAT_OK;
-        smc_hold(s, y, sN, cN, v);
+        smc_hold(s, t, y, sN, cN, v);
     } else {
         gamma1 = ref[PLAN_DRHO] - g->W1 * s1 / (fs_fabs(s1) + g->eps1);
         gamma2 = ref[PLAN_DDDTHETA] - s->alpha2 * dde - s->alpha1 * de - g->W2 * s2 / (fs_fabs(s2) + g->eps2);

@@ -80,6 +80,7 @@ struct smc {
     bool torques_constant;     // torque_model_constant(&p.torques): E = load, E' = 0 without the model's calls
     bool loss_aware;           // p.loss_aware.rho_hold > 0: the plan's rho replaced by rho*(t)
     bool hold;                 // p.gains.hold_damping > 0: the detent hold from tf on
+    bool hold_torques;         // hold and a known torque: the hold turns by its load angle on theta2
     uint32_t status_seen;      // OR of every status since the last reset
 };
 
@@ -113,7 +114,8 @@ void smc_reset(struct smc *s);
 // Returns the smc_status bits of this step; writes finite phase voltages v with hypot(v) <= v_limit for any
 // time t and measurement y = (ia, ib, omega, theta, theta'') (y[4] read in SMC_IDEAL mode only).
 // With gains.hold_damping = zeta > 0 and t >= tf, the voltages are the detent hold's instead of the law's:
-// i* = rho2 (cos p, sin p), p = Nr theta2 + asin(clip(-2 zeta sqrt(J Nr / (Km rho2)) omega, +-1)),
+// i* = rho2 (cos p, sin p), p = Nr theta2 + asin(clip(E(t, theta2, 0) / (Km rho2), +-1))
+// + asin(clip(-2 zeta sqrt(J Nr / (Km rho2)) omega, +-1)) with E the known torque (0 without torques),
 // v = R i* + L (W1 / eps1) (i* - i) + Km omega (-sin Nr theta, cos Nr theta) (flatstep.control.smc).
 uint32_t smc_step(struct smc *s, fs_real t, const fs_real y[5], fs_real v[2]);
 

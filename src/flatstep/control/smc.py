@@ -30,7 +30,15 @@ observer, hunts across a count edge at rest (docs/drive.md, "Standstill"). With 
 
 (the current loop at the rate of the :math:`s_1` boundary layer, with the back EMF cancelled). The position
 error then no longer feeds an integrator, so the quantization cannot drive a limit cycle; a load torque
-:math:`\tau_L` costs the static error :math:`\tau_L / K`.
+:math:`\tau_L` costs the static error :math:`\tau_L / K`. With known torques the hold turns the current vector
+by their load angle at rest, so that the known part of the load costs nothing:
+
+.. math::
+    p = N_r\theta_2 + \arcsin\!\big(\mathrm{clip}(E(t, \theta_2, 0) / K_m\rho_2, \pm 1)\big)
+    + \arcsin\!\big(\mathrm{clip}(\tau / K_m\rho_2, \pm 1)\big)
+
+(:math:`E` the known torque on the target at rest: the detent there, the load; Coulomb friction is 0 at rest).
+Without torques the first arcsine is 0 and the hold is the one above bit for bit.
 """
 from __future__ import annotations
 
@@ -182,22 +190,29 @@ class FlatnessSMC:
         v = flat_voltages(m, rho, gamma1, theta, omega, acc, gamma2 + dE / m.J, phi, m.J * acc + m.B * omega + E)
         if g.hold_damping is None:
             return v
-        return np.where(np.asarray(t) >= self.plan.tf, self.hold_voltages(ia, ib, omega, theta), v)
+        return np.where(np.asarray(t) >= self.plan.tf, self.hold_voltages(ia, ib, omega, theta, t), v)
 
-    def hold_currents(self, omega: ArrayLike) -> NDArray[np.float64]:
-        """The detent hold's current vector ``(ia*, ib*)`` at the measured speed (module docstring; vectorized)."""
+    def hold_currents(self, omega: ArrayLike, t: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """The detent hold's current vector ``(ia*, ib*)`` at the measured speed and time ``t`` (module docstring;
+        vectorized; ``t`` matters only for known torques that change in time)."""
         m, rho2, Nr, zeta = self.motor, self.plan.rho2, self.motor.Nr, self.gains.hold_damping
         assert zeta is not None, "hold_currents needs gains.hold_damping (the hold is off without it)"
-        # sin p = s, cos p by the angle addition on N_r theta2, as csrc/smc.c computes it
+        # sin p = s, cos p by the angle additions on N_r theta2 and the load angle, as csrc/smc.c computes them
         s = np.clip(-2.0 * zeta * np.sqrt(m.J * Nr / (m.Km * rho2)) * np.asarray(omega), -1.0, 1.0)
         c = np.sqrt(1.0 - s * s)
         s2, c2 = np.sin(Nr * self.plan.theta2), np.cos(Nr * self.plan.theta2)
+        if self.torques != NO_TORQUES:  # the load angle of the known torque on theta2 at rest (no Coulomb term)
+            sl = np.clip(self.torques.torque(t, self.plan.theta2, 0.0, Nr) / (m.Km * rho2), -1.0, 1.0)
+            cl = np.sqrt(1.0 - sl * sl)
+            s2, c2 = s2 * cl + c2 * sl, c2 * cl - s2 * sl
         return rho2 * np.array([c2 * c - s2 * s, s2 * c + c2 * s])
 
-    def hold_voltages(self, ia: ArrayLike, ib: ArrayLike, omega: ArrayLike, theta: ArrayLike) -> NDArray[np.float64]:
-        """The detent hold's voltages (module docstring) for measured currents, speed and angle (vectorized)."""
+    def hold_voltages(self, ia: ArrayLike, ib: ArrayLike, omega: ArrayLike, theta: ArrayLike,
+                      t: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """The detent hold's voltages (module docstring) for measured currents, speed and angle at time ``t``
+        (vectorized)."""
         m, g = self.motor, self.gains
-        ia_ref, ib_ref = self.hold_currents(omega)
+        ia_ref, ib_ref = self.hold_currents(omega, t)
         lam, emf, Nr_theta = g.W1 / g.eps1, m.Km * np.asarray(omega), m.Nr * np.asarray(theta)
         return np.array([m.R * ia_ref + m.L * lam * (ia_ref - ia) - emf * np.sin(Nr_theta),
                          m.R * ib_ref + m.L * lam * (ib_ref - ib) + emf * np.cos(Nr_theta)])

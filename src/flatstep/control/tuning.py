@@ -15,6 +15,7 @@ that none of them is crippled by the rule (halving or doubling does not make it 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Optional, Union
 
 from ..model.motor import MotorParams
@@ -34,20 +35,24 @@ from .smc import FlatnessSMC, SMCGains
 #: flatness laws and the cascade with the scenario's torque model (``[feedforward]``, a
 #: :class:`~flatstep.model.torque_model.TorqueModel`): the flatness laws' feedforward, the cascade's anti-cogging.
 CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff",
-                    "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i", "dq_smc_i_ff")
+                    "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
           "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q SMC + ff",
           "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
           "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff",
-          "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff"}
+          "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff",
+          "smc_ff_hold": "flatness SMC+ff, hold"}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
-SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff", "dq_smc_i", "dq_smc_i_ff")
+SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold")
 #: The flatness types that can run in continuous time (no integral advancing by the control period).
 CONTINUOUS_TYPES = tuple(k for k in SMC_TYPES if k not in ("dq_smc_i", "dq_smc_i_ff"))
 #: The types that need a torque model.
-FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i_ff")
+FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i_ff", "smc_ff_hold")
+#: The damping ratio of the ``smc_ff_hold`` type's detent hold when the scenario's gains give none: critical
+#: damping of the magnetic spring (docs/comparison.md, "At rest on the paper's move").
+REST_HOLD_DAMPING = 1.0
 #: The sliding controller's default gains, the paper's.
 _PAPER_SMC_GAINS = SMCGains()
 #: What :func:`make_controller` returns.
@@ -79,6 +84,8 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     them except the cascade's (anti-cogging as firmware does it); ``cascade_model`` gives them to its observer too.
     The d-q flatness types track the planned ``d_current``; ``smc_la`` and ``smc_la_ff`` are the paper's law on the
     ``loss_aware`` rho*(t) (:mod:`flatstep.plan.loss_aware`; default ``LossAwareRho.for_plan(plan)``).
+    ``smc_ff_hold`` is ``smc_ff`` with the detent hold from tf on (``smc_gains.hold_damping``, or
+    :data:`REST_HOLD_DAMPING`), turned by the known torques' load angle on the target.
     ``dq_smc_i`` and ``dq_smc_i_ff`` are the d-q law with integral action on ``s2``
     (:meth:`~flatstep.control.dq_smc.DQIntegral.designed`: its pole at ``omega_n/4`` as the cascade's velocity
     integral, held while the bus ``v_limit`` limits); they need ``control_period``.
@@ -89,6 +96,9 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
         raise ValueError(f"controller type {kind!r} needs the torques it knows beyond eq. (1): give a TorqueModel "
                          "(a [feedforward] table in a scenario file), or use the type without '_ff'")
     known = torques if kind in FEEDFORWARD_TYPES and torques is not None else NO_TORQUES
+    if kind == "smc_ff_hold":
+        hold = smc_gains if smc_gains.hold_damping is not None else replace(smc_gains, hold_damping=REST_HOLD_DAMPING)
+        return FlatnessSMC(motor, plan, hold, measurement, torques=known)
     if kind in ("smc", "smc_ff", "smc_la", "smc_la_ff"):
         return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known,
                            loss_aware=(loss_aware or LossAwareRho.for_plan(plan)) if kind in ("smc_la", "smc_la_ff")
