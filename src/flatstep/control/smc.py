@@ -193,8 +193,10 @@ class FlatnessSMC:
         return np.where(np.asarray(t) >= self.plan.tf, self.hold_voltages(ia, ib, omega, theta, t), v)
 
     def hold_currents(self, omega: ArrayLike, t: ArrayLike = 0.0) -> NDArray[np.float64]:
-        """The detent hold's current vector ``(ia*, ib*)`` at the measured speed and time ``t`` (module docstring;
-        vectorized; ``t`` matters only for known torques that change in time)."""
+        """The detent hold's current vector ``(ia*, ib*)`` at the measured speed and time ``t`` (vectorized).
+
+        The module docstring gives the law; ``t`` matters only for known torques that change in time.
+        """
         m, rho2, Nr, zeta = self.motor, self.plan.rho2, self.motor.Nr, self.gains.hold_damping
         assert zeta is not None, "hold_currents needs gains.hold_damping (the hold is off without it)"
         # sin p = s, cos p by the angle additions on N_r theta2 and the load angle, as csrc/smc.c computes them
@@ -209,8 +211,7 @@ class FlatnessSMC:
 
     def hold_voltages(self, ia: ArrayLike, ib: ArrayLike, omega: ArrayLike, theta: ArrayLike,
                       t: ArrayLike = 0.0) -> NDArray[np.float64]:
-        """The detent hold's voltages (module docstring) for measured currents, speed and angle at time ``t``
-        (vectorized)."""
+        """The detent hold's voltages (module docstring) for measured currents, speed, angle, time (vectorized)."""
         m, g = self.motor, self.gains
         ia_ref, ib_ref = self.hold_currents(omega, t)
         lam, emf, Nr_theta = g.W1 / g.eps1, m.Km * np.asarray(omega), m.Nr * np.asarray(theta)
