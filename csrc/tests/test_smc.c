@@ -185,7 +185,7 @@ static int hold_checks(void)
     struct smc_params p;
     struct smc plain, hold;
     const struct motor_params *m = &p.motor;
-    double y[5], v[2], vp[2], ia, ib, K, te, istar[2], omega = 2e-3, lam;
+    double y[5], v[2], vp[2], ia, ib, K, te, istar[2], omega = 2e-3, lam, E;
     smc_params_default(&p);
     p.measurement = SMC_MODEL;
     smc_init(&plain, &p);
@@ -211,6 +211,17 @@ static int hold_checks(void)
     te = m->Km * (ib * cos(m->Nr * y[3]) - ia * sin(m->Nr * y[3]));
     CHECK(rel_diff(te, -2 * 0.7 * sqrt(K * m->J) * omega) < 1e-6, "damping torque %g vs %g", te,
           -2 * 0.7 * sqrt(K * m->J) * omega);
+    // known torques: at rest the hold's currents balance E on theta2 (detent there and load, no Coulomb at rest)
+    p.torques.detent_torque = 1e-3, p.torques.coulomb_torque = 2e-4, p.torques.load = 1e-5;
+    CHECK(smc_init(&hold, &p) == SMC_PARAMS_OK && hold.hold_torques, "hold with known torques");
+    y[0] = 0.1, y[1] = -0.3, y[2] = 0, y[3] = p.plan.theta2 + 1e-4;
+    CHECK(smc_step(&hold, p.plan.tf, y, v) == SMC_OK, "hold with torques at rest");
+    ia = (v[0] + m->L * lam * y[0]) / (m->R + m->L * lam);
+    ib = (v[1] + m->L * lam * y[1]) / (m->R + m->L * lam);
+    te = m->Km * (ib * cos(m->Nr * p.plan.theta2) - ia * sin(m->Nr * p.plan.theta2));
+    E = torque_model_torque(&p.torques, m->Nr, p.plan.tf, p.plan.theta2, 0);
+    CHECK(fabs(E) > 5e-4 && rel_diff(te, E) < 1e-9, "hold torque %g vs E %g", te, E);
+    CHECK(rel_diff(hypot(ia, ib), p.plan.rho2) < 1e-12, "hold current %g vs rho2", hypot(ia, ib));
     return 0;
 }
 
