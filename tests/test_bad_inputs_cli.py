@@ -118,6 +118,8 @@ def _cases(tmp: Path) -> list[tuple[str, list[str], int, list[str]]]:
         ("compare band nan", ["compare", str(tmp / "drive.toml"), "--band", "nan"], 2, ["--band", "nan"]),
         ("compare scales", ["compare", str(tmp / "drive.toml"), "--scales", "a,b"], 2, ["--scales", "'a,b'"]),
         ("compare scales zero", ["compare", str(tmp / "drive.toml"), "--scales", "0"], 2, ["--scales"]),
+        ("compare scales no baseline", ["compare", str(tmp / "drive.toml"), "--controllers", "smc,dq_smc", "--scales",
+                                        "2"], 2, ["--scales", "'smc,dq_smc'", "cascade"]),
         ("compare samples", ["compare", str(tmp / "drive.toml"), "--samples", "-3"], 2, ["--samples", "-3"]),
         ("design no drive", ["design", str(tmp / "nodrive.toml")], 2, ["control_rate"]),
         ("compare python study", ["compare", str(tmp / "study.toml"), "--engine", "python"], 2,

@@ -101,7 +101,8 @@ def _check_work(scenario: Scenario, study: Optional[Robustness], kinds: Sequence
         study = replace(study, samples=args.samples) if args.samples is not None else study
     plants = len(plant_errors(study)) if study is not None and not args.no_robustness else 0
     scales = len(args.scales.split(",")) if args.scales else 0
-    runs = len(kinds) * (1 + plants) + scales * len(kinds) * max(plants, 1)
+    baselines = [k for k in kinds if k not in SMC_TYPES]
+    runs = len(kinds) * (1 + plants) + scales * len(baselines) * max(plants, 1)
     check_study(runs, cost, engine=args.engine, what=f"the comparison of {len(kinds)} controllers on {plants} plants")
 
 
@@ -120,6 +121,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.band is not None and args.band <= 0:
         raise ValueError(f"--band {args.band!r}: the settling band must be > 0 rad")
     band = args.band if args.band is not None else default_band(scenario)
+    if args.scales and all(k in SMC_TYPES for k in kinds):
+        raise ValueError(f"--scales {args.scales!r} sweeps the baselines' bandwidth, and --controllers "
+                         f"{args.controllers!r} names none: add one of "
+                         f"{[k for k in CONTROLLER_TYPES if k not in SMC_TYPES]}, or drop --scales")
     _check_work(scenario, study, kinds, args)
     count = encoder_count(scenario)
     log = _Log(enabled=not args.quiet)
