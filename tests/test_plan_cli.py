@@ -132,3 +132,39 @@ def test_plan_files_and_scenario_files_are_told_apart():
     assert scenarios and not any(is_plan_file(p) for p in scenarios)
     assert all(is_plan_file(p) for p in EXAMPLES)
     assert not is_plan_file(Path(__file__).parents[1] / "no-such-file.toml")
+
+
+SCENARIOS = sorted((Path(__file__).parents[1] / "examples").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
+def test_plan_shows_every_scenario_example(path, tmp_path, capsys):
+    from flatstep.plan.feasibility import check_feasibility
+    from flatstep.studies.scenario_file import load_scenario
+
+    assert main(["plan", str(path), "--out", str(tmp_path)]) == 0
+    report = json.loads((tmp_path / "plan.json").read_text())
+    assert (tmp_path / "plan.png").stat().st_size > 10_000
+    scenario, _ = load_scenario(path)
+    plan, drive = scenario.plan, scenario.loop.drive if scenario.loop is not None else None
+    assert report["steps"] == [dict(step=f"move {plan.theta1:g} -> {plan.theta2:g}", start=plan.t0,
+                                    duration=pytest.approx(plan.tf - plan.t0))]
+    load = scenario.plant.constant_load if scenario.plant is not None else 0.0
+    check = check_feasibility(plan, scenario.motor, load_torque=load, v_max=drive.v_bus if drive else None)
+    assert report["feasible"] and report["scenario"]["check"]["peak_voltage"] == pytest.approx(check.peak_voltage)
+    assert report["scenario"]["v_bus"] == (drive.v_bus if drive else None)
+    out = capsys.readouterr().out
+    assert f"{check.torque_ratio:.3f} of Km rho*" in out and "plan.json" in out
+
+
+def test_plan_on_a_scenario_refuses_simulate_and_reports_an_infeasible_move(tmp_path, capsys):
+    path = next(p for p in SCENARIOS if p.stem == "paper-fig1")
+    assert main(["plan", str(path), "--out", str(tmp_path), "--simulate"]) == 2
+    assert "flatstep simulate" in capsys.readouterr().err
+    fast = tmp_path / "fast.toml"  # the paper's move in 0.1 ms: its torque demand passes Km rho*
+    assert "tf = 0.04\n" in path.read_text()
+    fast.write_text(path.read_text().replace("tf = 0.04\n", "tf = 0.0201\n"))
+    assert main(["plan", str(fast), "--out", str(tmp_path)]) == 2
+    out = capsys.readouterr().out
+    assert "infeasible: torque demand exceeds Km rho*" in out and "no plan.png" in out
+    assert not json.loads((tmp_path / "plan.json").read_text())["feasible"]

@@ -17,11 +17,21 @@ if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not
     from ..engine.result import SimResult
     from ..plan.plan_file import PlanFile
 
+#: The controller types that follow a scenario plan's rho* (the others plan their own currents or ignore it).
+PLAN_RHO_TYPES = ("smc", "smc_ff", "smc_ff_hold")
 MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
 
 
-def plot_plan(pf: "PlanFile", path: Path) -> None:
-    """plan.png: angle, speed, phase voltage demand against the bus, current magnitude against its limit."""
+def _count(n: int, noun: str) -> str:
+    """``n noun``, plural unless n is 1."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def plot_plan(pf: "PlanFile", path: Path, v_bus: Optional[float] = None) -> None:
+    """plan.png: angle, speed, phase voltage demand against the bus, current magnitude against its limit.
+
+    ``v_bus``: the bus to draw when the file has no [limits] (a scenario's drive).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -42,6 +52,8 @@ def plot_plan(pf: "PlanFile", path: Path) -> None:
     if pf.limits is not None:
         ax[2].axhline(pf.limits.v_bus, color="k", ls="--", lw=1, label="$V_{bus}$")
         ax[3].axhline(pf.limits.i_max, color="k", ls="--", lw=1, label="$i_{max}$")
+    elif v_bus is not None:
+        ax[2].axhline(v_bus, color="k", ls="--", lw=1, label="$V_{bus}$")
     ax[2].set_ylabel("voltage demand [V]")
     ax[3].set_ylabel("current [A]")
     ax[3].set_xlabel("t [s]")
@@ -50,7 +62,7 @@ def plot_plan(pf: "PlanFile", path: Path) -> None:
     for _, start, _ in pf.steps:
         for a in ax:
             a.axvline(start, color="0.8", lw=0.5, zorder=0)
-    fig.suptitle(f"{pf.name}: {len(pf.steps)} steps, {plan.tf - plan.t0:.4g} s")
+    fig.suptitle(f"{pf.name}: {_count(len(pf.steps), 'step')}, {plan.tf - plan.t0:.4g} s")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -100,7 +112,7 @@ def _margins_line(pf: "PlanFile") -> tuple[dict[str, float], list[str]]:
 def _print_steps(pf: "PlanFile") -> None:
     """The plan's one-line summary and its moves and dwells."""
     plan = pf.plan
-    print(f"{pf.name}: {len(pf.steps)} steps in {plan.n} segments, {plan.tf - plan.t0:.6g} s "
+    print(f"{pf.name}: {_count(len(pf.steps), 'step')} in {_count(plan.n, 'segment')}, {plan.tf - plan.t0:.6g} s "
           f"(t = {plan.t0:g} .. {plan.tf:.6g} s)")
     for label, start, duration in pf.steps:
         print(f"  {label:<14} start {start:10.6f} s  duration {duration:10.6f} s")
@@ -132,10 +144,69 @@ def run_plan_file(path: str, x0: Optional[Sequence[float]] = None,
     return pf, _run_on_drive(pf, x0)
 
 
+def _scenario_as_plan(path: str) -> tuple["PlanFile", dict[str, Any]]:
+    """A scenario file's move as a one-step plan, and its check (plan.json's ``scenario``).
+
+    The check is :func:`~flatstep.plan.feasibility.check_feasibility` with the plant's constant load and the
+    drive's bus (none without a [drive]); a scenario has no current limit.
+    """
+    from ..plan.feasibility import check_feasibility
+    from ..plan.piecewise import PiecewisePlan
+    from ..plan.plan_file import PlanFile
+    from ..studies.scenario_file import load_scenario
+
+    scenario, _ = load_scenario(path)
+    plan, drive = scenario.plan, scenario.loop.drive if scenario.loop is not None else None
+    constant = scenario.plant.constant_load if scenario.plant is not None else 0.0
+    load = constant if constant is not None else 0.0  # a time-varying load: the check without it
+    v_bus = drive.v_bus if drive is not None else None
+    pf = PlanFile(name=scenario.name, motor=scenario.motor, limits=None, plan=PiecewisePlan.from_rest_to_rest(plan),
+                  steps=[(f"move {plan.theta1:g} -> {plan.theta2:g}", plan.t0, plan.tf - plan.t0)],
+                  simulate={})
+    check = check_feasibility(plan, scenario.motor, load_torque=load, v_max=v_bus)
+    info = dict(controller=scenario.controller_type, load_torque=load, v_bus=v_bus, check=check.as_dict())
+    return pf, info
+
+
+def _cmd_plan_scenario(args: argparse.Namespace) -> int:
+    """``flatstep plan SCENARIO.toml``: the scenario's move, its check against the law and the bus, plan.png."""
+    if args.simulate:
+        raise ValueError(f"{args.file} is a scenario file: 'flatstep simulate {args.file}' runs it (--simulate runs "
+                         "plan files, whose drive is their [limits] bus)")
+    pf, info = _scenario_as_plan(args.file)
+    _print_steps(pf)
+    check = info["check"]
+    print(f"  the paper's law on this move (constant load {info['load_torque']:g} N m): torque demand at most "
+          f"{check['torque_ratio']:.3f} of Km rho* (1 = the law's singularity)")
+    if info["controller"] not in PLAN_RHO_TYPES:
+        print(f"  (the scenario's controller {info['controller']} does not follow the plan's rho*: the currents and "
+              "voltages below are the paper's law's)")
+    if check["peak_voltage"] == check["peak_voltage"]:  # not NaN: the plan is regular
+        bus = f" of the {info['v_bus']:g} V bus" if info["v_bus"] is not None else " (no [drive]: no bus)"
+        print(f"  peaks: feedforward phase voltage {check['peak_voltage']:.4g} V{bus}, "
+              f"phase current {check['peak_current']:.4g} A")
+    if not check["feasible"]:
+        print("  infeasible: " + "; ".join(check["violations"]))
+    report: dict[str, Any] = dict(name=pf.name, total_duration=pf.plan.tf - pf.plan.t0, t0=pf.plan.t0,
+                                  tf=pf.plan.tf, segments=pf.plan.n,
+                                  steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps],
+                                  scenario=info, feasible=check["feasible"])
+    out = out_dir(args.out)
+    (out / "plan.json").write_text(strict_json(report, indent=2) + "\n")
+    if check["torque_margin"] > 0 and check["min_rho"] > 0:
+        plot_plan(pf, out / "plan.png", v_bus=info["v_bus"])
+        print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
+    else:
+        print(f"  wrote {out / 'plan.json'}; no plan.png: the flat maps are singular on this move")
+    return EXIT_OK if check["feasible"] else EXIT_REFUSED
+
+
 def cmd_plan(args: argparse.Namespace) -> int:
     """``flatstep plan FILE.toml``: plan the waypoints, print the steps and margins, write plan.png, plan.json."""
-    from ..plan.plan_file import load_plan_file
+    from ..plan.plan_file import is_plan_file, load_plan_file
 
+    if not is_plan_file(args.file) and Path(args.file).is_file():
+        return _cmd_plan_scenario(args)
     pf = load_plan_file(args.file)
     plan = pf.plan
     _print_steps(pf)
@@ -174,7 +245,8 @@ def add_plan_command(sub: Any) -> None:
                        "limit, write plan.png and plan.json; with --simulate, also run the plan on the 20 kHz drive "
                        "('flatstep simulate FILE.toml' runs it alone and prints the run's summary and status). Exit "
                        "2 when the plan exceeds a limit, 3 when the drive loses the move.")
-    p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml)")
+    p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml), or a scenario file: its move, "
+                   "checked against the law's singularity and the drive's bus")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
                    help="also run the plan on the 20 kHz drive (bus, sensors, observer, designed gains)")
