@@ -116,25 +116,6 @@ def test_binding_rejects_bad_input(motor, plan):
     assert np.isnan(_core.flat_voltages(motor, 0.0, 0, 0, 0, 0, 0, 0, 0)).all()
 
 
-def test_smc_hold_matches_the_reference(motor, plan):
-    """The detent hold (gains.hold_damping) in smc_step against FlatnessSMC.voltages, before and after tf."""
-    gains = SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500, hold_damping=0.7)
-    ctrl = FlatnessSMC(motor, plan, gains, "model")
-    rng = np.random.default_rng(3)
-    n = 400
-    t = rng.uniform(plan.tf - 0.005, plan.tf + 0.02, n)
-    x = np.array([rng.uniform(-0.5, 0.5, n), rng.uniform(-0.5, 0.5, n), rng.uniform(-30, 30, n),
-                  plan.theta2 + rng.uniform(-0.01, 0.01, n)])
-    x[2, :20] = rng.uniform(-1e4, 1e4, 20)  # speeds where the damping torque is clipped
-    v, status = _core.smc_voltages(ctrl, t, x, None, v_limit=1e6)
-    assert not status.any(), _core.status_names(np.bitwise_or.reduce(status))
-    held = t >= plan.tf
-    assert 50 < held.sum() < n - 50
-    ref = ctrl.voltages(t, x)
-    np.testing.assert_allclose(v[:, held], ref[:, held], rtol=1e-13, atol=1e-12)
-    np.testing.assert_allclose(v[:, ~held], ref[:, ~held], rtol=1e-10)  # the law's arccos amplifies rounding at speed
-
-
 BASELINES = {"microstep": (fs.Microstepping, fs.MicrostepGains), "cascade": (fs.CascadeFOC, fs.CascadeGains),
              "exact_linearization": (fs.ExactLinearization, fs.LinearizationGains)}
 GAIN_FIELDS = {"microstep": ("current_bandwidth", "feedforward"),

@@ -58,10 +58,10 @@ def test_hold_without_a_known_torque_is_the_detent_hold_bit_for_bit(motor, plan,
     np.testing.assert_array_equal(v, v_none)
 
 
-@pytest.mark.parametrize("torques", [KNOWN, fs.TorqueModel(load=-3e-3, load_step=5e-3, load_t0=0.045,
-                                                           load_tf=0.05, detent_torque=2e-3, detent_phase=0.4)],
-                         ids=["paper file", "load change"])
-def test_c_hold_with_known_torques_matches_the_reference(motor, plan, torques):
+@pytest.mark.parametrize("torques", [NO_TORQUES, KNOWN, fs.TorqueModel(load=-3e-3, load_step=5e-3, load_t0=0.045,
+                                                                       load_tf=0.05, detent_torque=2e-3, detent_phase=0.4)],
+                         ids=["no torques", "paper file", "load change"])
+def test_c_hold_matches_the_reference(motor, plan, torques):
     """smc_step's hold against FlatnessSMC.voltages, before and after tf, with the load angle of the torques."""
     ctrl = fs.FlatnessSMC(motor, plan, HOLD, "model", torques=torques)
     rng = np.random.default_rng(5)
