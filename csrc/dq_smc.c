@@ -79,6 +79,14 @@ void dq_smc_reset(struct dq_smc *s)
     s->km = s->p.motor.Km;
 }
 
+// Returns the regressor phi along the plan: the q-current rate the planned move demands less its back EMF's [A/s].
+static fs_real dq_smc_regressor(const struct dq_smc *s, fs_real t, const fs_real ref[PLAN_FLAG_LEN])
+{
+    const struct motor_params *m = &s->p.motor;
+    fs_real dE = torque_model_rate(&s->p.torques, m->Nr, t, ref[PLAN_THETA], ref[PLAN_DTHETA], ref[PLAN_DDTHETA]);
+    return (m->J * ref[PLAN_DDDTHETA] + m->B * ref[PLAN_DDTHETA] + dE) / s->km - s->km * ref[PLAN_DTHETA] / m->L;
+}
+
 // Returns nothing; advances Km^ by one period of its gradient law along the regressor phi, projected into range.
 static void dq_smc_adapt(struct dq_smc *s, fs_real s2, fs_real phi)
 {
@@ -114,7 +122,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
     fs_real ref[PLAN_FLAG_LEN], sn, cs, i_d, i_q, E, acc, e, de, dde, s1, s2, gamma1, gamma2, dE, v_d, v_q, id_ref,
-        did_ref, norm, vn, z, torque_rate, ki = s->p.integral.ki, km = s->km;
+        did_ref, norm, vn, z, ki = s->p.integral.ki, km = s->km;
     uint32_t status = CTRL_OK;
     v[0] = v[1] = 0;
     // x - x is 0 for a finite x and NaN otherwise: one test covers every input used.
@@ -148,8 +156,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
         gamma2 -= ki * s->z;
     dE = torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc);
     v_d = m->L * gamma1 + m->R * i_d - m->L * m->Nr * y[2] * i_q;
-    torque_rate = m->J * gamma2 + m->B * acc + dE;
-    v_q = m->L * (torque_rate / km) + m->R * i_q + m->L * m->Nr * y[2] * i_d + km * y[2];
+    v_q = m->L * ((m->J * gamma2 + m->B * acc + dE) / km) + m->R * i_q + m->L * m->Nr * y[2] * i_d + km * y[2];
     v[0] = v_d * cs - v_q * sn;
     v[1] = v_d * sn + v_q * cs;
     if (!(fs_isfinite(v[0]) && fs_isfinite(v[1]))) {
@@ -162,7 +169,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     if (ki != 0 && fs_fabs(s2) <= g->eps2 && vn <= s->p.integral.v_hold)
         s->z += s->p.integral.Ts * s2;
     if (s->p.adapt.rate != 0 && fs_fabs(s2) <= g->eps2 && vn <= s->p.adapt.v_hold)
-        dq_smc_adapt(s, s2, torque_rate / km - km * y[2] / m->L);
+        dq_smc_adapt(s, s2, dq_smc_regressor(s, t, ref));
     if (vn > s->p.v_limit) {
         // Scale by the larger component first so that hypot cannot overflow.
         norm = fs_fabs(v[0]) > fs_fabs(v[1]) ? fs_fabs(v[0]) : fs_fabs(v[1]);

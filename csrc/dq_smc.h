@@ -33,12 +33,11 @@ struct dq_smc_integral {
     fs_real v_hold;  // the bus voltage the anti-windup knows [V]
 };
 
-// The planned d current i_d*(t) = i_d1 + psi(t, t0, tf) (i_d2 - i_d1) - weakening max(|theta*'| - weakening_speed, 0),
-// with the paper's psi of eq. (17) and the planned speed theta*' (flatstep.plan.d_current).
 // Online estimate Km^ of the torque constant (off with rate = 0: Km^ = motor.Km, today's law): Km^ replaces Km in
-// the law and, after each step, Km^ += Ts rate (J lambda) s2 phi / (phi0^2 + phi^2), lambda = W2/eps2, with the
-// regressor phi = (J Gamma2 + B theta'' + E')/Km^ - Km^ omega/L [A/s], projected into motor.Km (1 +- range);
-// held as the integral is (|s2| > eps2, hypot(v) > v_hold, a fault).
+// the law and, after each step, Km^ += Ts rate (J lambda) s2 phi / (phi0^2 + phi^2), lambda = W2/eps2, along the
+// plan's regressor phi = (J theta*''' + B theta*'' + E'(t, theta*, theta*', theta*''))/Km^ - Km^ theta*'/L [A/s]
+// (0 at rest), projected into motor.Km (1 +- range); held as the integral is (|s2| > eps2, hypot(v) > v_hold,
+// a fault).
 struct dq_smc_adaptation {
     fs_real rate;    // >= 0 [1/s]: the estimate's convergence rate at full excitation (|phi| >> phi0)
     fs_real phi0;    // the regressor below which the estimate slows down (no excitation at rest) [A/s]
@@ -47,6 +46,8 @@ struct dq_smc_adaptation {
     fs_real v_hold;  // the bus voltage the estimate's hold knows [V]
 };
 
+// The planned d current i_d*(t) = i_d1 + psi(t, t0, tf) (i_d2 - i_d1) - weakening max(|theta*'| - weakening_speed, 0),
+// with the paper's psi of eq. (17) and the planned speed theta*' (flatstep.plan.d_current).
 struct dq_smc_current {
     fs_real i_d1, i_d2;       // start and end d current [A]
     fs_real t0, tf;           // start and end of the change [s]; read only when i_d2 != i_d1

@@ -254,7 +254,8 @@ class DQFlatnessSMC:
             gamma2 = gamma2 - self.integral.ki * z
         dE = self.torques.torque_rate(t, theta, omega, acc, m.Nr)
         v_d, v_q = dq_voltages(m, i_d, i_q, omega, acc, gamma1, gamma2, dE)
-        phi = (m.J * gamma2 + m.B * acc + dE) / km - km * omega / m.L
+        dE_plan = self.torques.torque_rate(t, ref.theta, ref.dtheta, ref.ddtheta, m.Nr)
+        phi = (m.J * ref.dddtheta + m.B * ref.ddtheta + dE_plan) / km - km * ref.dtheta / m.L
         return np.array(inverse_park(v_d, v_q, m.Nr * theta)), s2, phi
 
     @property
