@@ -144,7 +144,7 @@ class DQKmAdaptation:
         """
         speed = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 401)).dtheta)))
         phi0 = 0.1 * motor.Km * max(speed, 1e-6) / motor.L
-        return cls(gains.wn / 4, phi0, 0.3, control_period, v_hold if math.isfinite(v_hold) else 1e300)
+        return cls(gains.wn, phi0, 0.3, control_period, v_hold if math.isfinite(v_hold) else 1e300)
 
 
 class DQFlatnessSMC:
