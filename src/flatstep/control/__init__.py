@@ -8,5 +8,6 @@ from .smc import MEASUREMENTS, FlatnessSMC, SMCGains
 from .tuning import CONTROLLER_TYPES, LABELS, make_controller
 
 __all__ = ["Controller", "StaticController", "SlidingController", "is_static", "FlatnessSMC", "SMCGains",
-           "MEASUREMENTS", "DQFlatnessSMC", "DQIntegral", "DQKmAdaptation", "Microstepping", "MicrostepGains", "CascadeFOC",
-           "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "LABELS", "make_controller"]
+           "MEASUREMENTS", "DQFlatnessSMC", "DQIntegral", "DQKmAdaptation", "Microstepping", "MicrostepGains",
+           "CascadeFOC", "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "LABELS",
+           "make_controller"]

@@ -264,14 +264,13 @@ class DQFlatnessSMC:
         return self.torques
 
     def initial_state(self) -> Any:
-        """Return ``None`` for the static law, the integral ``z = 0`` with integral action, ``(z, Km^) = (0,
-        motor.Km)`` with the adaptation."""
+        """Return ``None`` for the static law, the integral ``z = 0``, or ``(z, Km^) = (0, motor.Km)`` adapting."""
         if self.adaptation is not None:
             return (0.0, self.motor.Km)
         return None if self.integral is None else 0.0
 
     def _adapted(self, km: float, s2: float, phi: float) -> float:
-        """The estimate after one period of its gradient law along ``phi``, projected into its range (C: dq_smc_adapt)."""
+        """The estimate after one period of its gradient law along ``phi``, projected (C: dq_smc_adapt)."""
         a, m, g = self.adaptation, self.motor, self.gains
         assert a is not None, "only a law with the adaptation advances Km^"
         gain = a.control_period * a.rate * m.J * g.W2 / g.eps2
