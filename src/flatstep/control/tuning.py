@@ -44,7 +44,7 @@ LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade"
           "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
           "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff",
           "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff",
-          "smc_ff_hold": "flatness SMC+ff, hold", "dq_smc_i_ff_km": "flatness d-q SMC+I+ff+Km"}
+          "smc_ff_hold": "flatness SMC+ff, hold", "dq_smc_i_ff_km": "flatness d-q I+ff+Km"}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
 SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold",
              "dq_smc_i_ff_km")
