@@ -35,8 +35,12 @@ An online estimate :math:`\hat K_m` of the torque constant (:class:`DQKmAdaptati
 :math:`\dot{\hat K}_m = \gamma\,s_2\,\phi`. The gain is normalized,
 :math:`\gamma = r J\lambda/(\phi_0^2 + \phi^2)`, :math:`\lambda = W_2/\epsilon_2`: inside the boundary layer
 :math:`s_2 \approx (K_m - \hat K_m)\phi/(J\lambda)`, so the estimate converges at the rate :math:`r` while
-:math:`|\phi| \gg \phi_0` and stops at rest, where :math:`\phi \to 0`. The demanded rate carries the detent
-cancellation :math:`\dot E` at :math:`4N_r\omega`, which keeps :math:`\phi` exciting during the move.
+:math:`|\phi| \gg \phi_0`. The law evaluates :math:`\phi` along the plan (:math:`\Gamma_2, \ddot\theta, \omega,
+\dot E` at :math:`\theta^*` and its derivatives, as a desired-compensation adaptation law does): free of the
+measurement's noise, and 0 at rest, where the estimate stops. The demanded rate carries the detent cancellation
+:math:`\dot E` at :math:`4N_r\omega`, which keeps :math:`\phi` exciting during the move. With integral action
+both take up the back EMF's share at constant speed, where nothing tells them apart, and :math:`\hat K_m` can
+drift between them (docs/comparison.md, "The targets").
 """
 from __future__ import annotations
 
