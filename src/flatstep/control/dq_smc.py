@@ -140,11 +140,12 @@ class DQKmAdaptation:
     @classmethod
     def designed(cls, motor: MotorParams, plan: RestToRest, gains: SMCGains, control_period: float,
                  v_hold: float) -> "DQKmAdaptation":
-        r"""The estimate at the integral's rate :math:`\omega_n/4`, excited above a tenth of the peak back EMF.
+        r"""The estimate at the error dynamics' rate :math:`\omega_n`, excited above a tenth of the peak back EMF.
 
-        :math:`r = \omega_n/4` (the pole of :meth:`DQIntegral.designed`),
-        :math:`\phi_0 = 0.1\,K_m\max|\dot\theta^*|/L` (the back-EMF share of the regressor at a tenth of the
-        planned peak speed), projected into +-30 %; an infinite ``v_hold`` holds only outside the boundary layer.
+        :math:`r = \omega_n` (of :math:`\omega_n/4, \omega_n, 4\omega_n`, the one with the smallest worst error on
+        the NEMA 17 move of docs/comparison.md), :math:`\phi_0 = 0.1\,K_m\max|\dot\theta^*|/L` (the back-EMF share
+        of the regressor at a tenth of the planned peak speed), projected into +-30 %; an infinite ``v_hold`` holds
+        only outside the boundary layer.
         """
         speed = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 401)).dtheta)))
         phi0 = 0.1 * motor.Km * max(speed, 1e-6) / motor.L
@@ -240,7 +241,7 @@ class DQFlatnessSMC:
              km: float) -> tuple[Array, Array, Array]:
         """Phase voltages (va, vb), ``s2`` and the regressor ``phi`` at the integral ``z`` and the estimate ``km``.
 
-        In the C step's operation order.
+        In the C step's operation order; ``phi`` is 0 without the adaptation.
         """
         _, _, omega, theta = np.asarray(x, dtype=float)
         g = self.gains
@@ -258,8 +259,10 @@ class DQFlatnessSMC:
             gamma2 = gamma2 - self.integral.ki * z
         dE = self.torques.torque_rate(t, theta, omega, acc, m.Nr)
         v_d, v_q = dq_voltages(m, i_d, i_q, omega, acc, gamma1, gamma2, dE)
-        dE_plan = self.torques.torque_rate(t, ref.theta, ref.dtheta, ref.ddtheta, m.Nr)
-        phi = (m.J * ref.dddtheta + m.B * ref.ddtheta + dE_plan) / km - km * ref.dtheta / m.L
+        phi = np.zeros_like(s2)
+        if self.adaptation is not None:
+            dE_plan = self.torques.torque_rate(t, ref.theta, ref.dtheta, ref.ddtheta, m.Nr)
+            phi = (m.J * ref.dddtheta + m.B * ref.ddtheta + dE_plan) / km - km * ref.dtheta / m.L
         return np.array(inverse_park(v_d, v_q, m.Nr * theta)), s2, phi
 
     @property
