@@ -25,6 +25,11 @@ void dq_smc_params_default(struct dq_smc_params *p)
     p->integral.ki = 0;
     p->integral.Ts = 0;
     p->integral.v_hold = 0;
+    p->adapt.rate = 0;
+    p->adapt.phi0 = 0;
+    p->adapt.range = 0;
+    p->adapt.Ts = 0;
+    p->adapt.v_hold = 0;
 }
 
 // Returns DQ_SMC_PARAMS_OK, or the dq_smc_param_error naming the invalid group (s is then left unusable).
@@ -51,6 +56,11 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
     if (!(fs_isfinite(p->integral.ki) && p->integral.ki >= 0
           && (p->integral.ki == 0 || (positive(p->integral.Ts) && positive(p->integral.v_hold)))))
         return DQ_SMC_EINTEGRAL;
+    if (!(fs_isfinite(p->adapt.rate) && p->adapt.rate >= 0
+          && (p->adapt.rate == 0
+              || (positive(p->adapt.Ts) && positive(p->adapt.v_hold) && positive(p->adapt.phi0)
+                  && positive(p->adapt.range) && p->adapt.range < 1))))
+        return DQ_SMC_EADAPT;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
@@ -61,11 +71,30 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
     return DQ_SMC_PARAMS_OK;
 }
 
-// Returns nothing; clears the accumulated status and the integral.
+// Returns nothing; clears the accumulated status and the integral, and sets Km^ = motor.Km.
 void dq_smc_reset(struct dq_smc *s)
 {
     s->status_seen = CTRL_OK;
     s->z = 0;
+    s->km = s->p.motor.Km;
+}
+
+// Returns the regressor phi along the plan: the q-current rate the planned move demands less its back EMF's [A/s].
+static fs_real dq_smc_regressor(const struct dq_smc *s, fs_real t, const fs_real ref[PLAN_FLAG_LEN])
+{
+    const struct motor_params *m = &s->p.motor;
+    fs_real dE = torque_model_rate(&s->p.torques, m->Nr, t, ref[PLAN_THETA], ref[PLAN_DTHETA], ref[PLAN_DDTHETA]);
+    return (m->J * ref[PLAN_DDDTHETA] + m->B * ref[PLAN_DDTHETA] + dE) / s->km - s->km * ref[PLAN_DTHETA] / m->L;
+}
+
+// Returns nothing; advances Km^ by one period of its gradient law along the regressor phi, projected into range.
+static void dq_smc_adapt(struct dq_smc *s, fs_real s2, fs_real phi)
+{
+    const struct dq_smc_adaptation *a = &s->p.adapt;
+    fs_real lo = s->p.motor.Km * (1 - a->range), hi = s->p.motor.Km * (1 + a->range);
+    fs_real gain = a->Ts * a->rate * s->p.motor.J * s->p.gains.W2 / s->p.gains.eps2;
+    fs_real km = s->km + gain * s2 * phi / (a->phi0 * a->phi0 + phi * phi);
+    s->km = km < lo ? lo : (km > hi ? hi : km);
 }
 
 // Returns nothing; writes the planned d current and its rate at time t, for the planned speed w and acceleration a.
@@ -93,7 +122,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     const struct motor_params *m = &s->p.motor;
     const struct smc_gains *g = &s->p.gains;
     fs_real ref[PLAN_FLAG_LEN], sn, cs, i_d, i_q, E, acc, e, de, dde, s1, s2, gamma1, gamma2, dE, v_d, v_q, id_ref,
-        did_ref, norm, vn, z, ki = s->p.integral.ki;
+        did_ref, norm, vn, z, ki = s->p.integral.ki, km = s->km;
     uint32_t status = CTRL_OK;
     v[0] = v[1] = 0;
     // x - x is 0 for a finite x and NaN otherwise: one test covers every input used.
@@ -114,7 +143,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
         acc = y[4];
     } else {
         E = torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]);
-        acc = (m->Km * i_q - m->B * y[2] - E) / m->J;
+        acc = (km * i_q - m->B * y[2] - E) / m->J;
     }
     e = y[3] - ref[PLAN_THETA];
     de = y[2] - ref[PLAN_DTHETA];
@@ -127,7 +156,7 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
         gamma2 -= ki * s->z;
     dE = torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc);
     v_d = m->L * gamma1 + m->R * i_d - m->L * m->Nr * y[2] * i_q;
-    v_q = m->L * ((m->J * gamma2 + m->B * acc + dE) / m->Km) + m->R * i_q + m->L * m->Nr * y[2] * i_d + m->Km * y[2];
+    v_q = m->L * ((m->J * gamma2 + m->B * acc + dE) / km) + m->R * i_q + m->L * m->Nr * y[2] * i_d + km * y[2];
     v[0] = v_d * cs - v_q * sn;
     v[1] = v_d * sn + v_q * cs;
     if (!(fs_isfinite(v[0]) && fs_isfinite(v[1]))) {
@@ -139,6 +168,8 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     // Anti-windup: z advances only inside the boundary layer and below the bus.
     if (ki != 0 && fs_fabs(s2) <= g->eps2 && vn <= s->p.integral.v_hold)
         s->z += s->p.integral.Ts * s2;
+    if (s->p.adapt.rate != 0 && fs_fabs(s2) <= g->eps2 && vn <= s->p.adapt.v_hold)
+        dq_smc_adapt(s, s2, dq_smc_regressor(s, t, ref));
     if (vn > s->p.v_limit) {
         // Scale by the larger component first so that hypot cannot overflow.
         norm = fs_fabs(v[0]) > fs_fabs(v[1]) ? fs_fabs(v[0]) : fs_fabs(v[1]);
@@ -165,12 +196,12 @@ static void dq_smc_reset_any(void *self)
     dq_smc_reset(self);
 }
 
-// Returns nothing; binds s into the run loops' interface (stateless without integral action: the continuous loop
-// may run it).
+// Returns nothing; binds s into the run loops' interface (stateless without integral action or adaptation: the
+// continuous loop may run it).
 void dq_smc_controller(struct dq_smc *s, struct controller *c)
 {
     c->self = s;
     c->step = dq_smc_step_any;
     c->reset = dq_smc_reset_any;
-    c->stateless = s->p.integral.ki == 0;
+    c->stateless = s->p.integral.ki == 0 && s->p.adapt.rate == 0;
 }

@@ -32,6 +32,7 @@ int test_sim(void);
 int test_drive(void);
 int test_baselines(void);
 int test_dq_smc(void);
+int test_dq_smc_km(void);
 int test_trajectory(void);
 
 #endif

@@ -298,5 +298,6 @@ int test_dq_smc(void)
     contract_checks();
     loss_aware_checks();
     integral_checks();
+    test_dq_smc_km();
     return 0;
 }

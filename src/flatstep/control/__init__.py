@@ -1,6 +1,6 @@
 """Controllers: the paper's flatness + sliding-mode law first, the baselines beside it."""
 from .cascade import CascadeFOC, CascadeGains
-from .dq_smc import DQFlatnessSMC, DQIntegral
+from .dq_smc import DQFlatnessSMC, DQIntegral, DQKmAdaptation
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .protocol import Controller, SlidingController, StaticController, is_static
@@ -8,5 +8,6 @@ from .smc import MEASUREMENTS, FlatnessSMC, SMCGains
 from .tuning import CONTROLLER_TYPES, LABELS, make_controller
 
 __all__ = ["Controller", "StaticController", "SlidingController", "is_static", "FlatnessSMC", "SMCGains",
-           "MEASUREMENTS", "DQFlatnessSMC", "DQIntegral", "Microstepping", "MicrostepGains", "CascadeFOC",
-           "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "LABELS", "make_controller"]
+           "MEASUREMENTS", "DQFlatnessSMC", "DQIntegral", "DQKmAdaptation", "Microstepping", "MicrostepGains",
+           "CascadeFOC", "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "LABELS",
+           "make_controller"]

@@ -22,6 +22,25 @@ move needs. The gains are :class:`~flatstep.control.smc.SMCGains`, from the same
 Integral action on :math:`s_2` (:class:`DQIntegral`, off by default) adds :math:`-k_i z`, :math:`\dot z = s_2`, to
 :math:`\Gamma_2`: inside the boundary layer :math:`\dot s_2 = -\lambda s_2 - k_i z + d`, so a slowly varying
 disturbance :math:`d` (the back EMF a wrong :math:`K_m` misses) no longer leaves :math:`s_2 = d/\lambda`.
+
+An online estimate :math:`\hat K_m` of the torque constant (:class:`DQKmAdaptation`, off by default) replaces
+:math:`K_m` in the law. With the plant's :math:`K_m` (and :math:`L, J, B` exact) the jerk the law misses is
+:math:`J(\theta^{(3)} - \Gamma_2) = (K_m - \hat K_m)\,\phi` along the regressor
+
+.. math::
+    \phi = \frac{J\Gamma_2 + B\ddot\theta + \dot E}{\hat K_m} - \frac{\hat K_m\,\omega}{L}
+
+(the q-current rate the law demands less the back EMF's), so
+:math:`V = s_2^2/2 + (K_m - \hat K_m)^2/(2\gamma J)` does not grow under
+:math:`\dot{\hat K}_m = \gamma\,s_2\,\phi`. The gain is normalized,
+:math:`\gamma = r J\lambda/(\phi_0^2 + \phi^2)`, :math:`\lambda = W_2/\epsilon_2`: inside the boundary layer
+:math:`s_2 \approx (K_m - \hat K_m)\phi/(J\lambda)`, so the estimate converges at the rate :math:`r` while
+:math:`|\phi| \gg \phi_0`. The law evaluates :math:`\phi` along the plan (:math:`\Gamma_2, \ddot\theta, \omega,
+\dot E` at :math:`\theta^*` and its derivatives, as a desired-compensation adaptation law does): free of the
+measurement's noise, and 0 at rest, where the estimate stops. The demanded rate carries the detent cancellation
+:math:`\dot E` at :math:`4N_r\omega`, which keeps :math:`\phi` exciting during the move. With integral action
+both take up the back EMF's share at constant speed, where nothing tells them apart, and :math:`\hat K_m` can
+drift between them (docs/comparison.md, "The targets").
 """
 from __future__ import annotations
 
@@ -83,6 +102,56 @@ class DQIntegral:
         return cls(gains.W2 / gains.eps2 * gains.wn / 4, control_period, v_hold if math.isfinite(v_hold) else 1e300)
 
 
+@dataclass(frozen=True)
+class DQKmAdaptation:
+    r"""Online estimate of :math:`K_m` (module docstring), projected into ``motor.Km * (1 +- range)``.
+
+    It advances after each control period and holds where the integral holds (:class:`DQIntegral`).
+
+    Parameters
+    ----------
+    rate : float
+        The convergence rate :math:`r` at full excitation [1/s], > 0.
+    phi0 : float
+        The regressor :math:`\phi_0` below which the estimate slows down [A/s], > 0.
+    range : float
+        The projection's relative half-width, in (0, 1).
+    control_period : float
+        The period ``Ts`` the estimate advances by [s], > 0.
+    v_hold : float
+        The bus voltage the hold knows [V], > 0.
+    """
+
+    rate: float
+    phi0: float
+    range: float
+    control_period: float
+    v_hold: float
+
+    def __post_init__(self) -> None:
+        check_positive("DQKmAdaptation.rate", self.rate, unit=" 1/s")
+        check_positive("DQKmAdaptation.phi0", self.phi0, unit=" A/s")
+        if not (check_positive("DQKmAdaptation.range", self.range) < 1.0):
+            raise ValueError(f"DQKmAdaptation.range={self.range!r} must be in (0, 1): the estimate's relative "
+                             "half-width around the nominal Km (0.3 for +-30 %)")
+        check_positive("DQKmAdaptation.control_period", self.control_period, unit=" s")
+        check_positive("DQKmAdaptation.v_hold", self.v_hold, unit=" V")
+
+    @classmethod
+    def designed(cls, motor: MotorParams, plan: RestToRest, gains: SMCGains, control_period: float,
+                 v_hold: float) -> "DQKmAdaptation":
+        r"""The estimate at the error dynamics' rate :math:`\omega_n`, excited above a tenth of the peak back EMF.
+
+        :math:`r = \omega_n` (of :math:`\omega_n/4, \omega_n, 4\omega_n`, the one with the smallest worst error on
+        the NEMA 17 move of docs/comparison.md), :math:`\phi_0 = 0.1\,K_m\max|\dot\theta^*|/L` (the back-EMF share
+        of the regressor at a tenth of the planned peak speed), projected into +-30 %; an infinite ``v_hold`` holds
+        only outside the boundary layer.
+        """
+        speed = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 401)).dtheta)))
+        phi0 = 0.1 * motor.Km * max(speed, 1e-6) / motor.L
+        return cls(gains.wn, phi0, 0.3, control_period, v_hold if math.isfinite(v_hold) else 1e300)
+
+
 class DQFlatnessSMC:
     """Flatness-based sliding-mode control of (theta, i_d) along a plan (module docstring).
 
@@ -103,6 +172,8 @@ class DQFlatnessSMC:
         The torques the law knows beyond eq. (1) (default none).
     integral : DQIntegral or None
         Integral action on ``s2`` (default none: a static law).
+    adaptation : DQKmAdaptation or None
+        The online estimate of ``Km`` (default none: the law uses ``motor.Km``).
     """
 
     #: The C twin: csrc/dq_smc.h.
@@ -112,7 +183,8 @@ class DQFlatnessSMC:
 
     def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = PAPER_GAINS,
                  measurement: str = "ideal", *, d_current: DCurrentPlan = ZERO_D_CURRENT,
-                 torques: TorqueModel = NO_TORQUES, integral: Optional[DQIntegral] = None) -> None:
+                 torques: TorqueModel = NO_TORQUES, integral: Optional[DQIntegral] = None,
+                 adaptation: Optional[DQKmAdaptation] = None) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
         if gains.hold_damping is not None:
@@ -124,16 +196,22 @@ class DQFlatnessSMC:
                 raise ValueError(f"{name}={value!r} is not a {kind.__name__}")
         if integral is not None and not isinstance(integral, DQIntegral):
             raise ValueError(f"integral={integral!r} is not a DQIntegral (or None for no integral action)")
+        if adaptation is not None and not isinstance(adaptation, DQKmAdaptation):
+            raise ValueError(f"adaptation={adaptation!r} is not a DQKmAdaptation (or None for the nominal Km)")
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
-        self.d_current, self.torques, self.integral = d_current, torques, integral
+        self.d_current, self.torques, self.integral, self.adaptation = d_current, torques, integral, adaptation
 
     def dq_currents(self, x: ArrayLike) -> tuple[Array, Array]:
         """The measured ``(i_d, i_q)``: the Park transform by the measured electrical angle."""
         ia, ib, _, theta = np.asarray(x, dtype=float)
         return park(ia, ib, self.motor.Nr * theta)
 
-    def acceleration(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> Array:
-        """The acceleration theta'' as the law sees it: the given one, or in ``model`` mode the torque model's."""
+    def acceleration(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None,
+                     km: Optional[float] = None) -> Array:
+        """The acceleration theta'' as the law sees it: the given one, or in ``model`` mode the torque model's.
+
+        ``km`` is the torque constant of the model mode (default ``motor.Km``).
+        """
         if self.measurement != "model":
             if ddtheta is None:
                 raise ValueError(f"measurement={self.measurement!r} needs the acceleration ddtheta; "
@@ -142,7 +220,7 @@ class DQFlatnessSMC:
         m = self.motor
         _, _, omega, theta = np.asarray(x, dtype=float)
         _, i_q = self.dq_currents(x)
-        return (m.Km * i_q - m.B * omega - self.torques.torque(t, theta, omega, m.Nr)) / m.J
+        return ((m.Km if km is None else km) * i_q - m.B * omega - self.torques.torque(t, theta, omega, m.Nr)) / m.J
 
     def sliding_variables(self, t: ArrayLike, x: ArrayLike,
                           ddtheta: Optional[ArrayLike] = None) -> tuple[Array, Array]:
@@ -156,17 +234,22 @@ class DQFlatnessSMC:
                 acc - ref.ddtheta + g.alpha2 * (omega - ref.dtheta) + g.alpha1 * (theta - ref.theta))
 
     def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> Array:
-        """Phase voltages (va, vb) of the law with the integral at 0, vectorized over time."""
-        return self._law(t, x, ddtheta, 0.0)[0]
+        """Phase voltages (va, vb) of the law with the integral at 0 and the nominal Km, vectorized over time."""
+        return self._law(t, x, ddtheta, 0.0, self.motor.Km)[0]
 
-    def _law(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike], z: float) -> tuple[Array, Array]:
-        """Phase voltages (va, vb) and ``s2`` at the integral ``z``, in the C step's operation order."""
+    def _law(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike], z: float,
+             km: float) -> tuple[Array, Array, Array]:
+        """Phase voltages (va, vb), ``s2`` and the regressor ``phi`` at the integral ``z`` and the estimate ``km``.
+
+        In the C step's operation order; ``phi`` is 0 without the adaptation.
+        """
         _, _, omega, theta = np.asarray(x, dtype=float)
-        m, g = self.motor, self.gains
+        g = self.gains
+        m = self.motor if km == self.motor.Km else self.motor.replace(Km=km)
         ref = self.plan.flag(t)
         id_ref, did_ref = self.d_current.flag(t, ref.dtheta, ref.ddtheta)
         i_d, i_q = self.dq_currents(x)
-        acc = self.acceleration(t, x, ddtheta)
+        acc = self.acceleration(t, x, ddtheta, km)
         e, de, dde = theta - ref.theta, omega - ref.dtheta, acc - ref.ddtheta
         s1 = i_d - id_ref
         s2 = dde + g.alpha2 * de + g.alpha1 * e
@@ -176,30 +259,54 @@ class DQFlatnessSMC:
             gamma2 = gamma2 - self.integral.ki * z
         dE = self.torques.torque_rate(t, theta, omega, acc, m.Nr)
         v_d, v_q = dq_voltages(m, i_d, i_q, omega, acc, gamma1, gamma2, dE)
-        return np.array(inverse_park(v_d, v_q, m.Nr * theta)), s2
+        phi = np.zeros_like(s2)
+        if self.adaptation is not None:
+            dE_plan = self.torques.torque_rate(t, ref.theta, ref.dtheta, ref.ddtheta, m.Nr)
+            phi = (m.J * ref.dddtheta + m.B * ref.ddtheta + dE_plan) / km - km * ref.dtheta / m.L
+        return np.array(inverse_park(v_d, v_q, m.Nr * theta)), s2, phi
 
     @property
     def observer_torques(self) -> TorqueModel:
         """The torques the drive loop's observer predicts with: the law's own (the observer shares its model)."""
         return self.torques
 
-    def initial_state(self) -> Optional[float]:
-        """Return ``None`` for the static law, the integral ``z = 0`` with integral action."""
+    def initial_state(self) -> Any:
+        """Return ``None`` for the static law, the integral ``z = 0``, or ``(z, Km^) = (0, motor.Km)`` adapting."""
+        if self.adaptation is not None:
+            return (0.0, self.motor.Km)
         return None if self.integral is None else 0.0
 
-    def step(self, state: Optional[float], measurement: ArrayLike, t: float) -> tuple[Array, Optional[float]]:
-        """Controller step ``(state, measurement, t) -> (voltages, new state)``; the state is the integral or None.
+    def _adapted(self, km: float, s2: float, phi: float) -> float:
+        """The estimate after one period of its gradient law along ``phi``, projected (C: dq_smc_adapt)."""
+        a, m, g = self.adaptation, self.motor, self.gains
+        assert a is not None, "only a law with the adaptation advances Km^"
+        gain = a.control_period * a.rate * m.J * g.W2 / g.eps2
+        km = km + gain * s2 * phi / (a.phi0 * a.phi0 + phi * phi)
+        return min(max(km, m.Km * (1 - a.range)), m.Km * (1 + a.range))
 
+    def step(self, state: Any, measurement: ArrayLike, t: float) -> tuple[Array, Any]:
+        """Controller step ``(state, measurement, t) -> (voltages, new state)``.
+
+        The state is None (the static law), the integral ``z``, or ``(z, Km^)`` with the adaptation.
         ``measurement`` is ``(ia, ib, omega, theta, ddtheta)``; ``ddtheta`` is not read in ``model`` mode.
         """
         y = np.asarray(measurement, dtype=float)
-        z = 0.0 if state is None else float(state)
-        v, s2 = self._law(t, y[:4], None if self.measurement == "model" else y[4], z)
-        if self.integral is None:
+        if self.adaptation is None:
+            z, km = (0.0 if state is None else float(state)), self.motor.Km
+        else:
+            z, km = float(state[0]), float(state[1])
+        v, s2_, phi_ = self._law(t, y[:4], None if self.measurement == "model" else y[4], z, km)
+        if self.integral is None and self.adaptation is None:
             return v, None
-        if np.all(np.isfinite(v)) and abs(float(s2)) <= self.gains.eps2 and np.hypot(*v) <= self.integral.v_hold:
-            z = z + self.integral.control_period * float(s2)
-        return v, z
+        s2, phi, vn = float(s2_), float(phi_), float(np.hypot(*v))
+        inside = bool(np.all(np.isfinite(v))) and abs(s2) <= self.gains.eps2
+        if self.integral is not None and inside and vn <= self.integral.v_hold:
+            z = z + self.integral.control_period * s2
+        if self.adaptation is None:
+            return v, z
+        if inside and vn <= self.adaptation.v_hold:
+            km = self._adapted(km, s2, phi)
+        return v, (z, km)
 
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct dq_smc_params`` (csrc/dq_smc.h) for this controller."""
@@ -210,4 +317,9 @@ class DQFlatnessSMC:
                     v_limit=self.c_v_limit,
                     integral={} if self.integral is None else dict(ki=self.integral.ki,
                                                                    Ts=self.integral.control_period,
-                                                                   v_hold=self.integral.v_hold))
+                                                                   v_hold=self.integral.v_hold),
+                    adapt={} if self.adaptation is None else dict(rate=self.adaptation.rate,
+                                                                  phi0=self.adaptation.phi0,
+                                                                  range=self.adaptation.range,
+                                                                  Ts=self.adaptation.control_period,
+                                                                  v_hold=self.adaptation.v_hold))

@@ -26,7 +26,7 @@ from ..plan.rest_to_rest import RestToRest
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
 from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
-from .dq_smc import DQFlatnessSMC, DQIntegral
+from .dq_smc import DQFlatnessSMC, DQIntegral, DQKmAdaptation
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .smc import FlatnessSMC, SMCGains
@@ -35,7 +35,8 @@ from .smc import FlatnessSMC, SMCGains
 #: flatness laws and the cascade with the scenario's torque model (``[feedforward]``, a
 #: :class:`~flatstep.model.torque_model.TorqueModel`): the flatness laws' feedforward, the cascade's anti-cogging.
 CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff",
-                    "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold")
+                    "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold",
+                    "dq_smc_i_ff_km")
 #: Short labels for tables and figures.
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
@@ -43,13 +44,15 @@ LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade"
           "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
           "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff",
           "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff",
-          "smc_ff_hold": "flatness SMC+ff, hold"}
+          "smc_ff_hold": "flatness SMC+ff, hold", "dq_smc_i_ff_km": "flatness d-q I+ff+Km"}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
-SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold")
-#: The flatness types that can run in continuous time (no integral advancing by the control period).
-CONTINUOUS_TYPES = tuple(k for k in SMC_TYPES if k not in ("dq_smc_i", "dq_smc_i_ff"))
+SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold",
+             "dq_smc_i_ff_km")
+#: The flatness types that can run in continuous time (no integral or estimate advancing by the control period).
+CONTINUOUS_TYPES = tuple(k for k in SMC_TYPES if k not in ("dq_smc_i", "dq_smc_i_ff", "dq_smc_i_ff_km"))
 #: The types that need a torque model.
-FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i_ff", "smc_ff_hold")
+FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i_ff", "smc_ff_hold",
+                     "dq_smc_i_ff_km")
 #: The damping ratio of the ``smc_ff_hold`` type's detent hold when the scenario's gains give none: critical
 #: damping of the magnetic spring (docs/comparison.md, "At rest on the paper's move").
 REST_HOLD_DAMPING = 1.0
@@ -88,7 +91,9 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
     :data:`REST_HOLD_DAMPING`), turned by the known torques' load angle on the target.
     ``dq_smc_i`` and ``dq_smc_i_ff`` are the d-q law with integral action on ``s2``
     (:meth:`~flatstep.control.dq_smc.DQIntegral.designed`: its pole at ``omega_n/4`` as the cascade's velocity
-    integral, held while the bus ``v_limit`` limits); they need ``control_period``.
+    integral, held while the bus ``v_limit`` limits); they need ``control_period``. ``dq_smc_i_ff_km`` is
+    ``dq_smc_i_ff`` with the online estimate of ``Km`` (:meth:`~flatstep.control.dq_smc.DQKmAdaptation.designed`:
+    at the integral's rate, held as the integral is).
     """
     if kind not in CONTROLLER_TYPES:
         raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
@@ -109,9 +114,11 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
         raise ValueError(f"controller type {kind!r} is tuned from the control period (lambda = 0.3/Ts): give one "
                          f"([drive] control_rate); only the flatness types {CONTINUOUS_TYPES} have gains of their own "
                          "for continuous time")
-    if kind in ("dq_smc_i", "dq_smc_i_ff"):
+    if kind in ("dq_smc_i", "dq_smc_i_ff", "dq_smc_i_ff_km"):
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current,
-                             integral=DQIntegral.designed(smc_gains, control_period, v_limit))
+                             integral=DQIntegral.designed(smc_gains, control_period, v_limit),
+                             adaptation=DQKmAdaptation.designed(motor, plan, smc_gains, control_period, v_limit)
+                             if kind == "dq_smc_i_ff_km" else None)
     scale = check_positive("bandwidth_scale", bandwidth_scale)
     lam, wn = (scale * w for w in bandwidths(control_period, compute_delay))
     if kind == "microstep":
