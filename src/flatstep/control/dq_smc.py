@@ -64,6 +64,12 @@ Array = NDArray[np.float64]
 PAPER_GAINS = SMCGains()
 
 
+def _check_period_and_hold(owner: str, control_period: float, v_hold: float) -> None:
+    """Raise for a control period or a hold voltage that is not finite and > 0, naming ``owner``'s field."""
+    check_positive(f"{owner}.control_period", control_period, unit=" s")
+    check_positive(f"{owner}.v_hold", v_hold, unit=" V")
+
+
 @dataclass(frozen=True)
 class DQIntegral:
     """Integral action on ``s2``: ``Gamma2 -= ki z``, ``z += Ts s2`` after each control period.
@@ -87,8 +93,7 @@ class DQIntegral:
 
     def __post_init__(self) -> None:
         check_positive("DQIntegral.ki", self.ki, unit=" 1/s^2")
-        check_positive("DQIntegral.control_period", self.control_period, unit=" s")
-        check_positive("DQIntegral.v_hold", self.v_hold, unit=" V")
+        _check_period_and_hold("DQIntegral", self.control_period, self.v_hold)
 
     @classmethod
     def designed(cls, gains: SMCGains, control_period: float, v_hold: float) -> "DQIntegral":
@@ -134,8 +139,7 @@ class DQKmAdaptation:
         if not (check_positive("DQKmAdaptation.range", self.range) < 1.0):
             raise ValueError(f"DQKmAdaptation.range={self.range!r} must be in (0, 1): the estimate's relative "
                              "half-width around the nominal Km (0.3 for +-30 %)")
-        check_positive("DQKmAdaptation.control_period", self.control_period, unit=" s")
-        check_positive("DQKmAdaptation.v_hold", self.v_hold, unit=" V")
+        _check_period_and_hold("DQKmAdaptation", self.control_period, self.v_hold)
 
     @classmethod
     def designed(cls, motor: MotorParams, plan: RestToRest, gains: SMCGains, control_period: float,
