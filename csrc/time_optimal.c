@@ -1,0 +1,542 @@
+// The time-optimal planner: envelope by Newton, bang-bang phase plane, double box smoothing, Hermite table,
+// regula falsi on the bus fraction (flatstep.plan.time_optimal is the reference, operation for operation).
+#include "time_optimal.h"
+#include <string.h>
+
+#define TO_GAMMA_MIN FS_C(0.05)
+#define TO_V_MARGIN FS_C(0.998)
+#define TO_NEWTON_TOL FS_C(1e-12)
+#define TO_FINE_LEN (TO_FINE_MAX + 2)
+
+// Scratch arrays carved out of the caller's workspace.
+struct to_work {
+    fs_real *omega, *ap, *am, *tacc, *tdec, *dboth;  // TO_GRID each: the envelope and its integrals
+    fs_real *a, *b, *c;                              // TO_FINE_LEN + 1 each: the sampled profile
+    fs_real *knot;                                   // TO_MAX_SEGMENTS + 1 sample indices
+    struct traj tr;                                  // the candidate table over the arrays below
+    fs_real *breaks, *theta, *rho;
+};
+
+// The bang-bang move of time_optimal.bang_bang and the sampling of time_optimal.timing.
+struct to_move {
+    fs_real t1, cruise, t2, w_peak, dt;
+    size_t n_box, n;
+};
+
+size_t time_optimal_work_len(void)
+{
+    return 6 * (size_t)TO_GRID + 3 * ((size_t)TO_FINE_LEN + 1) + (TO_MAX_SEGMENTS + 1) * 2 +
+           2 * (size_t)TO_MAX_SEGMENTS * TRAJ_NCOEF;
+}
+
+// Returns the across-axis floor f(omega) (MotorLimits.floor).
+static fs_real floor_current(const struct to_limits *lim, fs_real w)
+{
+    fs_real x = w / lim->speed_corner;
+    return lim->i_run + (lim->i_hold - lim->i_run) / (1 + x * x);
+}
+
+// Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
+static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2, fs_real u,
+                    fs_real *dh)
+{
+    fs_real c = m->Km * w, e = (fs_real)m->Nr * w * m->L, z = m->R * m->R + e * e;
+    fs_real root = fs_sqrt(f * f + k * k * u * u);
+    *dh = 2 * z * (1 + k * k) * u + 2 * c * m->R + 2 * c * e * k * k * u / root;
+    return z * ((1 + k * k) * u * u + f * f) + 2 * c * m->R * u + 2 * c * e * root + c * c - v2;
+}
+
+// Returns the torque current bound on side sign (+1 or -1) at speed w: the cap, or Newton's root from outside,
+// started at the previous grid point's root *prev when that lies outside (h > 0), else at the cap.
+static fs_real iq_bound(const struct motor_params *m, const struct to_limits *lim, fs_real w, fs_real v2,
+                        fs_real sign, fs_real *prev)
+{
+    fs_real k = fs_cos(lim->torque_angle_max) / fs_sin(lim->torque_angle_max), f = floor_current(lim, w), dh, h, u, step;
+    fs_real room = lim->i_max * lim->i_max - f * f;
+    fs_real cap = fs_sqrt(room > 0 ? room : 0) * fs_sin(lim->torque_angle_max);
+    int i;
+    if (!(to_h(m, k, f, w, v2, 0, &dh) <= 0))
+        return *prev = 0;
+    u = sign * cap;
+    h = to_h(m, k, f, w, v2, u, &dh);
+    if (!(h > 0))
+        return *prev = u;
+    if (sign * *prev < cap && sign * *prev > 0 && to_h(m, k, f, w, v2, *prev, &dh) > 0)
+        u = *prev;
+    for (i = 0; i < 100; i++) {  // monotone: h is convex and the start lies outside its root
+        h = to_h(m, k, f, w, v2, u, &dh);
+        step = h / dh;
+        u -= step;
+        if (!(fs_fabs(step) > TO_NEWTON_TOL * lim->i_max))
+            break;
+    }
+    return *prev = u;
+}
+
+// Returns the grid length (>= 2), or 0 when the motor cannot start; writes the envelope at gamma
+// (time_optimal.envelope).
+static size_t envelope(const struct motor_params *m, const struct to_limits *lim, fs_real gamma, struct to_work *w)
+{
+    fs_real v2 = gamma * lim->v_bus * gamma * lim->v_bus, w_max = gamma * lim->v_bus / m->Km, top, hi = 0, lo = 0;
+    fs_real acc, prev = 0;
+    size_t i, stop = TO_GRID;
+    if (lim->speed_max > 0 && lim->speed_max < w_max)
+        w_max = lim->speed_max;
+    top = w_max;
+    for (i = 0; i < TO_GRID; i++) {  // the probe: where a+ first reaches 0
+        fs_real x = w_max * (fs_real)i / (TO_GRID - 1);
+        acc = (m->Km * iq_bound(m, lim, x, v2, 1, &prev) - m->B * x) / m->J;
+        if (i == 0 && !(acc > 0))
+            return 0;
+        if (!(acc > 0)) {
+            stop = i;
+            break;
+        }
+    }
+    if (stop < TO_GRID)
+        top = w_max * (fs_real)(stop - 1) / (TO_GRID - 1);
+    for (i = 0; i < TO_GRID; i++) {
+        fs_real x = top * (fs_real)i / (TO_GRID - 1);
+        w->omega[i] = x;
+        w->ap[i] = (m->Km * iq_bound(m, lim, x, v2, 1, &hi) - m->B * x) / m->J;
+        w->am[i] = (m->Km * iq_bound(m, lim, x, v2, -1, &lo) - m->B * x) / m->J;
+        if (lim->accel_max > 0) {
+            w->ap[i] = fs_min(w->ap[i], lim->accel_max);
+            w->am[i] = fs_max(w->am[i], -lim->accel_max);
+        }
+    }
+    w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);
+    return TO_GRID;
+}
+
+// Returns y at x by linear interpolation in the increasing xs (numpy.interp, ends held).
+static fs_real interp(fs_real x, const fs_real *xs, const fs_real *ys, size_t n)
+{
+    size_t lo = 0, hi = n - 1, mid;
+    if (x <= xs[0])
+        return ys[0];
+    if (x >= xs[n - 1])
+        return ys[n - 1];
+    while (hi - lo > 1) {
+        mid = (lo + hi) / 2;
+        if (xs[mid] <= x)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return xs[hi] == xs[lo] ? ys[lo] : (ys[hi] - ys[lo]) / (xs[hi] - xs[lo]) * (x - xs[lo]) + ys[lo];
+}
+
+// Returns nothing; writes the running trapezoidal integral out[i] of y over the uniform or given x.
+static void cumtrapz(const fs_real *y, const fs_real *x, fs_real dx, size_t n, fs_real *out)
+{
+    size_t i;
+    out[0] = 0;
+    for (i = 1; i < n; i++)
+        out[i] = out[i - 1] + FS_C(0.5) * (y[i] + y[i - 1]) * (x ? x[i] - x[i - 1] : dx);
+}
+
+// Returns nothing; writes the bang-bang move over distance d > 0 on the envelope and its sampling at width
+// (time_optimal.bang_bang and time_optimal.timing).
+static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *mv)
+{
+    size_t i, g = TO_GRID;
+    fs_real total, dt, span, x;
+    for (i = 0; i < g; i++) {  // the integrands, then their running integrals in place
+        w->tacc[i] = 1 / w->ap[i];
+        w->tdec[i] = 1 / -w->am[i];
+        w->dboth[i] = w->omega[i] / w->ap[i] + w->omega[i] / -w->am[i];
+    }
+    cumtrapz(w->tacc, w->omega, 0, g, w->a);
+    cumtrapz(w->tdec, w->omega, 0, g, w->b);
+    cumtrapz(w->dboth, w->omega, 0, g, w->c);
+    for (i = 0; i < g; i++)
+        w->tacc[i] = w->a[i], w->tdec[i] = w->b[i], w->dboth[i] = w->c[i];
+    if (d >= w->dboth[g - 1]) {
+        mv->w_peak = w->omega[g - 1];
+        mv->cruise = (d - w->dboth[g - 1]) / w->omega[g - 1];
+    } else {
+        mv->w_peak = interp(d, w->dboth, w->omega, g);
+        mv->cruise = 0;
+    }
+    mv->t1 = interp(mv->w_peak, w->omega, w->tacc, g);
+    mv->t2 = interp(mv->w_peak, w->omega, w->tdec, g);
+    total = mv->t1 + mv->cruise + mv->t2;
+    span = total + 2 * width;
+    dt = fs_min(span / TO_FINE, fs_min(fs_min(mv->t1, mv->t2), width) / TO_PER_PHASE);
+    mv->dt = dt = fs_max(dt, span / TO_FINE_MAX);
+    x = fs_rint(width / dt);  // numpy's round: half to even, as rint in the default rounding mode
+    mv->n_box = x < 1 ? 1 : (size_t)x;
+    x = total / dt;
+    mv->n = (size_t)x + (x > (fs_real)(size_t)x) + 1;  // ceil(total / dt) + 1
+}
+
+// Returns the length of x after a box of n samples: x convolved with it through the running sum in s
+// (time_optimal._box; out may not alias x).
+static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
+{
+    size_t i, out_len = len + n - 1;
+    s[0] = 0;
+    for (i = 0; i < len + 2 * (n - 1); i++)
+        s[i + 1] = s[i] + (i >= n - 1 && i < n - 1 + len ? x[i - (n - 1)] : 0);
+    for (i = 0; i < out_len; i++)
+        out[i] = (s[i + n] - s[i]) / (fs_real)n;
+    return out_len;
+}
+
+// Returns the central difference of x at i (one-sided at the ends) over dt (time_optimal._gradient).
+static fs_real gradient(const fs_real *x, size_t len, size_t i, fs_real dt)
+{
+    if (i == 0)
+        return (x[1] - x[0]) / dt;
+    if (i == len - 1)
+        return (x[len - 1] - x[len - 2]) / dt;
+    return (x[i + 1] - x[i - 1]) / (2 * dt);
+}
+
+// Returns the second difference of x at i: the gradient of the gradient (time_optimal._gradient twice).
+static fs_real gradient2(const fs_real *x, size_t len, size_t i, fs_real dt)
+{
+    if (i == 0)
+        return (gradient(x, len, 1, dt) - gradient(x, len, 0, dt)) / dt;
+    if (i == len - 1)
+        return (gradient(x, len, len - 1, dt) - gradient(x, len, len - 2, dt)) / dt;
+    return (gradient(x, len, i + 1, dt) - gradient(x, len, i - 1, dt)) / (2 * dt);
+}
+
+// Returns the number of knots; writes their sample indices (time_optimal._knots).
+static size_t knots(size_t last, fs_real up, fs_real down, int cruise, fs_real *k)
+{
+    fs_real a = fs_min(fs_max(up, 0), (fs_real)last), b = fs_min(fs_max(down, 0), (fs_real)last), x;
+    size_t i, n = 0, half = TO_KNOTS / 2;
+    for (i = 0; i <= 2 * half + 4; i++) {
+        if (cruise && b > a) {
+            if (i <= half)
+                x = a * (fs_real)i / (fs_real)half;
+            else if (i <= half + 4)
+                x = a + (b - a) * (fs_real)(i - half) / 4;
+            else
+                x = b + ((fs_real)last - b) * (fs_real)(i - half - 4) / (fs_real)half;
+        } else {
+            if (i > 2 * half)
+                break;
+            x = i <= half ? (fs_real)last / 2 * (fs_real)i / (fs_real)half
+                          : (fs_real)last / 2 + ((fs_real)last - (fs_real)last / 2) * (fs_real)(i - half) / (fs_real)half;
+        }
+        x = fs_rint(x);
+        if (n == 0 || x != k[n - 1])
+            k[n++] = x;
+    }
+    return n;
+}
+
+// The inverse of the degree-7 Hermite system of segments.hermite_rows: coefficients (tau^7 .. tau^0) from the
+// ends' (theta, theta' h, theta'' h^2, theta''' h^3).
+static const fs_real HERMITE[8][8] = {
+    {20, 10, 2, FS_C(1.0) / 6, -20, 10, -2, FS_C(1.0) / 6},
+    {-70, -36, FS_C(-7.5), FS_C(-2.0) / 3, 70, -34, FS_C(6.5), FS_C(-0.5)},
+    {84, 45, 10, 1, -84, 39, -7, FS_C(0.5)},
+    {-35, -20, -5, FS_C(-2.0) / 3, 35, -15, FS_C(2.5), FS_C(-1.0) / 6},
+    {0, 0, 0, FS_C(1.0) / 6, 0, 0, 0, 0},
+    {0, 0, FS_C(0.5), 0, 0, 0, 0, 0},
+    {0, 1, 0, 0, 0, 0, 0, 0},
+    {1, 0, 0, 0, 0, 0, 0, 0},
+};
+
+// Returns nothing; writes the row (TRAJ_NCOEF, three leading zeros) of the segment from s0 to s1 over h.
+static void hermite_row(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_real *row)
+{
+    fs_real rhs[8], p = 1;
+    int i, j;
+    for (j = 0; j < 4; j++, p *= h)
+        rhs[j] = s0[j] * p, rhs[4 + j] = s1[j] * p;
+    for (i = 0; i < 3; i++)
+        row[i] = 0;
+    for (i = 0; i < 8; i++) {
+        fs_real sum = 0;
+        for (j = 0; j < 8; j++)
+            sum += HERMITE[i][j] * rhs[j];
+        row[3 + i] = sum;
+    }
+}
+
+// Returns the planned rho* at torque current iq and speed w (MotorLimits.rho).
+static fs_real rho_star(const struct to_limits *lim, fs_real iq, fs_real w)
+{
+    fs_real f = floor_current(lim, w), q = iq * fs_cos(lim->torque_angle_max) / fs_sin(lim->torque_angle_max);
+    return fs_hypot(iq, fs_hypot(f, q));
+}
+
+// Returns rho* at sample i of the scaled speed profile v (len samples, step dt).
+static fs_real rho_at(const struct motor_params *m, const struct to_limits *lim, const fs_real *v, size_t len,
+                      size_t i, fs_real dt)
+{
+    return rho_star(lim, (m->J * gradient(v, len, i, dt) + m->B * v[i]) / m->Km, v[i]);
+}
+
+// Returns true and builds the candidate table w->tr of the move over d > 0 at width (time_optimal.smoothed_table);
+// false when the profile would not fit the workspace.
+static bool smoothed_table(const struct motor_params *m, const struct to_limits *lim, fs_real d, fs_real width,
+                           struct to_work *w)
+{
+    struct to_move mv;
+    fs_real total, t, *speed = w->a, *theta = w->c, scale, s0[4], s1[4], r0[4], r1[4], h;
+    size_t i, len, nk, last;
+    bang_bang(d, width, w, &mv);
+    total = mv.t1 + mv.cruise + mv.t2;
+    if (mv.n + 2 * (mv.n_box - 1) > TO_FINE_LEN)
+        return false;
+    for (i = 0; i < mv.n; i++) {
+        t = (fs_real)i * mv.dt;
+        if (t <= mv.t1)
+            speed[i] = interp(t, w->tacc, w->omega, TO_GRID);
+        else if (t < mv.t1 + mv.cruise)
+            speed[i] = mv.w_peak;
+        else
+            speed[i] = interp(total - t, w->tdec, w->omega, TO_GRID);
+    }
+    speed[mv.n - 1] = 0;
+    len = box(speed, mv.n, mv.n_box, w->c, w->b);
+    len = box(w->b, len, mv.n_box, w->c, speed);
+    cumtrapz(speed, NULL, mv.dt, len, theta);
+    scale = d / theta[len - 1];
+    for (i = 0; i < len; i++)
+        speed[i] *= scale;
+    last = len - 1;
+    nk = knots(last, (mv.t1 + 2 * width) / mv.dt, (mv.t1 + mv.cruise) / mv.dt, mv.cruise > 0, w->knot);
+    w->tr.n = nk - 1;
+    w->breaks[0] = 0;
+    for (i = 0; i < nk; i++) {
+        size_t k = (size_t)w->knot[i];
+        s1[0] = theta[k] * scale;
+        s1[1] = speed[k];
+        s1[2] = gradient(speed, len, k, mv.dt);
+        s1[3] = gradient2(speed, len, k, mv.dt);
+        r1[0] = rho_at(m, lim, speed, len, k, mv.dt);
+        r1[1] = k == 0 ? (rho_at(m, lim, speed, len, 1, mv.dt) - r1[0]) / mv.dt
+                : k == last ? (r1[0] - rho_at(m, lim, speed, len, last - 1, mv.dt)) / mv.dt
+                            : (rho_at(m, lim, speed, len, k + 1, mv.dt) - rho_at(m, lim, speed, len, k - 1, mv.dt)) /
+                                  (2 * mv.dt);
+        r1[2] = r1[3] = 0;
+        if (i == 0 || i == nk - 1)
+            s1[1] = s1[2] = s1[3] = 0;
+        if (i == nk - 1)
+            s1[0] = d;
+        if (i > 0) {
+            h = (w->knot[i] - w->knot[i - 1]) * mv.dt;
+            w->breaks[i] = w->breaks[i - 1] + h;
+            hermite_row(s0, s1, h, w->theta + (i - 1) * TRAJ_NCOEF);
+            hermite_row(r0, r1, h, w->rho + (i - 1) * TRAJ_NCOEF);
+        }
+        memcpy(s0, s1, sizeof s0);
+        memcpy(r0, r1, sizeof r0);
+    }
+    return true;
+}
+
+// Returns the tau-derivative of order k of the row at tau, over h^k (time_optimal.table_margins' deriv).
+static fs_real deriv(const fs_real *row, int k, fs_real tau, fs_real h)
+{
+    fs_real out = 0, p = 1;
+    int j, q;
+    for (j = 0; j < TRAJ_NCOEF - k; j++) {
+        fs_real fall = 1;
+        for (q = 0; q < k; q++)
+            fall *= (fs_real)(TRAJ_NCOEF - 1 - j - q);
+        out = out * tau + row[j] * fall;
+    }
+    for (q = 0; q < k; q++)
+        p *= h;
+    return out / p;
+}
+
+struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim,
+                                       const struct traj *tr)
+{
+    struct to_margins out = {0, 0, 0, 0, 0, 0, 0};
+    fs_real rho_max = 0, w_max = 0, a_max = 0, j_max = 0, c_max = 0, v2_max = 0, kr, a, s, dphi, x, y;
+    fs_real sin_max = fs_sin(lim->torque_angle_max);
+    bool bad = false;
+    size_t i;
+    int j;
+    for (i = 0; i < tr->n; i++) {
+        fs_real h = tr->breaks[i + 1] - tr->breaks[i];
+        const fs_real *th = tr->theta + i * TRAJ_NCOEF, *rh = tr->rho + i * TRAJ_NCOEF;
+        for (j = 0; j <= TO_CHECK + (i == tr->n - 1); j++) {
+            fs_real tau = j < TO_CHECK ? ((fs_real)j + FS_C(0.5)) / TO_CHECK : j == TO_CHECK ? 0 : 1;
+            fs_real w = deriv(th, 1, tau, h), acc = deriv(th, 2, tau, h), jerk = deriv(th, 3, tau, h);
+            fs_real rho = deriv(rh, 0, tau, h), drho = deriv(rh, 1, tau, h);
+            rho_max = fs_max(rho_max, rho);
+            w_max = fs_max(w_max, fs_fabs(w));
+            a_max = fs_max(a_max, fs_fabs(acc));
+            j_max = fs_max(j_max, fs_fabs(jerk));
+            a = m->J * acc + m->B * w;
+            kr = m->Km * rho;
+            if (!(rho > 0 && fs_fabs(a) - kr < 0)) {
+                bad = true;
+                continue;
+            }
+            s = fs_sqrt(kr * kr - a * a);
+            c_max = fs_max(c_max, fs_fabs(a) / kr);
+            dphi = -((m->J * jerk + m->B * acc) * rho - a * drho) / (rho * s) - (fs_real)m->Nr * w;
+            x = m->L * drho + m->R * rho + m->Km * w * (a / kr);
+            y = m->L * rho * dphi - m->Km * w * (s / kr);
+            v2_max = fs_max(v2_max, x * x + y * y);
+        }
+    }
+    out.current = rho_max / lim->i_max;
+    out.speed = lim->speed_max > 0 ? w_max / lim->speed_max : 0;
+    out.acceleration = lim->accel_max > 0 ? a_max / lim->accel_max : 0;
+    out.jerk = lim->jerk_max > 0 ? j_max / lim->jerk_max : 0;
+    if (bad) {
+        out.voltage = out.torque_angle = out.worst = (fs_real)INFINITY;
+        return out;
+    }
+    out.torque_angle = c_max / sin_max;
+    out.voltage = fs_sqrt(v2_max) / lim->v_bus;
+    out.worst = fs_max(fs_max(out.voltage / (TO_V_MARGIN * lim->v_use), out.current),
+                       fs_max(out.torque_angle, fs_max(out.speed, fs_max(out.acceleration, out.jerk)))) -
+                1;
+    return out;
+}
+
+// The search's state: the workspace, the envelope's gamma in it, the best table so far (in out), the tables built.
+struct to_search {
+    const struct motor_params *m;
+    const struct to_limits *lim;
+    fs_real d, env_gamma;
+    struct to_work w;
+    struct to_result *out;
+    bool found, overflow;
+};
+
+// Returns the measure s of the table at gamma and width (inf when the motor cannot start or the profile does not
+// fit); a feasible table shorter than the best becomes the best (time_optimal._try and search_width).
+static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
+{
+    struct to_margins mg;
+    struct to_result *out = s->out;
+    if (s->env_gamma != gamma) {
+        s->env_gamma = gamma;
+        if (!envelope(s->m, s->lim, gamma, &s->w)) {
+            s->env_gamma = -1;
+            return (fs_real)INFINITY;
+        }
+    }
+    if (!smoothed_table(s->m, s->lim, s->d, width, &s->w)) {
+        s->overflow = true;
+        return (fs_real)INFINITY;
+    }
+    out->tables++;
+    mg = time_optimal_margins(s->m, s->lim, &s->w.tr);
+    if (mg.worst <= 0 && (!s->found || s->w.breaks[s->w.tr.n] < out->breaks[out->n])) {
+        s->found = true;
+        out->n = s->w.tr.n;
+        memcpy(out->breaks, s->w.breaks, (out->n + 1) * sizeof *out->breaks);
+        memcpy(out->theta, s->w.theta, out->n * TRAJ_NCOEF * sizeof *out->theta);
+        memcpy(out->rho, s->w.rho, out->n * TRAJ_NCOEF * sizeof *out->rho);
+        out->gamma = gamma;
+        out->width = width;
+        out->margins = mg;
+    }
+    return mg.worst;
+}
+
+// Returns nothing; the regula falsi on gamma at one width (time_optimal.search_width).
+static void search_width(struct to_search *s, fs_real width)
+{
+    fs_real lo = 0, hi = 1, s_lo = 0, s_hi = try_table(s, 1, width), guess, span, g, x;
+    bool have_lo = false;
+    int side = 0, it;
+    if (s_hi <= 0)
+        return;
+    guess = fs_isfinite(s_hi) ? 1 / (1 + s_hi) : FS_C(0.5);
+    for (it = 0; it < TO_SEARCH - 1; it++) {
+        span = hi - lo;
+        g = fs_min(fs_max(guess, lo + FS_C(0.02) * span), hi - FS_C(0.02) * span);
+        if (g < TO_GAMMA_MIN)
+            break;
+        x = try_table(s, g, width);
+        if (x <= 0) {
+            lo = g, s_lo = x, have_lo = true;
+            if (x > FS_C(-0.003))
+                break;
+            if (side == -1)
+                s_hi *= FS_C(0.5);
+            side = -1;
+        } else {
+            hi = g, s_hi = x;
+            if (side == 1 && have_lo)
+                s_lo *= FS_C(0.5);
+            side = 1;
+        }
+        if (fs_isfinite(s_hi) && have_lo)
+            guess = lo + (hi - lo) * s_lo / (s_lo - s_hi);
+        else if (fs_isfinite(s_hi))
+            guess = FS_C(0.999) * hi / (1 + s_hi);
+        else
+            guess = FS_C(0.5) * (lo + hi);
+    }
+}
+
+// Returns true when every limit is finite and in range.
+static bool limits_valid(const struct to_limits *l)
+{
+    const fs_real half_pi = FS_C(1.5707963267948966);
+    return fs_isfinite(l->v_bus) && l->v_bus > 0 && fs_isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max &&
+           l->i_run > 0 && l->i_run <= l->i_hold && fs_isfinite(l->speed_corner) && l->speed_corner > 0 &&
+           l->torque_angle_max > 0 && l->torque_angle_max < half_pi && l->v_use > 0 && l->v_use <= 1 &&
+           fs_isfinite(l->speed_max) && l->speed_max >= 0 && fs_isfinite(l->accel_max) && l->accel_max >= 0 &&
+           fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
+}
+
+int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim, fs_real distance,
+                      const fs_real *widths, size_t n_widths, fs_real *work, size_t work_len, struct to_result *out)
+{
+    static const fs_real DEFAULT_WIDTHS[] = {FS_C(0.25), FS_C(0.5), 1, 2, 4};
+    struct to_search s;
+    struct to_move mv;
+    fs_real width[TO_MAX_WIDTHS], full[TO_MAX_WIDTHS], sign = distance < 0 ? -1 : 1;
+    size_t i, k, nw = widths ? n_widths : sizeof DEFAULT_WIDTHS / sizeof *DEFAULT_WIDTHS;
+    out->n = 0;
+    out->tables = 0;
+    if (!motor_params_valid(m) || !limits_valid(lim) || !fs_isfinite(distance) || distance == 0 || nw < 1 ||
+        nw > TO_MAX_WIDTHS)
+        return TO_EARGS;
+    for (i = 0; i < nw; i++) {
+        width[i] = widths ? widths[i] : DEFAULT_WIDTHS[i] * (m->L / m->R);
+        if (!(fs_isfinite(width[i]) && width[i] > 0))
+            return TO_EARGS;
+    }
+    if (!work || work_len < time_optimal_work_len())
+        return TO_EWORK;
+    s.m = m, s.lim = lim, s.d = fs_fabs(distance), s.out = out, s.found = s.overflow = false;
+    s.w.omega = work, s.w.ap = work + TO_GRID, s.w.am = work + 2 * TO_GRID, s.w.tacc = work + 3 * TO_GRID;
+    s.w.tdec = work + 4 * TO_GRID, s.w.dboth = work + 5 * TO_GRID;
+    s.w.a = work + 6 * TO_GRID, s.w.b = s.w.a + TO_FINE_LEN + 1, s.w.c = s.w.b + TO_FINE_LEN + 1;
+    s.w.knot = s.w.c + TO_FINE_LEN + 1;
+    s.w.breaks = s.w.knot + TO_MAX_SEGMENTS + 1;
+    s.w.theta = s.w.breaks + TO_MAX_SEGMENTS + 1;
+    s.w.rho = s.w.theta + TO_MAX_SEGMENTS * TRAJ_NCOEF;
+    s.w.tr.breaks = s.w.breaks, s.w.tr.theta = s.w.theta, s.w.tr.rho = s.w.rho;
+    s.env_gamma = 1;
+    if (!envelope(m, lim, 1, &s.w))
+        return TO_ESTART;
+    for (i = 0; i < nw; i++) {  // the full-bus durations: a width whose is not shorter than the best cannot win
+        bang_bang(s.d, width[i], &s.w, &mv);
+        full[i] = (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
+    }
+    for (i = 0; i < nw; i++) {
+        if (s.found && full[i] >= out->breaks[out->n])
+            continue;
+        search_width(&s, width[i]);
+    }
+    if (!s.found) {
+        out->n = 0;
+        return TO_ENOPLAN;
+    }
+    for (i = 0; i < out->n; i++)  // a negative move mirrors the positive one
+        for (k = 0; k < TRAJ_NCOEF; k++)
+            out->theta[i * TRAJ_NCOEF + k] *= sign;
+    return TO_OK;
+}
