@@ -25,8 +25,8 @@ struct to_move {
 
 size_t time_optimal_work_len(void)
 {
-    return 6 * (size_t)TO_GRID + 3 * ((size_t)TO_FINE_LEN + 1) + (TO_MAX_SEGMENTS + 1) * 2 +
-           2 * (size_t)TO_MAX_SEGMENTS * TRAJ_NCOEF;
+    return 6 * (size_t)TO_GRID + 3 * ((size_t)TO_FINE_LEN + 1) + (TO_MAX_SEGMENTS + 1) * 2
+           + 2 * (size_t)TO_MAX_SEGMENTS * TRAJ_NCOEF;
 }
 
 // Returns the across-axis floor f(omega) (MotorLimits.floor).
@@ -37,8 +37,7 @@ static fs_real floor_current(const struct to_limits *lim, fs_real w)
 }
 
 // Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
-static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2, fs_real u,
-                    fs_real *dh)
+static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2, fs_real u, fs_real *dh)
 {
     fs_real c = m->Km * w, e = (fs_real)m->Nr * w * m->L, z = m->R * m->R + e * e;
     fs_real root = fs_sqrt(f * f + k * k * u * u);
@@ -48,12 +47,12 @@ static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real 
 
 // Returns the torque current bound on side sign (+1 or -1) at speed w: the cap, or Newton's root from outside,
 // started at the previous grid point's root *prev when that lies outside (h > 0), else at the cap.
-static fs_real iq_bound(const struct motor_params *m, const struct to_limits *lim, fs_real w, fs_real v2,
-                        fs_real sign, fs_real *prev)
+static fs_real iq_bound(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[2], fs_real w,
+                        fs_real v2, fs_real sign, fs_real *prev)
 {
-    fs_real k = fs_cos(lim->torque_angle_max) / fs_sin(lim->torque_angle_max), f = floor_current(lim, w), dh, h, u, step;
+    fs_real k = trig[1] / trig[0], f = floor_current(lim, w), dh, h, u, step;
     fs_real room = lim->i_max * lim->i_max - f * f;
-    fs_real cap = fs_sqrt(room > 0 ? room : 0) * fs_sin(lim->torque_angle_max);
+    fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
     int i;
     if (!(to_h(m, k, f, w, v2, 0, &dh) <= 0))
         return *prev = 0;
@@ -78,14 +77,15 @@ static fs_real iq_bound(const struct motor_params *m, const struct to_limits *li
 static size_t envelope(const struct motor_params *m, const struct to_limits *lim, fs_real gamma, struct to_work *w)
 {
     fs_real v2 = gamma * lim->v_bus * gamma * lim->v_bus, w_max = gamma * lim->v_bus / m->Km, top, hi = 0, lo = 0;
-    fs_real acc, prev = 0;
+    fs_real acc, prev = 0, trig[2];
     size_t i, stop = TO_GRID;
+    fs_sincos(lim->torque_angle_max, &trig[0], &trig[1]);
     if (lim->speed_max > 0 && lim->speed_max < w_max)
         w_max = lim->speed_max;
     top = w_max;
     for (i = 0; i < TO_GRID; i++) {  // the probe: where a+ first reaches 0
         fs_real x = w_max * (fs_real)i / (TO_GRID - 1);
-        acc = (m->Km * iq_bound(m, lim, x, v2, 1, &prev) - m->B * x) / m->J;
+        acc = (m->Km * iq_bound(m, lim, trig, x, v2, 1, &prev) - m->B * x) / m->J;
         if (i == 0 && !(acc > 0))
             return 0;
         if (!(acc > 0)) {
@@ -98,8 +98,8 @@ static size_t envelope(const struct motor_params *m, const struct to_limits *lim
     for (i = 0; i < TO_GRID; i++) {
         fs_real x = top * (fs_real)i / (TO_GRID - 1);
         w->omega[i] = x;
-        w->ap[i] = (m->Km * iq_bound(m, lim, x, v2, 1, &hi) - m->B * x) / m->J;
-        w->am[i] = (m->Km * iq_bound(m, lim, x, v2, -1, &lo) - m->B * x) / m->J;
+        w->ap[i] = (m->Km * iq_bound(m, lim, trig, x, v2, 1, &hi) - m->B * x) / m->J;
+        w->am[i] = (m->Km * iq_bound(m, lim, trig, x, v2, -1, &lo) - m->B * x) / m->J;
         if (lim->accel_max > 0) {
             w->ap[i] = fs_min(w->ap[i], lim->accel_max);
             w->am[i] = fs_max(w->am[i], -lim->accel_max);
@@ -125,6 +125,20 @@ static fs_real interp(fs_real x, const fs_real *xs, const fs_real *ys, size_t n)
             hi = mid;
     }
     return xs[hi] == xs[lo] ? ys[lo] : (ys[hi] - ys[lo]) / (xs[hi] - xs[lo]) * (x - xs[lo]) + ys[lo];
+}
+
+// Returns y at x as interp does, for x rising (dir 1) or falling (dir -1) between calls: *j walks to the bracket.
+static fs_real interp_walk(fs_real x, const fs_real *xs, const fs_real *ys, size_t n, size_t *j)
+{
+    if (x <= xs[0])
+        return ys[0];
+    if (x >= xs[n - 1])
+        return ys[n - 1];
+    while (*j + 1 < n - 1 && xs[*j + 1] <= x)
+        ++*j;
+    while (*j > 0 && xs[*j] > x)
+        --*j;
+    return (ys[*j + 1] - ys[*j]) / (xs[*j + 1] - xs[*j]) * (x - xs[*j]) + ys[*j];
 }
 
 // Returns nothing; writes the running trapezoidal integral out[i] of y over the uniform or given x.
@@ -220,8 +234,9 @@ static size_t knots(size_t last, fs_real up, fs_real down, int cruise, fs_real *
         } else {
             if (i > 2 * half)
                 break;
-            x = i <= half ? (fs_real)last / 2 * (fs_real)i / (fs_real)half
-                          : (fs_real)last / 2 + ((fs_real)last - (fs_real)last / 2) * (fs_real)(i - half) / (fs_real)half;
+            x = i <= half
+                    ? (fs_real)last / 2 * (fs_real)i / (fs_real)half
+                    : (fs_real)last / 2 + ((fs_real)last - (fs_real)last / 2) * (fs_real)(i - half) / (fs_real)half;
         }
         x = fs_rint(x);
         if (n == 0 || x != k[n - 1])
@@ -268,8 +283,8 @@ static fs_real rho_star(const struct to_limits *lim, fs_real iq, fs_real w)
 }
 
 // Returns rho* at sample i of the scaled speed profile v (len samples, step dt).
-static fs_real rho_at(const struct motor_params *m, const struct to_limits *lim, const fs_real *v, size_t len,
-                      size_t i, fs_real dt)
+static fs_real rho_at(const struct motor_params *m, const struct to_limits *lim, const fs_real *v, size_t len, size_t i,
+                      fs_real dt)
 {
     return rho_star(lim, (m->J * gradient(v, len, i, dt) + m->B * v[i]) / m->Km, v[i]);
 }
@@ -281,7 +296,7 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
 {
     struct to_move mv;
     fs_real total, t, *speed = w->a, *theta = w->c, scale, s0[4], s1[4], r0[4], r1[4], h;
-    size_t i, len, nk, last;
+    size_t i, len, nk, last, j_acc = 0, j_dec = TO_GRID - 2;
     bang_bang(d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
     if (mv.n + 2 * (mv.n_box - 1) > TO_FINE_LEN)
@@ -289,11 +304,11 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
     for (i = 0; i < mv.n; i++) {
         t = (fs_real)i * mv.dt;
         if (t <= mv.t1)
-            speed[i] = interp(t, w->tacc, w->omega, TO_GRID);
+            speed[i] = interp_walk(t, w->tacc, w->omega, TO_GRID, &j_acc);
         else if (t < mv.t1 + mv.cruise)
             speed[i] = mv.w_peak;
         else
-            speed[i] = interp(total - t, w->tdec, w->omega, TO_GRID);
+            speed[i] = interp_walk(total - t, w->tdec, w->omega, TO_GRID, &j_dec);
     }
     speed[mv.n - 1] = 0;
     len = box(speed, mv.n, mv.n_box, w->c, w->b);
@@ -313,10 +328,10 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
         s1[2] = gradient(speed, len, k, mv.dt);
         s1[3] = gradient2(speed, len, k, mv.dt);
         r1[0] = rho_at(m, lim, speed, len, k, mv.dt);
-        r1[1] = k == 0 ? (rho_at(m, lim, speed, len, 1, mv.dt) - r1[0]) / mv.dt
+        r1[1] = k == 0      ? (rho_at(m, lim, speed, len, 1, mv.dt) - r1[0]) / mv.dt
                 : k == last ? (r1[0] - rho_at(m, lim, speed, len, last - 1, mv.dt)) / mv.dt
-                            : (rho_at(m, lim, speed, len, k + 1, mv.dt) - rho_at(m, lim, speed, len, k - 1, mv.dt)) /
-                                  (2 * mv.dt);
+                            : (rho_at(m, lim, speed, len, k + 1, mv.dt) - rho_at(m, lim, speed, len, k - 1, mv.dt))
+                                  / (2 * mv.dt);
         r1[2] = r1[3] = 0;
         if (i == 0 || i == nk - 1)
             s1[1] = s1[2] = s1[3] = 0;
@@ -334,24 +349,34 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
     return true;
 }
 
-// Returns the tau-derivative of order k of the row at tau, over h^k (time_optimal.table_margins' deriv).
-static fs_real deriv(const fs_real *row, int k, fs_real tau, fs_real h)
+// Returns p(tau) of the coefficients c[0..deg] (highest power first) by Horner's rule.
+static fs_real horner(const fs_real *c, int deg, fs_real tau)
 {
-    fs_real out = 0, p = 1;
-    int j, q;
-    for (j = 0; j < TRAJ_NCOEF - k; j++) {
+    fs_real out = c[0];
+    int j;
+    for (j = 1; j <= deg; j++)
+        out = out * tau + c[j];
+    return out;
+}
+
+// Returns the degree of the k-th time derivative; writes its coefficients in tau from the row over h (the
+// reference's deriv: the tau-derivative over h^k).
+static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
+{
+    fs_real p = 1;
+    int j, q, deg = TRAJ_NCOEF - 1 - k;
+    for (q = 0; q < k; q++)
+        p *= h;
+    for (j = 0; j <= deg; j++) {
         fs_real fall = 1;
         for (q = 0; q < k; q++)
             fall *= (fs_real)(TRAJ_NCOEF - 1 - j - q);
-        out = out * tau + row[j] * fall;
+        out[j] = row[j] * fall / p;
     }
-    for (q = 0; q < k; q++)
-        p *= h;
-    return out / p;
+    return deg;
 }
 
-struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim,
-                                       const struct traj *tr)
+struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim, const struct traj *tr)
 {
     struct to_margins out = {0, 0, 0, 0, 0, 0, 0};
     fs_real rho_max = 0, w_max = 0, a_max = 0, j_max = 0, c_max = 0, v2_max = 0, kr, a, s, dphi, x, y;
@@ -362,10 +387,13 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
     for (i = 0; i < tr->n; i++) {
         fs_real h = tr->breaks[i + 1] - tr->breaks[i];
         const fs_real *th = tr->theta + i * TRAJ_NCOEF, *rh = tr->rho + i * TRAJ_NCOEF;
+        fs_real c1[TRAJ_NCOEF], c2[TRAJ_NCOEF], c3[TRAJ_NCOEF], c4[TRAJ_NCOEF];
+        int g1 = deriv_row(th, 1, h, c1), g2 = deriv_row(th, 2, h, c2), g3 = deriv_row(th, 3, h, c3);
+        int g4 = deriv_row(rh, 1, h, c4);
         for (j = 0; j <= TO_CHECK + (i == tr->n - 1); j++) {
             fs_real tau = j < TO_CHECK ? ((fs_real)j + FS_C(0.5)) / TO_CHECK : j == TO_CHECK ? 0 : 1;
-            fs_real w = deriv(th, 1, tau, h), acc = deriv(th, 2, tau, h), jerk = deriv(th, 3, tau, h);
-            fs_real rho = deriv(rh, 0, tau, h), drho = deriv(rh, 1, tau, h);
+            fs_real w = horner(c1, g1, tau), acc = horner(c2, g2, tau), jerk = horner(c3, g3, tau);
+            fs_real rho = horner(rh, TRAJ_NCOEF - 1, tau), drho = horner(c4, g4, tau);
             rho_max = fs_max(rho_max, rho);
             w_max = fs_max(w_max, fs_fabs(w));
             a_max = fs_max(a_max, fs_fabs(acc));
@@ -395,8 +423,8 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
     out.torque_angle = c_max / sin_max;
     out.voltage = fs_sqrt(v2_max) / lim->v_bus;
     out.worst = fs_max(fs_max(out.voltage / (TO_V_MARGIN * lim->v_use), out.current),
-                       fs_max(out.torque_angle, fs_max(out.speed, fs_max(out.acceleration, out.jerk)))) -
-                1;
+                       fs_max(out.torque_angle, fs_max(out.speed, fs_max(out.acceleration, out.jerk))))
+                - 1;
     return out;
 }
 
@@ -483,11 +511,11 @@ static void search_width(struct to_search *s, fs_real width)
 static bool limits_valid(const struct to_limits *l)
 {
     const fs_real half_pi = FS_C(1.5707963267948966);
-    return fs_isfinite(l->v_bus) && l->v_bus > 0 && fs_isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max &&
-           l->i_run > 0 && l->i_run <= l->i_hold && fs_isfinite(l->speed_corner) && l->speed_corner > 0 &&
-           l->torque_angle_max > 0 && l->torque_angle_max < half_pi && l->v_use > 0 && l->v_use <= 1 &&
-           fs_isfinite(l->speed_max) && l->speed_max >= 0 && fs_isfinite(l->accel_max) && l->accel_max >= 0 &&
-           fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
+    return fs_isfinite(l->v_bus) && l->v_bus > 0 && fs_isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max
+           && l->i_run > 0 && l->i_run <= l->i_hold && fs_isfinite(l->speed_corner) && l->speed_corner > 0
+           && l->torque_angle_max > 0 && l->torque_angle_max < half_pi && l->v_use > 0 && l->v_use <= 1
+           && fs_isfinite(l->speed_max) && l->speed_max >= 0 && fs_isfinite(l->accel_max) && l->accel_max >= 0
+           && fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
 }
 
 int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim, fs_real distance,
@@ -500,8 +528,8 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
     size_t i, k, nw = widths ? n_widths : sizeof DEFAULT_WIDTHS / sizeof *DEFAULT_WIDTHS;
     out->n = 0;
     out->tables = 0;
-    if (!motor_params_valid(m) || !limits_valid(lim) || !fs_isfinite(distance) || distance == 0 || nw < 1 ||
-        nw > TO_MAX_WIDTHS)
+    if (!motor_params_valid(m) || !limits_valid(lim) || !fs_isfinite(distance) || distance == 0 || nw < 1
+        || nw > TO_MAX_WIDTHS)
         return TO_EARGS;
     for (i = 0; i < nw; i++) {
         width[i] = widths ? widths[i] : DEFAULT_WIDTHS[i] * (m->L / m->R);

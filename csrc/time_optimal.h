@@ -51,14 +51,14 @@ struct to_margins {
 
 // The planned move: a segment table (struct traj layout) from theta = 0 at t = 0, and how it was found.
 struct to_result {
-    size_t n;                                          // segments
-    fs_real breaks[TO_MAX_SEGMENTS + 1];               // n + 1 times [s]
-    fs_real theta[TO_MAX_SEGMENTS * TRAJ_NCOEF];       // theta rows [rad], highest power first
-    fs_real rho[TO_MAX_SEGMENTS * TRAJ_NCOEF];         // rho rows [A]
-    fs_real gamma;                                     // fraction of the bus of the envelope
-    fs_real width;                                     // smoothing width [s]
-    struct to_margins margins;                         // on the table at TO_CHECK samples per segment
-    int tables;                                        // tables built and checked
+    size_t n;                                     // segments
+    fs_real breaks[TO_MAX_SEGMENTS + 1];          // n + 1 times [s]
+    fs_real theta[TO_MAX_SEGMENTS * TRAJ_NCOEF];  // theta rows [rad], highest power first
+    fs_real rho[TO_MAX_SEGMENTS * TRAJ_NCOEF];    // rho rows [A]
+    fs_real gamma;                                // fraction of the bus of the envelope
+    fs_real width;                                // smoothing width [s]
+    struct to_margins margins;                    // on the table at TO_CHECK samples per segment
+    int tables;                                   // tables built and checked
 };
 
 // Returns the number of fs_real the workspace of time_optimal_plan needs.
