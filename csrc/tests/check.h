@@ -33,5 +33,6 @@ int test_drive(void);
 int test_baselines(void);
 int test_dq_smc(void);
 int test_trajectory(void);
+int test_time_optimal(void);
 
 #endif
