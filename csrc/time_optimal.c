@@ -4,6 +4,8 @@
 #include <string.h>
 
 #define TO_GAMMA_MIN FS_C(0.05)
+#define TO_TOP_ACCEL FS_C(0.01)
+#define TO_GAMMA_STEPS FS_C(16777216.0)  // 2^24
 #define TO_V_MARGIN FS_C(0.998)
 #define TO_NEWTON_TOL FS_C(1e-12)
 #define TO_FINE_LEN (TO_FINE_MAX + 2)
@@ -34,6 +36,13 @@ static fs_real floor_current(const struct to_limits *lim, fs_real w)
 {
     fs_real x = w / lim->speed_corner;
     return lim->i_run + (lim->i_hold - lim->i_run) / (1 + x * x);
+}
+
+// Returns element i of numpy.linspace(start, stop, num) as numpy computes it: i (stop - start) / (num - 1) + start,
+// the last element stop itself (the knots are rounded from these: the same rounding gives the same knots).
+static fs_real linspace(fs_real start, fs_real stop, size_t num, size_t i)
+{
+    return i == num - 1 ? stop : (fs_real)i * ((stop - start) / (fs_real)(num - 1)) + start;
 }
 
 // Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
@@ -77,26 +86,27 @@ static fs_real iq_bound(const struct motor_params *m, const struct to_limits *li
 static size_t envelope(const struct motor_params *m, const struct to_limits *lim, fs_real gamma, struct to_work *w)
 {
     fs_real v2 = gamma * lim->v_bus * gamma * lim->v_bus, w_max = gamma * lim->v_bus / m->Km, top, hi = 0, lo = 0;
-    fs_real acc, prev = 0, trig[2];
-    size_t i, stop = TO_GRID;
+    fs_real acc, prev = 0, trig[2], thr = 0, x, x_prev = 0, a_prev = 0;
+    size_t i;
     fs_sincos(lim->torque_angle_max, &trig[0], &trig[1]);
     if (lim->speed_max > 0 && lim->speed_max < w_max)
         w_max = lim->speed_max;
     top = w_max;
-    for (i = 0; i < TO_GRID; i++) {  // the probe: where a+ first reaches 0
-        fs_real x = w_max * (fs_real)i / (TO_GRID - 1);
+    for (i = 0; i < TO_PROBE; i++) {  // the probe: where a+ first falls to TO_TOP_ACCEL of a+(0), interpolated
+        x = linspace(0, w_max, TO_PROBE, i);
         acc = (m->Km * iq_bound(m, lim, trig, x, v2, 1, &prev) - m->B * x) / m->J;
-        if (i == 0 && !(acc > 0))
-            return 0;
-        if (!(acc > 0)) {
-            stop = i;
+        if (i == 0) {
+            if (!(acc > 0))
+                return 0;
+            thr = TO_TOP_ACCEL * acc;
+        } else if (!(acc > thr)) {
+            top = x_prev + (x - x_prev) * ((a_prev - thr) / (a_prev - acc));
             break;
         }
+        x_prev = x, a_prev = acc;
     }
-    if (stop < TO_GRID)
-        top = w_max * (fs_real)(stop - 1) / (TO_GRID - 1);
     for (i = 0; i < TO_GRID; i++) {
-        fs_real x = top * (fs_real)i / (TO_GRID - 1);
+        fs_real x = linspace(0, top, TO_GRID, i);
         w->omega[i] = x;
         w->ap[i] = (m->Km * iq_bound(m, lim, trig, x, v2, 1, &hi) - m->B * x) / m->J;
         w->am[i] = (m->Km * iq_bound(m, lim, trig, x, v2, -1, &lo) - m->B * x) / m->J;
@@ -223,20 +233,19 @@ static size_t knots(size_t last, fs_real up, fs_real down, int cruise, fs_real *
 {
     fs_real a = fs_min(fs_max(up, 0), (fs_real)last), b = fs_min(fs_max(down, 0), (fs_real)last), x;
     size_t i, n = 0, half = TO_KNOTS / 2;
+    fs_real mid = (fs_real)last / 2;
     for (i = 0; i <= 2 * half + 4; i++) {
         if (cruise && b > a) {
             if (i <= half)
-                x = a * (fs_real)i / (fs_real)half;
+                x = linspace(0, a, half + 1, i);
             else if (i <= half + 4)
-                x = a + (b - a) * (fs_real)(i - half) / 4;
+                x = linspace(a, b, 5, i - half);
             else
-                x = b + ((fs_real)last - b) * (fs_real)(i - half - 4) / (fs_real)half;
+                x = linspace(b, (fs_real)last, half + 1, i - half - 4);
         } else {
             if (i > 2 * half)
                 break;
-            x = i <= half
-                    ? (fs_real)last / 2 * (fs_real)i / (fs_real)half
-                    : (fs_real)last / 2 + ((fs_real)last - (fs_real)last / 2) * (fs_real)(i - half) / (fs_real)half;
+            x = i <= half ? linspace(0, mid, half + 1, i) : linspace(mid, (fs_real)last, half + 1, i - half);
         }
         x = fs_rint(x);
         if (n == 0 || x != k[n - 1])
@@ -457,6 +466,9 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
     }
     out->tables++;
     mg = time_optimal_margins(s->m, s->lim, &s->w.tr);
+#ifdef TO_DEBUG
+    printf("C g=%.17g w=%.6g s=%.17g tf=%.17g\n", gamma, width, mg.worst, s->w.breaks[s->w.tr.n]);
+#endif
     if (mg.worst <= 0 && (!s->found || s->w.breaks[s->w.tr.n] < out->breaks[out->n])) {
         s->found = true;
         out->n = s->w.tr.n;
@@ -482,6 +494,7 @@ static void search_width(struct to_search *s, fs_real width)
     for (it = 0; it < TO_SEARCH - 1; it++) {
         span = hi - lo;
         g = fs_min(fs_max(guess, lo + FS_C(0.02) * span), hi - FS_C(0.02) * span);
+        g = fs_rint(g * TO_GAMMA_STEPS) / TO_GAMMA_STEPS;  // on a grid: both planners try the same gamma
         if (g < TO_GAMMA_MIN)
             break;
         x = try_table(s, g, width);

@@ -12,6 +12,7 @@
 // Sizes of the algorithm (the constants of flatstep.plan.time_optimal, which must match).
 enum {
     TO_GRID = 192,                   // speed-grid points of the phase plane
+    TO_PROBE = 64,                   // speed-grid points of the probe for the top speed
     TO_FINE = 1000,                  // time samples of the smoothed profile, at least
     TO_FINE_MAX = 12000,             // time samples of the smoothed profile, at most (box tails included)
     TO_PER_PHASE = 16,               // samples over the shortest of speed-up, braking and smoothing width

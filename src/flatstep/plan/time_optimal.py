@@ -50,6 +50,8 @@ from .segments import hermite_rows
 
 Array = NDArray[np.float64]
 _GRID = 192          # speed-grid points of the phase plane
+_PROBE = 64          # speed-grid points of the probe for the top speed
+_TOP_ACCEL = 0.01    # the top speed: where a+ falls to this fraction of a+ at rest
 _FINE = 1000         # time samples of the smoothed profile (at least)
 _FINE_MAX = 12000    # time samples of the smoothed profile (at most, box tails included)
 _PER_PHASE = 16      # time samples over the shortest of speed-up, braking and smoothing width (at least)
@@ -58,6 +60,7 @@ _CHECK = 12          # samples per segment of the search's margin check
 _WIDTHS = (0.25, 0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
 _SEARCH = 6          # tables tried per width on gamma
 _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
+_GAMMA_STEPS = 2.0**24  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
 _V_MARGIN = 0.998    # of v_use: the sampled check may miss the peak between its samples by about that much
 _NEWTON_TOL = 1e-12  # Newton stops when its step is below this fraction of i_max
 #: The most segments of a table the planner writes (csrc/time_optimal.h ``TO_MAX_SEGMENTS``).
@@ -111,19 +114,25 @@ def iq_bounds(omega: Array, motor: MotorParams, limits: MotorLimits, gamma: floa
 def envelope(motor: MotorParams, limits: MotorLimits, gamma: float) -> Envelope:
     """The speed grid up to the top speed and the accelerations on it, at ``gamma`` of the bus.
 
-    A probe grid up to the lesser of the speed cap and the back-EMF speed finds where a+ first reaches 0; the grid
-    then ends one probe point before it.
+    A probe grid up to the lesser of the speed cap and the back-EMF speed finds where a+ first falls to
+    ``_TOP_ACCEL`` of its value at rest, interpolated between its points; the grid ends there. (Speeds above it take
+    long to reach for little gain; a top that moves continuously with gamma keeps the search's measure smooth.)
     """
     m = motor
     w_emf = gamma * limits.v_bus / m.Km
     w_max = min(limits.speed_max, w_emf) if limits.speed_max else w_emf
-    probe = np.linspace(0.0, w_max, _GRID)
+    probe = np.linspace(0.0, w_max, _PROBE)
     acc = (m.Km * iq_bounds(probe, m, limits, gamma)[1] - m.B * probe) / m.J
     if not acc[0] > 0:
         raise ValueError(f"the motor cannot start: at rest the bus {limits.v_bus} V (x {gamma:.3g}) and the limits "
                          f"{limits} leave no torque")
-    stop = np.flatnonzero(acc <= 0)
-    omega = np.linspace(0.0, probe[stop[0] - 1], _GRID) if stop.size else probe
+    thr = _TOP_ACCEL * acc[0]
+    below = np.flatnonzero(~(acc[1:] > thr)) + 1
+    top = w_max
+    if below.size:  # interpolated between the probe points: the top speed moves continuously with gamma
+        j = below[0]
+        top = probe[j - 1] + (probe[j] - probe[j - 1]) * ((acc[j - 1] - thr) / (acc[j - 1] - acc[j]))
+    omega = np.linspace(0.0, top, _GRID)
     lo, hi = iq_bounds(omega, m, limits, gamma)
     a_plus = (m.Km * hi - m.B * omega) / m.J
     a_minus = (m.Km * lo - m.B * omega) / m.J
@@ -338,6 +347,7 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
     for _ in range(_SEARCH - 1):
         span = hi - lo
         g = min(max(guess, lo + 0.02 * span), hi - 0.02 * span)
+        g = float(np.rint(g * _GAMMA_STEPS)) / _GAMMA_STEPS  # on a grid: the C planner tries the same gamma
         if g < _GAMMA_MIN:
             break
         try:
