@@ -399,8 +399,8 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
         fs_real c1[TRAJ_NCOEF], c2[TRAJ_NCOEF], c3[TRAJ_NCOEF], c4[TRAJ_NCOEF];
         int g1 = deriv_row(th, 1, h, c1), g2 = deriv_row(th, 2, h, c2), g3 = deriv_row(th, 3, h, c3);
         int g4 = deriv_row(rh, 1, h, c4);
-        for (j = 0; j <= TO_CHECK + (i == tr->n - 1); j++) {
-            fs_real tau = j < TO_CHECK ? ((fs_real)j + FS_C(0.5)) / TO_CHECK : j == TO_CHECK ? 0 : 1;
+        for (j = 0; j < TO_CHECK + (i == tr->n - 1); j++) {
+            fs_real tau = (fs_real)j / TO_CHECK;  // j = TO_CHECK on the last segment: its end
             fs_real w = horner(c1, g1, tau), acc = horner(c2, g2, tau), jerk = horner(c3, g3, tau);
             fs_real rho = horner(rh, TRAJ_NCOEF - 1, tau), drho = horner(c4, g4, tau);
             rho_max = fs_max(rho_max, rho);

@@ -17,7 +17,7 @@ enum {
     TO_FINE_MAX = 12000,             // time samples of the smoothed profile, at most (box tails included)
     TO_PER_PHASE = 16,               // samples over the shortest of speed-up, braking and smoothing width
     TO_KNOTS = 64,                   // segments of the table in speed-up and braking (4 more in a cruise)
-    TO_CHECK = 12,                   // samples per segment of the margin check
+    TO_CHECK = 8,                    // samples per segment of the margin check (tau = j / 8)
     TO_SEARCH = 6,                   // tables tried per smoothing width on gamma
     TO_MAX_WIDTHS = 8,               // smoothing widths a call may try
     TO_MAX_SEGMENTS = TO_KNOTS + 4,  // segments of a planned table, at most
@@ -71,7 +71,7 @@ size_t time_optimal_work_len(void);
 int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim, fs_real distance,
                       const fs_real *widths, size_t n_widths, fs_real *work, size_t work_len, struct to_result *out);
 
-// Returns the margins of a table (the search's check, TO_CHECK samples per segment and every break).
+// Returns the margins of a table (the search's check: tau = j / TO_CHECK on each segment, and the end).
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim,
                                        const struct traj *tr);
 

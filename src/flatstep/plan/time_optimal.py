@@ -56,7 +56,7 @@ _FINE = 1000         # time samples of the smoothed profile (at least)
 _FINE_MAX = 12000    # time samples of the smoothed profile (at most, box tails included)
 _PER_PHASE = 16      # time samples over the shortest of speed-up, braking and smoothing width (at least)
 _KNOTS = 64          # segments of the table (speed-up and braking halves; 4 more in the cruise)
-_CHECK = 12          # samples per segment of the search's margin check
+_CHECK = 8           # samples per segment of the search's margin check (tau = j / 8: the middle included)
 _WIDTHS = (0.25, 0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
 _SEARCH = 6          # tables tried per width on gamma
 _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
@@ -266,7 +266,7 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
 
 
 def table_margins(table: Table, motor: MotorParams, limits: MotorLimits, samples: int = _CHECK) -> dict[str, float]:
-    r"""The table's worst use of each limit at ``samples`` midpoints per segment and at every break.
+    r"""The table's worst use of each limit at ``samples`` points per segment (``tau = j / samples``) and its end.
 
     The same ratios as :func:`~flatstep.plan.limits.plan_margins`, the voltage magnitude from the polar-frame
     voltages (the input map is a rotation, so :math:`|v| = \sqrt{X^2 + Y^2}`, no angle needed); ``inf`` where
@@ -275,7 +275,7 @@ def table_margins(table: Table, motor: MotorParams, limits: MotorLimits, samples
     """
     m = motor
     h = np.diff(table.breaks)
-    tau = np.concatenate([(np.arange(samples) + 0.5) / samples, [0.0]])
+    tau = np.arange(samples) / samples  # from each segment's start; an even count has its middle, where fits bulge
     seg = np.repeat(np.arange(h.size), tau.size)
     tt = np.tile(tau, h.size)
     seg, tt = np.append(seg, h.size - 1), np.append(tt, 1.0)
