@@ -88,7 +88,7 @@ static int error_checks(void)
     bad = l, bad.v_bus = 0.5;  // the resistance alone takes the bus at i_hold
     CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_ESTART && out.n == 0, "cannot start");
     bad = l, bad.v_use = 0.05;  // R i_hold alone takes more than 5 % of the bus
-    CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_ENOPLAN && out.n == 0, "v_use 5 %");
+    CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_ENOPLAN && out.n == 0, "v_use 0.05");
     CHECK(time_optimal_plan(&NEMA17, &l, 1.0, NULL, 0, work, time_optimal_work_len() - 1, &out) == TO_EWORK,
           "short workspace");
     CHECK(time_optimal_plan(&NEMA17, &l, 1.0, NULL, 0, NULL, n, &out) == TO_EWORK, "no workspace");
