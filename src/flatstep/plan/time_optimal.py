@@ -58,10 +58,11 @@ _PER_PHASE = 16      # time samples over the shortest of speed-up, braking and s
 _KNOTS = 64          # segments of the table (speed-up and braking halves; 4 more in the cruise)
 _CHECK = 8           # samples per segment of the search's margin check (tau = j / 8: the middle included)
 _WIDTHS = (0.25, 0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
-_SEARCH = 6          # tables tried per width on gamma
+_SEARCH = 6          # tables tried per width on gamma, at most
 _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
 _GAMMA_STEPS = 2.0**24  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
 _V_MARGIN = 0.998    # of v_use: the sampled check may miss the peak between its samples by about that much
+_S_TOL = 0.003       # a feasible table within 0.3 % of the bus target ends a width's search
 _NEWTON_TOL = 1e-12  # Newton stops when its step is below this fraction of i_max
 #: The most segments of a table the planner writes (csrc/time_optimal.h ``TO_MAX_SEGMENTS``).
 MAX_SEGMENTS = _KNOTS + 4
@@ -186,24 +187,33 @@ def _box(x: Array, n: int) -> Array:
 
 
 class Timing(NamedTuple):
-    """The sampling of a smoothed move: the bang-bang move, the sample step [s], box and profile samples."""
+    """The sampling of a smoothed move: the bang-bang move, the sample step [s], box and profile samples, and the
+    cut: ``k`` samples of the cruise from sample ``r`` on are not sampled (the smoothed speed is constant there)."""
 
     move: BangBang
     dt: float
     n_box: int
     n: int
+    r: int
+    k: int
 
 
 def timing(distance: float, env: Envelope, width: float) -> Timing:
     """The sampling of the move over ``distance`` > 0 smoothed by ``width`` [s] (module docstring).
 
-    Fine enough for the shortest of speed-up, braking and smoothing and for the whole move, and coarse enough
-    that the smoothed profile has at most ``_FINE_MAX`` samples: it lasts ``(n + 2 (n_box - 1) - 1) dt``.
+    Fine enough for the shortest of speed-up, braking and smoothing and for the move less its long cruise, coarse
+    enough for at most about ``_FINE_MAX`` samples; the full profile lasts ``(n + 2 (n_box - 1) - 1) dt``. A
+    cruise longer than the smoothing needs is cut: only ``2 n_box + 4`` samples of it are kept at each end.
     """
     b = bang_bang(distance, env)
     total = b.t1 + b.cruise + b.t2
-    dt = max(min((total + 2 * width) / _FINE, min(b.t1, b.t2, width) / _PER_PHASE), (total + 2 * width) / _FINE_MAX)
-    return Timing(b, dt, max(1, int(round(width / dt))), int(math.ceil(total / dt)) + 1)
+    core = b.t1 + b.t2 + min(b.cruise, 4 * width) + 2 * width
+    dt = max(min(core / _FINE, min(b.t1, b.t2, width) / _PER_PHASE), core / _FINE_MAX)
+    n_box = max(1, int(round(width / dt)))
+    keep = 2 * n_box + 4
+    first, last = math.ceil(b.t1 / dt) + 1, math.floor((b.t1 + b.cruise) / dt) - 1  # inside the raw cruise
+    r = first + keep
+    return Timing(b, dt, n_box, int(math.ceil(total / dt)) + 1, r, max(0, last - keep - r))
 
 
 def smoothed_duration(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float) -> float:
@@ -240,27 +250,39 @@ class Table(NamedTuple):
 
 
 def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorParams, limits: MotorLimits) -> Table:
-    """The bang-bang move on ``env`` over ``distance`` > 0, smoothed twice by a box of ``width`` [s], as a table."""
-    b, dt, n_box, n = timing(distance, env, width)
+    """The bang-bang move on ``env`` over ``distance`` > 0, smoothed twice by a box of ``width`` [s], as a table.
+
+    The profile is sampled without the cut of :func:`timing` (sample ``i >= r`` at ``(i + k) dt``); a knot in the
+    cut reads the constant cruise at sample ``r``, a knot after it the sample ``k`` earlier, its angle ``k dt`` of
+    cruise further on.
+    """
+    b, dt, n_box, n, r, k = timing(distance, env, width)
     total = b.t1 + b.cruise + b.t2
-    t = np.arange(n) * dt
+    i = np.arange(n - k)
+    t = np.where(i < r, i, i + k) * dt
     speed = np.where(t <= b.t1, np.interp(t, b.t_acc, env.omega),
                      np.where(t < b.t1 + b.cruise, b.w_peak, np.interp(total - t, b.t_dec, env.omega)))
     speed[-1] = 0.0
     speed = _box(_box(speed, n_box), n_box)
-    theta = _cumtrapz(speed, np.arange(speed.size) * dt)
-    scale = distance / theta[-1]
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * dt)])
+    r = min(r, speed.size - 1)  # no cut (k = 0): r only has to index the profile
+    cruise = speed[r] if k else 0.0
+    extra = k * dt * cruise  # the angle of the cut's cruise
+    scale = distance / (theta[-1] + extra)
+    knots = _knots(speed.size - 1 + k, (b.t1 + 2 * width) / dt, (b.t1 + b.cruise) / dt, b.cruise > 0)
+    at = np.where(knots < r, knots, np.where(knots >= r + k, knots - k, r))  # the sample each knot reads
+    angle = np.where(knots < r, theta[at],
+                     np.where(knots >= r + k, theta[at] + extra, theta[r] + (knots - r) * dt * cruise))
     speed = speed * scale
     acc = _gradient(speed, dt)
     jerk = _gradient(acc, dt)
-    knots = _knots(speed.size - 1, (b.t1 + 2 * width) / dt, (b.t1 + b.cruise) / dt, b.cruise > 0)
-    state = np.column_stack([theta * scale, speed, acc, jerk])[knots]
+    state = np.column_stack([angle * scale, speed[at], acc[at], jerk[at]])
     state[0, 1:] = state[-1, 1:] = 0.0
     state[-1, 0] = distance
     h = np.diff(knots) * dt
     rho = limits.rho((motor.J * acc + motor.B * speed) / motor.Km, speed)
     # rho and rho' at the knots (the law reads rho' only); rho'' and rho''' set to 0 keep each segment monotone
-    rho_state = np.column_stack([rho, _gradient(rho, dt), 0 * rho, 0 * rho])[knots]
+    rho_state = np.column_stack([rho, _gradient(rho, dt), 0 * rho, 0 * rho])[at]
     return Table(np.concatenate([[0.0], np.cumsum(h)]), hermite_rows(state[:-1], state[1:], h),
                  hermite_rows(rho_state[:-1], rho_state[1:], h))
 
@@ -329,36 +351,34 @@ def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
 
 
 def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width: float,
-                 best: Optional[Candidate] = None) -> Optional[Candidate]:
-    """The regula falsi on gamma at ``width`` (module docstring): ``best`` or a shorter feasible table it tried."""
+                 start: float = 1.0) -> Optional[Candidate]:
+    """The regula falsi on gamma at ``width`` from ``start`` (module docstring): its shortest feasible table or None.
 
-    def consider(c: Candidate) -> float:
-        nonlocal best
-        if c.margins["worst"] <= 0 and (best is None or c.tf < best.tf):
-            best = c
-        return c.margins["worst"]
-
-    s_hi = consider(_try(distance, motor, limits, 1.0, width))
-    if s_hi <= 0:
-        return best
-    lo, s_lo, hi = 0.0, math.nan, 1.0
-    side = 0
-    guess = 1.0 / (1.0 + s_hi) if math.isfinite(s_hi) else 0.5
-    for _ in range(_SEARCH - 1):
-        span = hi - lo
-        g = min(max(guess, lo + 0.02 * span), hi - 0.02 * span)
+    Until both a feasible and an infeasible gamma are known, the next guess scales gamma by ``1 / (1 + s)`` (the
+    voltage about proportional to gamma); then regula falsi (Illinois) inside the bracket. It stops at a feasible
+    table within ``_S_TOL`` of the bus target, at a feasible gamma of 1, or after ``_SEARCH`` tables.
+    """
+    best: Optional[Candidate] = None
+    lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan  # nan: not measured
+    side, g, g_last, s_last = 0, start, math.nan, math.nan
+    g_prev, s_prev = math.nan, math.nan  # the point before the last, for the secant
+    for _ in range(_SEARCH):
         g = float(np.rint(g * _GAMMA_STEPS)) / _GAMMA_STEPS  # on a grid: the C planner tries the same gamma
         if g < _GAMMA_MIN:
             break
         try:
-            s = consider(_try(distance, motor, limits, g, width))
+            c: Optional[Candidate] = _try(distance, motor, limits, g, width)
+            s = c.margins["worst"] if c is not None else math.inf
         except ValueError:  # the motor cannot start at this gamma
-            s = math.inf
-        if s <= 0:
+            c, s = None, math.inf
+        g_last, s_last, g_prev, s_prev = g, s, g_last, s_last
+        if c is not None and s <= 0:
+            if best is None or c.tf < best.tf:
+                best = c
             lo, s_lo = g, s
-            if s > -0.003:  # the bus within 0.3 % of its target: near enough
+            if g >= 1.0 or s > -_S_TOL:
                 break
-            if side == -1:
+            if side == -1 and not math.isnan(s_hi):
                 s_hi *= 0.5  # Illinois: the end kept twice in a row counts half
             side = -1
         else:
@@ -366,12 +386,20 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
             if side == 1 and not math.isnan(s_lo):
                 s_lo *= 0.5
             side = 1
-        if math.isfinite(s_hi) and not math.isnan(s_lo):
-            guess = lo + (hi - lo) * s_lo / (s_lo - s_hi)
-        elif math.isfinite(s_hi):
-            guess = 0.999 * hi / (1.0 + s_hi)  # the voltage about proportional to gamma
-        else:
-            guess = 0.5 * (lo + hi)
+        if hi - lo < 1e-4:
+            break
+        if not math.isnan(s_lo) and math.isfinite(s_hi):  # a bracket: regula falsi
+            g = lo + (hi - lo) * s_lo / (s_lo - s_hi)
+        elif math.isfinite(s_last) and math.isfinite(s_prev) and s_last != s_prev:  # one side: the secant
+            g = g_last - s_last * (g_last - g_prev) / (s_last - s_prev)
+            g = min(max(g, 0.5 * g_last), 1.5 * g_last)
+        elif math.isfinite(s_last):  # one point: the voltage about proportional to gamma
+            g = 0.999 * g_last / (1.0 + s_last)
+        else:  # an infinite measure: halve the bracket
+            g = 0.5 * (lo + hi)
+        if not math.isnan(s_hi):  # inside a measured bracket
+            g = min(max(g, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
+        g = min(g, 1.0)
     return best
 
 
@@ -391,17 +419,49 @@ def _plan(table: Table, distance: float, theta1: float, t0: float) -> PiecewiseP
 
 def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
               widths: Optional[tuple[float, ...]] = None) -> Candidate:
-    """The shortest feasible candidate over ``distance`` != 0 (module docstring); a ValueError when there is none."""
+    """The shortest feasible candidate over ``distance`` != 0 (module docstring); a ValueError when there is none.
+
+    The widths, sorted, are searched from the middle one outwards: down while the duration falls, then up while
+    it falls unless the way down found a shorter table (the duration first falls, then rises with the width);
+    infeasible widths do not stop a walk before a feasible one is found, and an infeasible middle width sends the
+    search both ways. Each width's search starts at the gamma the previous feasible width found.
+    """
     d = abs(distance)
-    tau_e = motor.L / motor.R
-    best: Optional[Candidate] = None
+    ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
     full = envelope(motor, limits, 1.0)
-    for w in widths or tuple(k * tau_e for k in _WIDTHS):
+    best: Optional[Candidate] = None
+    start = 1.0
+
+    def run(i: int) -> float:
+        nonlocal best, start
+        tm = timing(d, full, ws[i])
         # the duration falls as gamma rises: a width whose full-bus move is not shorter than the best cannot win
-        tm = timing(d, full, w)
         if best is not None and (tm.n + 2 * (tm.n_box - 1) - 1) * tm.dt >= best.tf:
-            continue
-        best = search_width(d, motor, limits, w, best)
+            return math.inf
+        c = search_width(d, motor, limits, ws[i], start)
+        if c is None:
+            return math.inf
+        start = c.gamma
+        if best is None or c.tf < best.tf:
+            best = c
+        return c.tf
+
+    def walk(i: int, step: int, f: float) -> bool:
+        """Whether a width beyond ws[i - step] was shorter; walks while the duration falls."""
+        better = False
+        while 0 <= i < len(ws):
+            fi = run(i)
+            if fi < f:
+                better, f = True, fi
+            elif f < math.inf:
+                break
+            i += step
+        return better
+
+    i0 = len(ws) // 2
+    f0 = run(i0)
+    if not walk(i0 - 1, -1, f0) or f0 == math.inf:  # an infeasible middle width: both ways
+        walk(i0 + 1, 1, f0)
     if best is None:
         raise ValueError(f"no feasible plan of {distance} rad within {limits}: raise v_bus or i_max, lower i_hold or "
                          "i_run, or split the move with waypoints")
