@@ -5,7 +5,8 @@
 
 #define TO_GAMMA_MIN FS_C(0.05)
 #define TO_TOP_ACCEL FS_C(0.01)
-#define TO_GAMMA_STEPS FS_C(16777216.0)  // 2^24
+#define TO_S_TOL FS_C(0.003)
+#define TO_GAMMA_STEPS FS_C(65536.0)  // 2^16
 #define TO_V_MARGIN FS_C(0.998)
 #define TO_NEWTON_TOL FS_C(1e-12)
 #define TO_FINE_LEN (TO_FINE_MAX + 2)
@@ -23,6 +24,7 @@ struct to_work {
 struct to_move {
     fs_real t1, cruise, t2, w_peak, dt;
     size_t n_box, n;
+    size_t r, k;  // the cut: k samples of the cruise from sample r on are not sampled
 };
 
 size_t time_optimal_work_len(void)
@@ -165,7 +167,8 @@ static void cumtrapz(const fs_real *y, const fs_real *x, fs_real dx, size_t n, f
 static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *mv)
 {
     size_t i, g = TO_GRID;
-    fs_real total, dt, span, x;
+    long keep, first, last;
+    fs_real total, dt, core, x;
     for (i = 0; i < g; i++) {  // the integrands, then their running integrals in place
         w->tacc[i] = 1 / w->ap[i];
         w->tdec[i] = 1 / -w->am[i];
@@ -186,13 +189,21 @@ static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_mov
     mv->t1 = interp(mv->w_peak, w->omega, w->tacc, g);
     mv->t2 = interp(mv->w_peak, w->omega, w->tdec, g);
     total = mv->t1 + mv->cruise + mv->t2;
-    span = total + 2 * width;
-    dt = fs_min(span / TO_FINE, fs_min(fs_min(mv->t1, mv->t2), width) / TO_PER_PHASE);
-    mv->dt = dt = fs_max(dt, span / TO_FINE_MAX);
+    core = mv->t1 + mv->t2 + fs_min(mv->cruise, 4 * width) + 2 * width;
+    dt = fs_min(core / TO_FINE, fs_min(fs_min(mv->t1, mv->t2), width) / TO_PER_PHASE);
+    mv->dt = dt = fs_max(dt, core / TO_FINE_MAX);
     x = fs_rint(width / dt);  // numpy's round: half to even, as rint in the default rounding mode
     mv->n_box = x < 1 ? 1 : (size_t)x;
     x = total / dt;
     mv->n = (size_t)x + (x > (fs_real)(size_t)x) + 1;  // ceil(total / dt) + 1
+    // the cut: inside the raw cruise (from ceil(t1 / dt) + 1 to floor((t1 + cruise) / dt) - 1), 2 n_box + 4
+    // samples kept at each end
+    keep = 2 * (long)mv->n_box + 4;
+    x = mv->t1 / dt;
+    first = (long)x + (x > (fs_real)(long)x) + 1;
+    last = (long)((mv->t1 + mv->cruise) / dt) - 1;
+    mv->r = (size_t)(first + keep);
+    mv->k = last - keep - (first + keep) > 0 ? (size_t)(last - keep - (first + keep)) : 0;
 }
 
 // Returns the length of x after a box of n samples: x convolved with it through the running sum in s
@@ -304,14 +315,14 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
                            struct to_work *w)
 {
     struct to_move mv;
-    fs_real total, t, *speed = w->a, *theta = w->c, scale, s0[4], s1[4], r0[4], r1[4], h;
-    size_t i, len, nk, last, j_acc = 0, j_dec = TO_GRID - 2;
+    fs_real total, t, *speed = w->a, *theta = w->c, scale, cruise, extra, angle, s0[4], s1[4], r0[4], r1[4], h;
+    size_t i, len, nk, last, at, r, j_acc = 0, j_dec = TO_GRID - 2;
     bang_bang(d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
-    if (mv.n + 2 * (mv.n_box - 1) > TO_FINE_LEN)
+    if (mv.n - mv.k + 2 * (mv.n_box - 1) > TO_FINE_LEN)
         return false;
-    for (i = 0; i < mv.n; i++) {
-        t = (fs_real)i * mv.dt;
+    for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt: the cut is not sampled
+        t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
         if (t <= mv.t1)
             speed[i] = interp_walk(t, w->tacc, w->omega, TO_GRID, &j_acc);
         else if (t < mv.t1 + mv.cruise)
@@ -319,28 +330,36 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
         else
             speed[i] = interp_walk(total - t, w->tdec, w->omega, TO_GRID, &j_dec);
     }
-    speed[mv.n - 1] = 0;
-    len = box(speed, mv.n, mv.n_box, w->c, w->b);
+    speed[mv.n - mv.k - 1] = 0;
+    len = box(speed, mv.n - mv.k, mv.n_box, w->c, w->b);
     len = box(w->b, len, mv.n_box, w->c, speed);
     cumtrapz(speed, NULL, mv.dt, len, theta);
-    scale = d / theta[len - 1];
+    r = mv.r < len - 1 ? mv.r : len - 1;  // no cut (k = 0): r only has to index the profile
+    cruise = mv.k ? speed[r] : 0;
+    extra = (fs_real)mv.k * mv.dt * cruise;  // the angle of the cut's cruise
+    scale = d / (theta[len - 1] + extra);
     for (i = 0; i < len; i++)
         speed[i] *= scale;
     last = len - 1;
-    nk = knots(last, (mv.t1 + 2 * width) / mv.dt, (mv.t1 + mv.cruise) / mv.dt, mv.cruise > 0, w->knot);
+    nk = knots(last + mv.k, (mv.t1 + 2 * width) / mv.dt, (mv.t1 + mv.cruise) / mv.dt, mv.cruise > 0, w->knot);
+    if (nk < 2)
+        return false;
     w->tr.n = nk - 1;
     w->breaks[0] = 0;
     for (i = 0; i < nk; i++) {
         size_t k = (size_t)w->knot[i];
-        s1[0] = theta[k] * scale;
-        s1[1] = speed[k];
-        s1[2] = gradient(speed, len, k, mv.dt);
-        s1[3] = gradient2(speed, len, k, mv.dt);
-        r1[0] = rho_at(m, lim, speed, len, k, mv.dt);
-        r1[1] = k == 0      ? (rho_at(m, lim, speed, len, 1, mv.dt) - r1[0]) / mv.dt
-                : k == last ? (r1[0] - rho_at(m, lim, speed, len, last - 1, mv.dt)) / mv.dt
-                            : (rho_at(m, lim, speed, len, k + 1, mv.dt) - rho_at(m, lim, speed, len, k - 1, mv.dt))
-                                  / (2 * mv.dt);
+        // the sample the knot reads: itself before the cut, the constant cruise in it, k earlier after it
+        at = k < r ? k : k >= r + mv.k ? k - mv.k : r;
+        angle = k < r ? theta[at] : k >= r + mv.k ? theta[at] + extra : theta[r] + (fs_real)(k - r) * mv.dt * cruise;
+        s1[0] = angle * scale;
+        s1[1] = speed[at];
+        s1[2] = gradient(speed, len, at, mv.dt);
+        s1[3] = gradient2(speed, len, at, mv.dt);
+        r1[0] = rho_at(m, lim, speed, len, at, mv.dt);
+        r1[1] = at == 0      ? (rho_at(m, lim, speed, len, 1, mv.dt) - r1[0]) / mv.dt
+                : at == last ? (r1[0] - rho_at(m, lim, speed, len, last - 1, mv.dt)) / mv.dt
+                             : (rho_at(m, lim, speed, len, at + 1, mv.dt) - rho_at(m, lim, speed, len, at - 1, mv.dt))
+                                   / (2 * mv.dt);
         r1[2] = r1[3] = 0;
         if (i == 0 || i == nk - 1)
             s1[1] = s1[2] = s1[3] = 0;
@@ -445,6 +464,9 @@ struct to_search {
     struct to_work w;
     struct to_result *out;
     bool found, overflow;
+    fs_real width[TO_MAX_WIDTHS], full[TO_MAX_WIDTHS];  // the widths, sorted, and their full-bus durations
+    size_t nw;
+    fs_real start, width_tf, width_gamma;  // the next search's first gamma; the last width's best
 };
 
 // Returns the measure s of the table at gamma and width (inf when the motor cannot start or the profile does not
@@ -469,6 +491,10 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
 #ifdef TO_DEBUG
     printf("C g=%.17g w=%.6g s=%.17g tf=%.17g\n", gamma, width, mg.worst, s->w.breaks[s->w.tr.n]);
 #endif
+    if (mg.worst <= 0 && s->w.breaks[s->w.tr.n] < s->width_tf) {
+        s->width_tf = s->w.breaks[s->w.tr.n];
+        s->width_gamma = gamma;
+    }
     if (mg.worst <= 0 && (!s->found || s->w.breaks[s->w.tr.n] < out->breaks[out->n])) {
         s->found = true;
         out->n = s->w.tr.n;
@@ -482,42 +508,78 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
     return mg.worst;
 }
 
-// Returns nothing; the regula falsi on gamma at one width (time_optimal.search_width).
-static void search_width(struct to_search *s, fs_real width)
+// Returns nothing; the search on gamma at one width from start (time_optimal.search_width): regula falsi in a
+// measured bracket, else the secant through the last two tables, else the proportional guess; s->width_tf and
+// s->width_gamma are the width's shortest feasible table's duration and gamma (inf and 0 when none).
+static void search_width(struct to_search *s, fs_real width, fs_real start)
 {
-    fs_real lo = 0, hi = 1, s_lo = 0, s_hi = try_table(s, 1, width), guess, span, g, x;
-    bool have_lo = false;
+    const fs_real nan = (fs_real)NAN;
+    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, g = start, x, g_last = nan, s_last = nan, g_prev, s_prev;
     int side = 0, it;
-    if (s_hi <= 0)
-        return;
-    guess = fs_isfinite(s_hi) ? 1 / (1 + s_hi) : FS_C(0.5);
-    for (it = 0; it < TO_SEARCH - 1; it++) {
-        span = hi - lo;
-        g = fs_min(fs_max(guess, lo + FS_C(0.02) * span), hi - FS_C(0.02) * span);
+    s->width_tf = (fs_real)INFINITY;
+    s->width_gamma = 0;
+    for (it = 0; it < TO_SEARCH; it++) {
         g = fs_rint(g * TO_GAMMA_STEPS) / TO_GAMMA_STEPS;  // on a grid: both planners try the same gamma
         if (g < TO_GAMMA_MIN)
             break;
         x = try_table(s, g, width);
+        g_prev = g_last, s_prev = s_last, g_last = g, s_last = x;
         if (x <= 0) {
-            lo = g, s_lo = x, have_lo = true;
-            if (x > FS_C(-0.003))
+            lo = g, s_lo = x;
+            if (g >= 1 || x > -TO_S_TOL)
                 break;
-            if (side == -1)
-                s_hi *= FS_C(0.5);
+            if (side == -1 && !isnan(s_hi))
+                s_hi *= FS_C(0.5);  // Illinois: the end kept twice in a row counts half
             side = -1;
         } else {
             hi = g, s_hi = x;
-            if (side == 1 && have_lo)
+            if (side == 1 && !isnan(s_lo))
                 s_lo *= FS_C(0.5);
             side = 1;
         }
-        if (fs_isfinite(s_hi) && have_lo)
-            guess = lo + (hi - lo) * s_lo / (s_lo - s_hi);
-        else if (fs_isfinite(s_hi))
-            guess = FS_C(0.999) * hi / (1 + s_hi);
+        if (hi - lo < FS_C(1e-4))
+            break;
+        if (!isnan(s_lo) && fs_isfinite(s_hi))
+            g = lo + (hi - lo) * s_lo / (s_lo - s_hi);
+        else if (fs_isfinite(s_last) && fs_isfinite(s_prev) && s_last != s_prev) {
+            g = g_last - s_last * (g_last - g_prev) / (s_last - s_prev);
+            g = fs_min(fs_max(g, FS_C(0.5) * g_last), FS_C(1.5) * g_last);
+        } else if (fs_isfinite(s_last))
+            g = FS_C(0.999) * g_last / (1 + s_last);
         else
-            guess = FS_C(0.5) * (lo + hi);
+            g = FS_C(0.5) * (lo + hi);
+        if (!isnan(s_hi))  // inside a measured bracket
+            g = fs_min(fs_max(g, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));
+        g = fs_min(g, 1);
     }
+}
+
+// Returns the duration of width i's shortest feasible table (inf when none, or when its full-bus duration cannot
+// beat the best); the next width's search starts at its gamma (time_optimal.plan_move's run).
+static fs_real run_width(struct to_search *s, size_t i)
+{
+    if (s->found && s->full[i] >= s->out->breaks[s->out->n])
+        return (fs_real)INFINITY;
+    search_width(s, s->width[i], s->start);
+    if (s->width_tf < (fs_real)INFINITY)
+        s->start = s->width_gamma;
+    return s->width_tf;
+}
+
+// Returns true when a width beyond the one before i was shorter; walks by step while the duration falls
+// (time_optimal.plan_move's walk).
+static bool walk(struct to_search *s, long i, long step, fs_real f)
+{
+    bool better = false;
+    fs_real fi;
+    for (; i >= 0 && i < (long)s->nw; i += step) {
+        fi = run_width(s, (size_t)i);
+        if (fi < f)
+            better = true, f = fi;
+        else if (f < (fs_real)INFINITY)
+            break;
+    }
+    return better;
 }
 
 // Returns true when every limit is finite and in range.
@@ -537,21 +599,24 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
     static const fs_real DEFAULT_WIDTHS[] = {FS_C(0.25), FS_C(0.5), 1, 2, 4};
     struct to_search s;
     struct to_move mv;
-    fs_real width[TO_MAX_WIDTHS], full[TO_MAX_WIDTHS], sign = distance < 0 ? -1 : 1;
-    size_t i, k, nw = widths ? n_widths : sizeof DEFAULT_WIDTHS / sizeof *DEFAULT_WIDTHS;
+    fs_real sign = distance < 0 ? -1 : 1, f0, x;
+    size_t i, j, k, nw = widths ? n_widths : sizeof DEFAULT_WIDTHS / sizeof *DEFAULT_WIDTHS;
     out->n = 0;
     out->tables = 0;
     if (!motor_params_valid(m) || !limits_valid(lim) || !fs_isfinite(distance) || distance == 0 || nw < 1
         || nw > TO_MAX_WIDTHS)
         return TO_EARGS;
-    for (i = 0; i < nw; i++) {
-        width[i] = widths ? widths[i] : DEFAULT_WIDTHS[i] * (m->L / m->R);
-        if (!(fs_isfinite(width[i]) && width[i] > 0))
+    for (i = 0; i < nw; i++) {  // insertion into the sorted widths
+        x = widths ? widths[i] : DEFAULT_WIDTHS[i] * (m->L / m->R);
+        if (!(fs_isfinite(x) && x > 0))
             return TO_EARGS;
+        for (j = i; j > 0 && s.width[j - 1] > x; j--)
+            s.width[j] = s.width[j - 1];
+        s.width[j] = x;
     }
     if (!work || work_len < time_optimal_work_len())
         return TO_EWORK;
-    s.m = m, s.lim = lim, s.d = fs_fabs(distance), s.out = out, s.found = s.overflow = false;
+    s.m = m, s.lim = lim, s.d = fs_fabs(distance), s.out = out, s.found = s.overflow = false, s.nw = nw, s.start = 1;
     s.w.omega = work, s.w.ap = work + TO_GRID, s.w.am = work + 2 * TO_GRID, s.w.tacc = work + 3 * TO_GRID;
     s.w.tdec = work + 4 * TO_GRID, s.w.dboth = work + 5 * TO_GRID;
     s.w.a = work + 6 * TO_GRID, s.w.b = s.w.a + TO_FINE_LEN + 1, s.w.c = s.w.b + TO_FINE_LEN + 1;
@@ -564,14 +629,14 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
     if (!envelope(m, lim, 1, &s.w))
         return TO_ESTART;
     for (i = 0; i < nw; i++) {  // the full-bus durations: a width whose is not shorter than the best cannot win
-        bang_bang(s.d, width[i], &s.w, &mv);
-        full[i] = (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
+        bang_bang(s.d, s.width[i], &s.w, &mv);
+        s.full[i] = (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
     }
-    for (i = 0; i < nw; i++) {
-        if (s.found && full[i] >= out->breaks[out->n])
-            continue;
-        search_width(&s, width[i]);
-    }
+    // from the middle width down while the duration falls, then up unless down found a shorter table (both ways
+    // from an infeasible middle width)
+    f0 = run_width(&s, nw / 2);
+    if (!walk(&s, (long)(nw / 2) - 1, -1, f0) || !(f0 < (fs_real)INFINITY))
+        walk(&s, (long)(nw / 2) + 1, 1, f0);
     if (!s.found) {
         out->n = 0;
         return TO_ENOPLAN;

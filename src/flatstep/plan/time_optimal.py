@@ -60,7 +60,7 @@ _CHECK = 8           # samples per segment of the search's margin check (tau = j
 _WIDTHS = (0.25, 0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
 _SEARCH = 6          # tables tried per width on gamma, at most
 _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
-_GAMMA_STEPS = 2.0**24  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
+_GAMMA_STEPS = 2.0**16  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
 _V_MARGIN = 0.998    # of v_use: the sampled check may miss the peak between its samples by about that much
 _S_TOL = 0.003       # a feasible table within 0.3 % of the bus target ends a width's search
 _NEWTON_TOL = 1e-12  # Newton stops when its step is below this fraction of i_max
