@@ -315,8 +315,8 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
                            struct to_work *w)
 {
     struct to_move mv;
-    fs_real total, t, *speed = w->a, *theta = w->c, scale, cruise, extra, angle, s0[4], s1[4], r0[4], r1[4], h;
-    size_t i, len, nk, last, at, r, j_acc = 0, j_dec = TO_GRID - 2;
+    fs_real total, t, *speed = w->a, *inc = w->c, scale, cruise, sum, angle = 0, step, s0[4], s1[4], r0[4], r1[4], h;
+    size_t i, j, len, nk, last, at, at0 = 0, r, j_acc = 0, j_dec = TO_GRID - 2;
     bang_bang(d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
     if (mv.n - mv.k + 2 * (mv.n_box - 1) > TO_FINE_LEN)
@@ -333,11 +333,14 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
     speed[mv.n - mv.k - 1] = 0;
     len = box(speed, mv.n - mv.k, mv.n_box, w->c, w->b);
     len = box(w->b, len, mv.n_box, w->c, speed);
-    cumtrapz(speed, NULL, mv.dt, len, theta);
+    sum = 0;
+    for (i = 0; i + 1 < len; i++) {  // the trapezoids of the angle
+        inc[i] = FS_C(0.5) * (speed[i + 1] + speed[i]) * mv.dt;
+        sum += inc[i];
+    }
     r = mv.r < len - 1 ? mv.r : len - 1;  // no cut (k = 0): r only has to index the profile
     cruise = mv.k ? speed[r] : 0;
-    extra = (fs_real)mv.k * mv.dt * cruise;  // the angle of the cut's cruise
-    scale = d / (theta[len - 1] + extra);
+    scale = d / (sum + (fs_real)mv.k * mv.dt * cruise);
     for (i = 0; i < len; i++)
         speed[i] *= scale;
     last = len - 1;
@@ -350,8 +353,7 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
         size_t k = (size_t)w->knot[i];
         // the sample the knot reads: itself before the cut, the constant cruise in it, k earlier after it
         at = k < r ? k : k >= r + mv.k ? k - mv.k : r;
-        angle = k < r ? theta[at] : k >= r + mv.k ? theta[at] + extra : theta[r] + (fs_real)(k - r) * mv.dt * cruise;
-        s1[0] = angle * scale;
+        s1[0] = 0;
         s1[1] = speed[at];
         s1[2] = gradient(speed, len, at, mv.dt);
         s1[3] = gradient2(speed, len, at, mv.dt);
@@ -363,15 +365,27 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
         r1[2] = r1[3] = 0;
         if (i == 0 || i == nk - 1)
             s1[1] = s1[2] = s1[3] = 0;
-        if (i == nk - 1)
-            s1[0] = d;
         if (i > 0) {
+            size_t k0 = (size_t)w->knot[i - 1], c0 = k0 < r ? r : k0 > r + mv.k ? r + mv.k : k0;
+            size_t c1 = k < r ? r : k > r + mv.k ? r + mv.k : k;
+            // the angle from the last knot: the trapezoids between their samples and the cut's samples between them
+            sum = 0;
+            for (j = at0; j < at; j++)
+                sum += inc[j];
+            step = (sum + (fs_real)(c1 - c0) * mv.dt * cruise) * scale;
+            if (i == nk - 1)
+                step = d - angle;  // the move ends at the distance
             h = (w->knot[i] - w->knot[i - 1]) * mv.dt;
             w->breaks[i] = w->breaks[i - 1] + h;
+            s1[0] = step;  // each segment from 0 to its step, its start angle added after (module docstring)
             hermite_row(s0, s1, h, w->theta + (i - 1) * TRAJ_NCOEF);
+            w->theta[(i - 1) * TRAJ_NCOEF + TRAJ_NCOEF - 1] += angle;
             hermite_row(r0, r1, h, w->rho + (i - 1) * TRAJ_NCOEF);
+            angle += step;
         }
+        at0 = at;
         memcpy(s0, s1, sizeof s0);
+        s0[0] = 0;
         memcpy(r0, r1, sizeof r0);
     }
     return true;

@@ -253,8 +253,8 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
     """The bang-bang move on ``env`` over ``distance`` > 0, smoothed twice by a box of ``width`` [s], as a table.
 
     The profile is sampled without the cut of :func:`timing` (sample ``i >= r`` at ``(i + k) dt``); a knot in the
-    cut reads the constant cruise at sample ``r``, a knot after it the sample ``k`` earlier, its angle ``k dt`` of
-    cruise further on.
+    cut reads the constant cruise at sample ``r``, a knot after it the sample ``k`` earlier. The angle between
+    knots sums the profile's trapezoids between them and the cut's cruise they span.
     """
     b, dt, n_box, n, r, k = timing(distance, env, width)
     total = b.t1 + b.cruise + b.t2
@@ -264,27 +264,34 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
                      np.where(t < b.t1 + b.cruise, b.w_peak, np.interp(total - t, b.t_dec, env.omega)))
     speed[-1] = 0.0
     speed = _box(_box(speed, n_box), n_box)
-    theta = np.concatenate([[0.0], np.cumsum(0.5 * (speed[1:] + speed[:-1]) * dt)])
+    inc = 0.5 * (speed[1:] + speed[:-1]) * dt  # the trapezoids of the angle
     r = min(r, speed.size - 1)  # no cut (k = 0): r only has to index the profile
     cruise = speed[r] if k else 0.0
-    extra = k * dt * cruise  # the angle of the cut's cruise
-    scale = distance / (theta[-1] + extra)
+    scale = distance / (np.sum(inc) + k * dt * cruise)
     knots = _knots(speed.size - 1 + k, (b.t1 + 2 * width) / dt, (b.t1 + b.cruise) / dt, b.cruise > 0)
     at = np.where(knots < r, knots, np.where(knots >= r + k, knots - k, r))  # the sample each knot reads
-    angle = np.where(knots < r, theta[at],
-                     np.where(knots >= r + k, theta[at] + extra, theta[r] + (knots - r) * dt * cruise))
+    # the angle from knot to knot: the trapezoids between their samples and the cut's samples between them
+    sums = np.where(at[1:] > at[:-1], np.add.reduceat(inc, np.minimum(at[:-1], inc.size - 1)), 0.0)
+    cut = np.clip(knots[1:], r, r + k) - np.clip(knots[:-1], r, r + k)
+    step = (sums + cut * dt * cruise) * scale
+    angle = np.concatenate([[0.0], np.cumsum(step)])
+    step[-1] = distance - angle[-2]  # the move ends at the distance
     speed = speed * scale
     acc = _gradient(speed, dt)
     jerk = _gradient(acc, dt)
-    state = np.column_stack([angle * scale, speed[at], acc[at], jerk[at]])
+    state = np.column_stack([angle, speed[at], acc[at], jerk[at]])
     state[0, 1:] = state[-1, 1:] = 0.0
-    state[-1, 0] = distance
     h = np.diff(knots) * dt
     rho = limits.rho((motor.J * acc + motor.B * speed) / motor.Km, speed)
     # rho and rho' at the knots (the law reads rho' only); rho'' and rho''' set to 0 keep each segment monotone
     rho_state = np.column_stack([rho, _gradient(rho, dt), 0 * rho, 0 * rho])[at]
-    return Table(np.concatenate([[0.0], np.cumsum(h)]), hermite_rows(state[:-1], state[1:], h),
-                 hermite_rows(rho_state[:-1], rho_state[1:], h))
+    # each segment from 0 to its step, its start angle added after: rounding of the angle [rad] divided by h^3
+    # would otherwise show in the jerk at the breaks
+    start, end = state[:-1].copy(), state[1:].copy()
+    start[:, 0], end[:, 0] = 0.0, step
+    rows = hermite_rows(start, end, h)
+    rows[:, -1] += angle[:-1]
+    return Table(np.concatenate([[0.0], np.cumsum(h)]), rows, hermite_rows(rho_state[:-1], rho_state[1:], h))
 
 
 def table_margins(table: Table, motor: MotorParams, limits: MotorLimits, samples: int = _CHECK) -> dict[str, float]:
