@@ -6,6 +6,7 @@
 #define TO_GAMMA_MIN FS_C(0.05)
 #define TO_TOP_ACCEL FS_C(0.01)
 #define TO_S_TOL FS_C(0.003)
+#define TO_ANGLE_PLAN FS_C(0.98)
 #define TO_GAMMA_STEPS FS_C(65536.0)  // 2^16
 #define TO_V_MARGIN FS_C(0.998)
 #define TO_NEWTON_TOL FS_C(1e-12)
@@ -211,9 +212,12 @@ static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_mov
 static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
 {
     size_t i, out_len = len + n - 1;
-    s[0] = 0;
-    for (i = 0; i < len + 2 * (n - 1); i++)
-        s[i + 1] = s[i] + (i >= n - 1 && i < n - 1 + len ? x[i - (n - 1)] : 0);
+    for (i = 0; i < n; i++)  // the running sum of x padded by n - 1 zeros at each end
+        s[i] = 0;
+    for (i = 0; i < len; i++)
+        s[n + i] = s[n - 1 + i] + x[i];
+    for (i = n + len; i < len + 2 * n - 1; i++)
+        s[i] = s[i - 1];
     for (i = 0; i < out_len; i++)
         out[i] = (s[i + n] - s[i]) / (fs_real)n;
     return out_len;
@@ -295,18 +299,18 @@ static void hermite_row(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_
     }
 }
 
-// Returns the planned rho* at torque current iq and speed w (MotorLimits.rho).
-static fs_real rho_star(const struct to_limits *lim, fs_real iq, fs_real w)
+// Returns the planned rho* at torque current iq and speed w (MotorLimits.rho); cot is cot(torque_angle_max).
+static fs_real rho_star(const struct to_limits *lim, fs_real cot, fs_real iq, fs_real w)
 {
-    fs_real f = floor_current(lim, w), q = iq * fs_cos(lim->torque_angle_max) / fs_sin(lim->torque_angle_max);
-    return fs_hypot(iq, fs_hypot(f, q));
+    fs_real f = floor_current(lim, w), q = iq * cot;
+    return fs_sqrt(iq * iq + (f * f + q * q));
 }
 
 // Returns rho* at sample i of the scaled speed profile v (len samples, step dt).
-static fs_real rho_at(const struct motor_params *m, const struct to_limits *lim, const fs_real *v, size_t len, size_t i,
-                      fs_real dt)
+static fs_real rho_at(const struct motor_params *m, const struct to_limits *lim, fs_real cot, const fs_real *v,
+                      size_t len, size_t i, fs_real dt)
 {
-    return rho_star(lim, (m->J * gradient(v, len, i, dt) + m->B * v[i]) / m->Km, v[i]);
+    return rho_star(lim, cot, (m->J * gradient(v, len, i, dt) + m->B * v[i]) / m->Km, v[i]);
 }
 
 // Returns true and builds the candidate table w->tr of the move over d > 0 at width (time_optimal.smoothed_table);
@@ -317,6 +321,7 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
     struct to_move mv;
     fs_real total, t, *speed = w->a, *inc = w->c, scale, cruise, sum, angle = 0, step, s0[4], s1[4], r0[4], r1[4], h;
     size_t i, j, len, nk, last, at, at0 = 0, r, j_acc = 0, j_dec = TO_GRID - 2;
+    fs_real cot = fs_cos(lim->torque_angle_max) / fs_sin(lim->torque_angle_max);
     bang_bang(d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
     if (mv.n - mv.k + 2 * (mv.n_box - 1) > TO_FINE_LEN)
@@ -357,11 +362,12 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
         s1[1] = speed[at];
         s1[2] = gradient(speed, len, at, mv.dt);
         s1[3] = gradient2(speed, len, at, mv.dt);
-        r1[0] = rho_at(m, lim, speed, len, at, mv.dt);
-        r1[1] = at == 0      ? (rho_at(m, lim, speed, len, 1, mv.dt) - r1[0]) / mv.dt
-                : at == last ? (r1[0] - rho_at(m, lim, speed, len, last - 1, mv.dt)) / mv.dt
-                             : (rho_at(m, lim, speed, len, at + 1, mv.dt) - rho_at(m, lim, speed, len, at - 1, mv.dt))
-                                   / (2 * mv.dt);
+        r1[0] = rho_at(m, lim, cot, speed, len, at, mv.dt);
+        r1[1] = at == 0 ? (rho_at(m, lim, cot, speed, len, 1, mv.dt) - r1[0]) / mv.dt
+                : at == last
+                    ? (r1[0] - rho_at(m, lim, cot, speed, len, last - 1, mv.dt)) / mv.dt
+                    : (rho_at(m, lim, cot, speed, len, at + 1, mv.dt) - rho_at(m, lim, cot, speed, len, at - 1, mv.dt))
+                          / (2 * mv.dt);
         r1[2] = r1[3] = 0;
         if (i == 0 || i == nk - 1)
             s1[1] = s1[2] = s1[3] = 0;
@@ -406,14 +412,17 @@ static fs_real horner(const fs_real *c, int deg, fs_real tau)
 static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
 {
     fs_real p = 1;
-    int j, q, deg = TRAJ_NCOEF - 1 - k;
+    int j, q, lead = 0, deg;
+    while (lead < TRAJ_NCOEF - 1 - k && row[lead] == 0)  // leading zeros: a lower degree
+        lead++;
+    deg = TRAJ_NCOEF - 1 - k - lead;
     for (q = 0; q < k; q++)
         p *= h;
     for (j = 0; j <= deg; j++) {
         fs_real fall = 1;
         for (q = 0; q < k; q++)
-            fall *= (fs_real)(TRAJ_NCOEF - 1 - j - q);
-        out[j] = row[j] * fall / p;
+            fall *= (fs_real)(TRAJ_NCOEF - 1 - (j + lead) - q);
+        out[j] = row[j + lead] * fall / p;
     }
     return deg;
 }
@@ -429,13 +438,13 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
     for (i = 0; i < tr->n; i++) {
         fs_real h = tr->breaks[i + 1] - tr->breaks[i];
         const fs_real *th = tr->theta + i * TRAJ_NCOEF, *rh = tr->rho + i * TRAJ_NCOEF;
-        fs_real c1[TRAJ_NCOEF], c2[TRAJ_NCOEF], c3[TRAJ_NCOEF], c4[TRAJ_NCOEF];
+        fs_real c0[TRAJ_NCOEF], c1[TRAJ_NCOEF], c2[TRAJ_NCOEF], c3[TRAJ_NCOEF], c4[TRAJ_NCOEF];
         int g1 = deriv_row(th, 1, h, c1), g2 = deriv_row(th, 2, h, c2), g3 = deriv_row(th, 3, h, c3);
-        int g4 = deriv_row(rh, 1, h, c4);
+        int g4 = deriv_row(rh, 1, h, c4), g0 = deriv_row(rh, 0, h, c0);
         for (j = 0; j < TO_CHECK + (i == tr->n - 1); j++) {
             fs_real tau = (fs_real)j / TO_CHECK;  // j = TO_CHECK on the last segment: its end
             fs_real w = horner(c1, g1, tau), acc = horner(c2, g2, tau), jerk = horner(c3, g3, tau);
-            fs_real rho = horner(rh, TRAJ_NCOEF - 1, tau), drho = horner(c4, g4, tau);
+            fs_real rho = horner(c0, g0, tau), drho = horner(c4, g4, tau);
             rho_max = fs_max(rho_max, rho);
             w_max = fs_max(w_max, fs_fabs(w));
             a_max = fs_max(a_max, fs_fabs(acc));
@@ -474,6 +483,7 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
 struct to_search {
     const struct motor_params *m;
     const struct to_limits *lim;
+    struct to_limits plan;  // the limits planned with: the torque angle cap TO_ANGLE_PLAN times lim's
     fs_real d, env_gamma;
     struct to_work w;
     struct to_result *out;
@@ -491,12 +501,12 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
     struct to_result *out = s->out;
     if (s->env_gamma != gamma) {
         s->env_gamma = gamma;
-        if (!envelope(s->m, s->lim, gamma, &s->w)) {
+        if (!envelope(s->m, &s->plan, gamma, &s->w)) {
             s->env_gamma = -1;
             return (fs_real)INFINITY;
         }
     }
-    if (!smoothed_table(s->m, s->lim, s->d, width, &s->w)) {
+    if (!smoothed_table(s->m, &s->plan, s->d, width, &s->w)) {
         s->overflow = true;
         return (fs_real)INFINITY;
     }
@@ -639,8 +649,10 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
     s.w.theta = s.w.breaks + TO_MAX_SEGMENTS + 1;
     s.w.rho = s.w.theta + TO_MAX_SEGMENTS * TRAJ_NCOEF;
     s.w.tr.breaks = s.w.breaks, s.w.tr.theta = s.w.theta, s.w.tr.rho = s.w.rho;
+    s.plan = *lim;
+    s.plan.torque_angle_max *= TO_ANGLE_PLAN;
     s.env_gamma = 1;
-    if (!envelope(m, lim, 1, &s.w))
+    if (!envelope(m, &s.plan, 1, &s.w))
         return TO_ESTART;
     for (i = 0; i < nw; i++) {  // the full-bus durations: a width whose is not shorter than the best cannot win
         bang_bang(s.d, s.width[i], &s.w, &mv);

@@ -37,6 +37,7 @@ smoothing width of a small set (multiples of :math:`L/R`), the table's worst mar
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import NamedTuple, Optional
 
 import numpy as np
@@ -62,6 +63,7 @@ _SEARCH = 6          # tables tried per width on gamma, at most
 _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
 _GAMMA_STEPS = 2.0**16  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
 _V_MARGIN = 0.998    # of v_use: the sampled check may miss the peak between its samples by about that much
+_ANGLE_PLAN = 0.98   # the torque angle cap planned with, of the true one (planning_limits)
 _S_TOL = 0.003       # a feasible table within 0.3 % of the bus target ends a width's search
 _NEWTON_TOL = 1e-12  # Newton stops when its step is below this fraction of i_max
 #: The most segments of a table the planner writes (csrc/time_optimal.h ``TO_MAX_SEGMENTS``).
@@ -351,9 +353,19 @@ class Candidate(NamedTuple):
     table: Table
 
 
+def planning_limits(limits: MotorLimits) -> MotorLimits:
+    """The limits the envelope and rho* are planned with: the torque angle cap ``_ANGLE_PLAN`` times the true one.
+
+    rho* keeps the torque angle at its cap where the torque current is large; the table's fit would otherwise
+    cross it by a little wherever it does, a margin no bus fraction could buy back.
+    """
+    return replace(limits, torque_angle_max=limits.torque_angle_max * _ANGLE_PLAN)
+
+
 def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float) -> Candidate:
-    """The table at ``gamma`` and ``width`` and its margins."""
-    table = smoothed_table(distance, envelope(motor, limits, gamma), width, motor, limits)
+    """The table at ``gamma`` and ``width`` (planned within :func:`planning_limits`) and its margins."""
+    plan = planning_limits(limits)
+    table = smoothed_table(distance, envelope(motor, plan, gamma), width, motor, plan)
     return Candidate(float(table.breaks[-1]), gamma, width, table_margins(table, motor, limits), table)
 
 
@@ -435,7 +447,7 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     """
     d = abs(distance)
     ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
-    full = envelope(motor, limits, 1.0)
+    full = envelope(motor, planning_limits(limits), 1.0)
     best: Optional[Candidate] = None
     start = 1.0
 
