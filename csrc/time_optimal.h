@@ -14,7 +14,7 @@ enum {
     TO_GRID = 192,                   // speed-grid points of the phase plane
     TO_PROBE = 64,                   // speed-grid points of the probe for the top speed
     TO_FINE = 1000,                  // time samples of the smoothed profile, at least
-    TO_FINE_MAX = 12000,             // time samples of the smoothed profile, at most (box tails included)
+    TO_FINE_MAX = 4000,              // time samples of the smoothed profile, at most (a long cruise is cut)
     TO_PER_PHASE = 16,               // samples over the shortest of speed-up, braking and smoothing width
     TO_KNOTS = 64,                   // segments of the table in speed-up and braking (4 more in a cruise)
     TO_CHECK = 8,                    // samples per segment of the margin check (tau = j / 8)

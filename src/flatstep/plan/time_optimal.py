@@ -54,7 +54,7 @@ _GRID = 192          # speed-grid points of the phase plane
 _PROBE = 64          # speed-grid points of the probe for the top speed
 _TOP_ACCEL = 0.01    # the top speed: where a+ falls to this fraction of a+ at rest
 _FINE = 1000         # time samples of the smoothed profile (at least)
-_FINE_MAX = 12000    # time samples of the smoothed profile (at most, box tails included)
+_FINE_MAX = 4000     # time samples of the smoothed profile, at most (box tails included; a long cruise is cut)
 _PER_PHASE = 16      # time samples over the shortest of speed-up, braking and smoothing width (at least)
 _KNOTS = 64          # segments of the table (speed-up and braking halves; 4 more in the cruise)
 _CHECK = 8           # samples per segment of the search's margin check (tau = j / 8: the middle included)
