@@ -556,6 +556,8 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
                 s_hi *= FS_C(0.5);  // Illinois: the end kept twice in a row counts half
             side = -1;
         } else {
+            if (s->found && s->w.breaks[s->w.tr.n] >= s->out->breaks[s->out->n] && s->env_gamma == g)
+                break;  // every feasible gamma of this width lies below g, and is slower still
             hi = g, s_hi = x;
             if (side == 1 && !isnan(s_lo))
                 s_lo *= FS_C(0.5);

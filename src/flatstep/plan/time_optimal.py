@@ -370,12 +370,13 @@ def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
 
 
 def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width: float,
-                 start: float = 1.0) -> Optional[Candidate]:
+                 start: float = 1.0, bound: float = math.inf) -> Optional[Candidate]:
     """The regula falsi on gamma at ``width`` from ``start`` (module docstring): its shortest feasible table or None.
 
     Until both a feasible and an infeasible gamma are known, the next guess scales gamma by ``1 / (1 + s)`` (the
     voltage about proportional to gamma); then regula falsi (Illinois) inside the bracket. It stops at a feasible
-    table within ``_S_TOL`` of the bus target, at a feasible gamma of 1, or after ``_SEARCH`` tables.
+    table within ``_S_TOL`` of the bus target, at a feasible gamma of 1, after ``_SEARCH`` tables, or at an
+    infeasible table not shorter than ``bound`` [s] (every feasible gamma lies below it, and is slower still).
     """
     best: Optional[Candidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan  # nan: not measured
@@ -401,6 +402,8 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
                 s_hi *= 0.5  # Illinois: the end kept twice in a row counts half
             side = -1
         else:
+            if c is not None and c.tf >= min(bound, best.tf if best is not None else math.inf):
+                break
             hi, s_hi = g, s
             if side == 1 and not math.isnan(s_lo):
                 s_lo *= 0.5
@@ -457,7 +460,7 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
         # the duration falls as gamma rises: a width whose full-bus move is not shorter than the best cannot win
         if best is not None and (tm.n + 2 * (tm.n_box - 1) - 1) * tm.dt >= best.tf:
             return math.inf
-        c = search_width(d, motor, limits, ws[i], start)
+        c = search_width(d, motor, limits, ws[i], start, best.tf if best is not None else math.inf)
         if c is None:
             return math.inf
         start = c.gamma
