@@ -1,5 +1,7 @@
-"""The C time-optimal planner (csrc/time_optimal.h): :func:`plan_table` returns what
-:func:`flatstep.plan.time_optimal.plan_move` does, planned by ``time_optimal_plan``.
+"""The C time-optimal planner (csrc/time_optimal.h) behind ``time_optimal(..., engine="c")``.
+
+:func:`plan_table` returns the table :func:`flatstep.plan.time_optimal.plan_move` plans, planned by
+``time_optimal_plan`` (the same algorithm, csrc/time_optimal.c).
 """
 from __future__ import annotations
 

@@ -189,8 +189,10 @@ def _box(x: Array, n: int) -> Array:
 
 
 class Timing(NamedTuple):
-    """The sampling of a smoothed move: the bang-bang move, the sample step [s], box and profile samples, and the
-    cut: ``k`` samples of the cruise from sample ``r`` on are not sampled (the smoothed speed is constant there)."""
+    """The sampling of a smoothed move: the bang-bang move, the sample step [s], box and profile samples, the cut.
+
+    ``k`` samples of the cruise from sample ``r`` on are not sampled (the smoothed speed is constant there).
+    """
 
     move: BangBang
     dt: float
@@ -228,7 +230,8 @@ def _knots(last: int, up: float, down: float, cruise: bool) -> NDArray[np.intp]:
     """Sample indices of the table's knots: dense in speed-up and braking (smoothing included), few in a cruise."""
     a, b = min(max(up, 0.0), last), min(max(down, 0.0), last)
     if cruise and b > a:
-        pieces = [np.linspace(0.0, a, _KNOTS // 2 + 1), np.linspace(a, b, 5)[1:], np.linspace(b, last, _KNOTS // 2 + 1)[1:]]
+        pieces = [np.linspace(0.0, a, _KNOTS // 2 + 1), np.linspace(a, b, 5)[1:],
+                  np.linspace(b, last, _KNOTS // 2 + 1)[1:]]
     else:
         pieces = [np.linspace(0.0, last / 2, _KNOTS // 2 + 1), np.linspace(last / 2, last, _KNOTS // 2 + 1)[1:]]
     k = np.rint(np.concatenate(pieces)).astype(np.intp)
