@@ -9,7 +9,7 @@
 #define TO_ANGLE_PLAN FS_C(0.98)
 #define TO_GAMMA_STEPS FS_C(65536.0)  // 2^16
 #define TO_V_MARGIN FS_C(0.998)
-#define TO_NEWTON_TOL FS_C(1e-12)
+#define TO_NEWTON_TOL (FS_REAL_EPSILON > FS_C(1e-12) ? 16 * FS_REAL_EPSILON : FS_C(1e-12))  // of i_max
 #define TO_FINE_LEN (TO_FINE_MAX + 2)
 
 // Scratch arrays carved out of the caller's workspace.
