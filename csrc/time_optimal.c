@@ -196,6 +196,10 @@ static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_mov
     x = fs_rint(width / dt);  // numpy's round: half to even, as rint in the default rounding mode
     mv->n_box = x < 1 ? 1 : (size_t)x;
     x = total / dt;
+    if (!(x < TO_MAX_SAMPLES)) {  // too long to sample (and to cast): refused by the caller
+        mv->n = (size_t)TO_MAX_SAMPLES + 1, mv->r = mv->k = 0;
+        return;
+    }
     mv->n = (size_t)x + (x > (fs_real)(size_t)x) + 1;  // ceil(total / dt) + 1
     // the cut: inside the raw cruise (from ceil(t1 / dt) + 1 to floor((t1 + cruise) / dt) - 1), 2 n_box + 4
     // samples kept at each end
@@ -324,7 +328,7 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
     fs_real cot = fs_cos(lim->torque_angle_max) / fs_sin(lim->torque_angle_max);
     bang_bang(d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
-    if (mv.n - mv.k + 2 * (mv.n_box - 1) > TO_FINE_LEN)
+    if (mv.n > TO_MAX_SAMPLES || mv.n - mv.k + 2 * (mv.n_box - 1) > TO_FINE_LEN)
         return false;
     for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt: the cut is not sampled
         t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
@@ -658,6 +662,8 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
         return TO_ESTART;
     for (i = 0; i < nw; i++) {  // the full-bus durations: a width whose is not shorter than the best cannot win
         bang_bang(s.d, s.width[i], &s.w, &mv);
+        if (mv.n > TO_MAX_SAMPLES)
+            return TO_ELONG;
         s.full[i] = (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
     }
     // from the middle width down while the duration falls, then up unless down found a shorter table (both ways

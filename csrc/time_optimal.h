@@ -21,6 +21,7 @@ enum {
     TO_SEARCH = 6,                   // tables tried per smoothing width on gamma
     TO_MAX_WIDTHS = 8,               // smoothing widths a call may try
     TO_MAX_SEGMENTS = TO_KNOTS + 4,  // segments of a planned table, at most
+    TO_MAX_SAMPLES = 2000000,        // time samples of a whole move at the full bus, at most (float: below 2^24)
 };
 
 // Return codes of time_optimal_plan.
@@ -30,6 +31,7 @@ enum {
     TO_ESTART = -2,   // at rest the bus and the limits leave no torque: the motor cannot start
     TO_ENOPLAN = -3,  // no smoothing width and bus fraction give a table within the limits
     TO_EWORK = -4,    // the workspace is shorter than time_optimal_work_len()
+    TO_ELONG = -5,    // the move would take more than TO_MAX_SAMPLES samples: split it into shorter moves
 };
 
 // The motor's limits on a plan (flatstep.plan.limits.MotorLimits): a cap of 0 is no cap.

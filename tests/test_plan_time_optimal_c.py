@@ -15,6 +15,7 @@ from flatstep._flatstep_core import lib
 from flatstep.model.motor import PRESETS
 from flatstep.plan.limits import MotorLimits, plan_margins
 from flatstep.plan.time_optimal import MAX_SEGMENTS, plan_move, time_optimal, time_optimal_sequence
+from flatstep.validate import InputError
 
 MOTOR = PRESETS["nema17"]
 DISTANCES = (0.1, 0.3, 1.0, 2.5, 5.0, 10.0, 20.0)
@@ -88,6 +89,9 @@ def test_bad_arguments_are_refused_before_c():
         time_optimal(1.0, MOTOR, limits, widths=(0.001, -0.001))
     with pytest.raises(ValueError, match="cannot start"):
         time_optimal(1.0, MOTOR, MotorLimits(v_bus=0.5, i_max=1.0))
+    for engine in ("c", "python"):  # the same message from both: the move's samples
+        with pytest.raises(InputError, match="move of 100000 rad takes .*MAX_PLAN_SAMPLES"):
+            time_optimal(1e5, MOTOR, limits, engine=engine)
     with pytest.raises(ValueError, match="no feasible plan"):  # R i_hold alone takes more than 5 % of the bus
         time_optimal(1.0, MOTOR, MotorLimits(v_bus=24.0, i_max=1.0, v_use=0.05))
 
@@ -97,5 +101,6 @@ def test_the_c_error_codes():
     assert plan_raw(1.0, MOTOR, limits, work_len=WORK_LEN - 1)[0] == lib.TO_EWORK
     assert plan_raw(0.0, MOTOR, limits)[0] == lib.TO_EARGS
     assert plan_raw(1.0, MOTOR, MotorLimits(v_bus=0.5, i_max=1.0))[0] == lib.TO_ESTART
+    assert plan_raw(1e5, MOTOR, limits)[0] == lib.TO_ELONG
     rc, out = plan_raw(1.0, MOTOR, MotorLimits(v_bus=24.0, i_max=1.0, v_use=0.05))
     assert rc == lib.TO_ENOPLAN and out.n == 0

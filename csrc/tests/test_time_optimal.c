@@ -89,6 +89,8 @@ static int error_checks(void)
     CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_ESTART && out.n == 0, "cannot start");
     bad = l, bad.v_use = 0.05;  // R i_hold alone takes more than 5 % of the bus
     CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_ENOPLAN && out.n == 0, "v_use 0.05");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1e5, NULL, 0, work, n, &out) == TO_ELONG && out.n == 0, "1e5 rad");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1e300, NULL, 0, work, n, &out) == TO_ELONG, "1e300 rad");
     CHECK(time_optimal_plan(&NEMA17, &l, 1.0, NULL, 0, work, time_optimal_work_len() - 1, &out) == TO_EWORK,
           "short workspace");
     CHECK(time_optimal_plan(&NEMA17, &l, 1.0, NULL, 0, NULL, n, &out) == TO_EWORK, "no workspace");

@@ -14,10 +14,15 @@ from ._flatstep_core import ffi, lib
 from .model.motor import MotorParams
 from .plan.limits import MotorLimits
 from .plan.piecewise import NCOEF
-from .plan.time_optimal import MAX_SEGMENTS, Table
+from .plan.time_optimal import DEFAULT_WIDTHS, MAX_SEGMENTS, Table, check_samples, envelope, planning_limits, timing
+from .validate import InputError
+from .validate.limits import MAX_PLAN_SAMPLES
 
 #: The workspace time_optimal_plan needs [fs_real].
 WORK_LEN = int(lib.time_optimal_work_len())
+if lib.TO_MAX_SAMPLES != MAX_PLAN_SAMPLES:
+    raise ImportError(f"csrc/time_optimal.h TO_MAX_SAMPLES={lib.TO_MAX_SAMPLES} differs from "
+                      f"flatstep.validate.limits.MAX_PLAN_SAMPLES={MAX_PLAN_SAMPLES}: keep them equal")
 if lib.TO_MAX_SEGMENTS != MAX_SEGMENTS:  # the reference and the C core share their sizes
     raise ImportError(f"csrc/time_optimal.h TO_MAX_SEGMENTS={lib.TO_MAX_SEGMENTS} differs from "
                       f"flatstep.plan.time_optimal.MAX_SEGMENTS={MAX_SEGMENTS}: rebuild the C core (pip install -e .)")
@@ -63,6 +68,13 @@ def plan_table(distance: float, motor: MotorParams, limits: MotorLimits,
     if rc == lib.TO_ESTART:
         raise ValueError(f"the motor cannot start: at rest the bus {limits.v_bus} V and the limits {limits} leave no "
                          "torque")
+    if rc == lib.TO_ELONG:  # the reference's message, from its own timing of the full-bus move
+        full = envelope(motor, planning_limits(limits), 1.0)
+        for w in widths or tuple(k * (motor.L / motor.R) for k in DEFAULT_WIDTHS):
+            check_samples(distance, timing(abs(distance), full, w))
+        raise InputError("distance", distance, f"the move of {distance:g} rad would take more than "
+                         f"{MAX_PLAN_SAMPLES:.3g} samples (flatstep.validate.limits.MAX_PLAN_SAMPLES): split it "
+                         "into shorter moves with waypoints")
     if rc == lib.TO_ENOPLAN:
         raise ValueError(f"no feasible plan of {distance} rad within {limits}: raise v_bus or i_max, lower i_hold or "
                          "i_run, or split the move with waypoints")

@@ -44,7 +44,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..model.motor import MotorParams
-from ..validate import check_finite
+from ..validate import InputError, check_finite
+from ..validate.limits import MAX_PLAN_SAMPLES
 from .limits import MotorLimits
 from .piecewise import NCOEF, PiecewisePlan
 from .segments import hermite_rows
@@ -59,6 +60,8 @@ _PER_PHASE = 16      # time samples over the shortest of speed-up, braking and s
 _KNOTS = 64          # segments of the table (speed-up and braking halves; 4 more in the cruise)
 _CHECK = 8           # samples per segment of the search's margin check (tau = j / 8: the middle included)
 _WIDTHS = (0.25, 0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
+#: The smoothing widths tried by default, in units of L / R (csrc/time_optimal.c ``DEFAULT_WIDTHS``).
+DEFAULT_WIDTHS = _WIDTHS
 _SEARCH = 6          # tables tried per width on gamma, at most
 _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
 _GAMMA_STEPS = 2.0**16  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
@@ -365,10 +368,17 @@ def planning_limits(limits: MotorLimits) -> MotorLimits:
     return replace(limits, torque_angle_max=limits.torque_angle_max * _ANGLE_PLAN)
 
 
-def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float) -> Candidate:
-    """The table at ``gamma`` and ``width`` (planned within :func:`planning_limits`) and its margins."""
+def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
+         width: float) -> Optional[Candidate]:
+    """The table at ``gamma`` and ``width`` (planned within :func:`planning_limits`) and its margins.
+
+    None when the move would take more than ``MAX_PLAN_SAMPLES`` samples.
+    """
     plan = planning_limits(limits)
-    table = smoothed_table(distance, envelope(motor, plan, gamma), width, motor, plan)
+    env = envelope(motor, plan, gamma)
+    if timing(distance, env, width).n > MAX_PLAN_SAMPLES:
+        return None
+    table = smoothed_table(distance, env, width, motor, plan)
     return Candidate(float(table.breaks[-1]), gamma, width, table_margins(table, motor, limits), table)
 
 
@@ -442,6 +452,16 @@ def _plan(table: Table, distance: float, theta1: float, t0: float) -> PiecewiseP
     return PiecewisePlan(table.breaks + t0, theta, table.rho)
 
 
+def check_samples(distance: float, tm: Timing) -> None:
+    """Raise an InputError naming ``distance`` when its move would be sampled more than ``MAX_PLAN_SAMPLES`` times."""
+    if tm.n > MAX_PLAN_SAMPLES:
+        total = tm.move.t1 + tm.move.cruise + tm.move.t2
+        raise InputError("distance", distance, f"the move of {distance:g} rad takes {total:.4g} s at this motor's "
+                         f"speed limit, which the time-optimal planner would sample {tm.n:.3g} times (every "
+                         f"{tm.dt:.3g} s), above the limit of {MAX_PLAN_SAMPLES:.3g} (flatstep.validate.limits."
+                         "MAX_PLAN_SAMPLES); split it into shorter moves with waypoints, or plan it with a spline")
+
+
 def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
               widths: Optional[tuple[float, ...]] = None) -> Candidate:
     """The shortest feasible candidate over ``distance`` != 0 (module docstring); a ValueError when there is none.
@@ -456,6 +476,9 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     full = envelope(motor, planning_limits(limits), 1.0)
     best: Optional[Candidate] = None
     start = 1.0
+
+    for w in ws:
+        check_samples(distance, timing(d, full, w))
 
     def run(i: int) -> float:
         nonlocal best, start
