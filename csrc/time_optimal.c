@@ -415,6 +415,11 @@ static fs_real horner(const fs_real *c, int deg, fs_real tau)
 // reference's deriv: the tau-derivative over h^k).
 static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
 {
+    // FALL[k][p] = p! / (p - k)!: the factor of tau^p's k-th derivative
+    static const fs_real FALL[4][TRAJ_NCOEF] = {{1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1},
+                                                {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10},
+                                                {0, 0, 2, 6, 12, 20, 30, 42, 56, 72, 90},
+                                                {0, 0, 0, 6, 24, 60, 120, 210, 336, 504, 720}};
     fs_real p = 1;
     int j, q, lead = 0, deg;
     while (lead < TRAJ_NCOEF - 1 - k && row[lead] == 0)  // leading zeros: a lower degree
@@ -422,12 +427,8 @@ static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
     deg = TRAJ_NCOEF - 1 - k - lead;
     for (q = 0; q < k; q++)
         p *= h;
-    for (j = 0; j <= deg; j++) {
-        fs_real fall = 1;
-        for (q = 0; q < k; q++)
-            fall *= (fs_real)(TRAJ_NCOEF - 1 - (j + lead) - q);
-        out[j] = row[j + lead] * fall / p;
-    }
+    for (j = 0; j <= deg; j++)
+        out[j] = row[j + lead] * FALL[k][TRAJ_NCOEF - 1 - (j + lead)] / p;
     return deg;
 }
 
