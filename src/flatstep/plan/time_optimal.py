@@ -24,15 +24,18 @@ this is the *bang-bang bound* :func:`bang_bang_time`, the lower bound the planne
 
 **Smoothing.** The speed profile is convolved twice with a box of width :math:`w` (an FIR filter, as
 firmwares smooth moves): the jerk becomes continuous, theta''' exists for the law's feedforward, the duration
-grows by :math:`2w`, and the end position is kept. The result becomes a table of degree-7 segments through
-the profile's (theta, theta', theta'', theta''') at its knots (:func:`.segments.hermite_rows`), with
-:math:`\rho^* = \sqrt{i_q^2 + i_d^2}` (:meth:`~flatstep.plan.limits.MotorLimits.rho`).
+grows by :math:`2w`, and the end position is kept. A cruise longer than the smoothing needs is not sampled
+(:func:`timing`). The result becomes a table of degree-7 segments through the profile's (theta, theta',
+theta'', theta''') at its knots (:func:`.segments.hermite_rows`), with :math:`\rho^* = \sqrt{i_q^2 + i_d^2}`
+(:meth:`~flatstep.plan.limits.MotorLimits.rho`), both planned at 0.98 of the torque-angle cap
+(:func:`planning_limits`).
 
-**Search.** The inductance needs voltage headroom, which the envelope's :math:`\gamma < 1` leaves. For each
-smoothing width of a small set (multiples of :math:`L/R`), the table's worst margin :math:`s(\gamma)`
-(:func:`table_margins`: the voltage over ``0.998 v_use``, every other ratio over 1, less 1) is measured and
-:math:`\gamma` is found by regula falsi on :math:`s(\gamma) = 0` (Illinois), started from the proportional guess
-:math:`\gamma = 1/(1 + s(1))`, in at most ``_SEARCH`` tables; the shortest feasible table wins.
+**Search.** The inductance needs voltage headroom, which the envelope's :math:`\gamma < 1` leaves. The table's
+worst margin :math:`s(\gamma)` (:func:`table_margins`: the voltage over ``0.998 v_use``, every other ratio over
+1, less 1) is driven to 0 by :func:`search_width`: the proportional guess :math:`\gamma/(1 + s)`, the secant,
+then regula falsi (Illinois) once a bracket is measured, in at most ``_SEARCH`` tables. :func:`plan_move` walks
+the smoothing widths (multiples of :math:`L/R`) from the middle one towards shorter plans; the shortest feasible
+table wins.
 """
 from __future__ import annotations
 
