@@ -7,6 +7,7 @@
 #define TO_TOP_ACCEL FS_C(0.01)
 #define TO_S_TOL FS_C(0.003)
 #define TO_ANGLE_PLAN FS_C(0.98)
+#define TO_CAP_PLAN FS_C(0.995)
 #define TO_GAMMA_STEPS FS_C(65536.0)  // 2^16
 #define TO_V_MARGIN FS_C(0.998)
 #define TO_NEWTON_TOL (FS_REAL_EPSILON > FS_C(1e-12) ? 16 * FS_REAL_EPSILON : FS_C(1e-12))  // of i_max
@@ -353,7 +354,8 @@ static bool smoothed_table(const struct motor_params *m, const struct to_limits 
     for (i = 0; i < len; i++)
         speed[i] *= scale;
     last = len - 1;
-    nk = knots(last + mv.k, (mv.t1 + 2 * width) / mv.dt, (mv.t1 + mv.cruise) / mv.dt, mv.cruise > 0, w->knot);
+    // the cruise's knots 4 samples inside it (time_optimal.smoothed_table)
+    nk = knots(last + mv.k, (mv.t1 + 2 * width) / mv.dt + 4, (mv.t1 + mv.cruise) / mv.dt - 4, mv.cruise > 0, w->knot);
     if (nk < 2)
         return false;
     w->tr.n = nk - 1;
@@ -488,7 +490,8 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
 struct to_search {
     const struct motor_params *m;
     const struct to_limits *lim;
-    struct to_limits plan;  // the limits planned with: the torque angle cap TO_ANGLE_PLAN times lim's
+    struct to_limits plan;  // the limits planned with: the torque angle cap TO_ANGLE_PLAN times lim's, the speed
+                            // and acceleration caps TO_CAP_PLAN times
     fs_real d, env_gamma;
     struct to_work w;
     struct to_result *out;
@@ -658,6 +661,8 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
     s.w.tr.breaks = s.w.breaks, s.w.tr.theta = s.w.theta, s.w.tr.rho = s.w.rho;
     s.plan = *lim;
     s.plan.torque_angle_max *= TO_ANGLE_PLAN;
+    s.plan.speed_max *= TO_CAP_PLAN;
+    s.plan.accel_max *= TO_CAP_PLAN;
     s.env_gamma = 1;
     if (!envelope(m, &s.plan, 1, &s.w))
         return TO_ESTART;

@@ -104,3 +104,15 @@ def test_the_c_error_codes():
     assert plan_raw(1e5, MOTOR, limits)[0] == lib.TO_ELONG
     rc, out = plan_raw(1.0, MOTOR, MotorLimits(v_bus=24.0, i_max=1.0, v_use=0.05))
     assert rc == lib.TO_ENOPLAN and out.n == 0
+
+
+@pytest.mark.parametrize("caps", [dict(speed_max=20.0), dict(accel_max=3000.0), dict(jerk_max=2e6),
+                                  dict(speed_max=30.0, accel_max=5000.0, jerk_max=5e6)])
+def test_speed_acceleration_and_jerk_caps_are_kept(caps):
+    # a capped speed or acceleration is planned a little inside its cap, so that the fit does not cross it
+    limits = MotorLimits(v_bus=24.0, i_max=1.0, **caps)
+    for d in (0.5, 5.0):
+        c, py = time_optimal(d, MOTOR, limits), time_optimal(d, MOTOR, limits, engine="python")
+        assert math.isclose(c.tf, py.tf, rel_tol=1e-12)
+        m = plan_margins(c, MOTOR, limits, samples_per_segment=97)
+        assert m["worst"] <= 1.0 and m["voltage"] <= limits.v_use * 1.005, (d, m)

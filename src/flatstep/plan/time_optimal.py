@@ -70,6 +70,7 @@ _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
 _GAMMA_STEPS = 2.0**16  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
 _V_MARGIN = 0.998    # of v_use: the sampled check may miss the peak between its samples by about that much
 _ANGLE_PLAN = 0.98   # the torque angle cap planned with, of the true one (planning_limits)
+_CAP_PLAN = 0.995    # the speed and acceleration caps planned with, of the true ones (planning_limits)
 _S_TOL = 0.003       # a feasible table within 0.3 % of the bus target ends a width's search
 _NEWTON_TOL = 1e-12  # Newton stops when its step is below this fraction of i_max
 #: The most segments of a table the planner writes (csrc/time_optimal.h ``TO_MAX_SEGMENTS``).
@@ -279,7 +280,9 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
     r = min(r, speed.size - 1)  # no cut (k = 0): r only has to index the profile
     cruise = speed[r] if k else 0.0
     scale = distance / (np.sum(inc) + k * dt * cruise)
-    knots = _knots(speed.size - 1 + k, (b.t1 + 2 * width) / dt, (b.t1 + b.cruise) / dt, b.cruise > 0)
+    # the cruise's knots 4 samples inside it, where the jerk's central differences see only the constant cruise (at
+    # its ends the jerk jumps, and a long cruise segment would bulge to meet half of that jump)
+    knots = _knots(speed.size - 1 + k, (b.t1 + 2 * width) / dt + 4, (b.t1 + b.cruise) / dt - 4, b.cruise > 0)
     at = np.where(knots < r, knots, np.where(knots >= r + k, knots - k, r))  # the sample each knot reads
     # the angle from knot to knot: the trapezoids between their samples and the cut's samples between them
     sums = np.where(at[1:] > at[:-1], np.add.reduceat(inc, np.minimum(at[:-1], inc.size - 1)), 0.0)
@@ -363,12 +366,16 @@ class Candidate(NamedTuple):
 
 
 def planning_limits(limits: MotorLimits) -> MotorLimits:
-    """The limits the envelope and rho* are planned with: the torque angle cap ``_ANGLE_PLAN`` times the true one.
+    """The limits the envelope and rho* are planned with, a little inside the true ones.
 
-    rho* keeps the torque angle at its cap where the torque current is large; the table's fit would otherwise
-    cross it by a little wherever it does, a margin no bus fraction could buy back.
+    The torque angle cap is ``_ANGLE_PLAN`` times the true one, the speed and acceleration caps ``_CAP_PLAN``
+    times theirs: rho* keeps the torque angle at its cap where the torque current is large, and the envelope
+    keeps a capped speed or acceleration at its cap; the table's fit would otherwise cross them by a little, a
+    margin no bus fraction could buy back.
     """
-    return replace(limits, torque_angle_max=limits.torque_angle_max * _ANGLE_PLAN)
+    return replace(limits, torque_angle_max=limits.torque_angle_max * _ANGLE_PLAN,
+                   speed_max=limits.speed_max * _CAP_PLAN if limits.speed_max else None,
+                   accel_max=limits.accel_max * _CAP_PLAN if limits.accel_max else None)
 
 
 def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
