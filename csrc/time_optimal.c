@@ -63,7 +63,7 @@ static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real 
 static fs_real iq_bound(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[2], fs_real w,
                         fs_real v2, fs_real sign, fs_real *prev)
 {
-    fs_real k = trig[1] / trig[0], f = floor_current(lim, w), dh, h, u, step;
+    fs_real k = trig[1] / trig[0], f = floor_current(lim, w), dh, h, u, step, dh_prev, h_prev;
     fs_real room = lim->i_max * lim->i_max - f * f;
     fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
     int i;
@@ -73,14 +73,17 @@ static fs_real iq_bound(const struct motor_params *m, const struct to_limits *li
     h = to_h(m, k, f, w, v2, u, &dh);
     if (!(h > 0))
         return *prev = u;
-    if (sign * *prev < cap && sign * *prev > 0 && to_h(m, k, f, w, v2, *prev, &dh) > 0)
-        u = *prev;
+    if (sign * *prev < cap && sign * *prev > 0) {
+        h_prev = to_h(m, k, f, w, v2, *prev, &dh_prev);
+        if (h_prev > 0)
+            u = *prev, h = h_prev, dh = dh_prev;
+    }
     for (i = 0; i < 100; i++) {  // monotone: h is convex and the start lies outside its root
-        h = to_h(m, k, f, w, v2, u, &dh);
         step = h / dh;
         u -= step;
         if (!(fs_fabs(step) > TO_NEWTON_TOL * lim->i_max))
             break;
+        h = to_h(m, k, f, w, v2, u, &dh);
     }
     return *prev = u;
 }
@@ -296,12 +299,14 @@ static void hermite_row(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_
         rhs[j] = s0[j] * p, rhs[4 + j] = s1[j] * p;
     for (i = 0; i < 3; i++)
         row[i] = 0;
-    for (i = 0; i < 8; i++) {
+    for (i = 0; i < 4; i++) {  // tau^7 .. tau^4 from both ends
         fs_real sum = 0;
         for (j = 0; j < 8; j++)
             sum += HERMITE[i][j] * rhs[j];
         row[3 + i] = sum;
     }
+    for (i = 4; i < 8; i++)  // tau^3 .. tau^0: the start's own derivatives
+        row[3 + i] = HERMITE[i][7 - i] * rhs[7 - i];
 }
 
 // Returns the planned rho* at torque current iq and speed w (MotorLimits.rho); cot is cot(torque_angle_max).
