@@ -58,18 +58,14 @@ static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real 
     return z * ((1 + k * k) * u * u + f * f) + 2 * c * m->R * u + 2 * c * e * root + c * c - v2;
 }
 
-// Returns the torque current bound on side sign (+1 or -1) at speed w: the cap, or Newton's root from outside,
-// started at the previous grid point's root *prev when that lies outside (h > 0), else at the cap.
-static fs_real iq_bound(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[2], fs_real w,
-                        fs_real v2, fs_real sign, fs_real *prev)
+// Returns the torque current bound on side sign (+1 or -1) at speed w, where the across-axis floor is f, the
+// current cap cap and no torque is within the bus: the cap, or Newton's root from outside, started at the
+// previous grid point's root *prev when that lies outside (h > 0), else at the cap.
+static fs_real newton_side(const struct motor_params *m, const struct to_limits *lim, fs_real k, fs_real f, fs_real cap,
+                           fs_real w, fs_real v2, fs_real sign, fs_real *prev)
 {
-    fs_real k = trig[1] / trig[0], f = floor_current(lim, w), dh, h, u, step, dh_prev, h_prev;
-    fs_real room = lim->i_max * lim->i_max - f * f;
-    fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
+    fs_real dh, h, u = sign * cap, step, dh_prev, h_prev;
     int i;
-    if (!(to_h(m, k, f, w, v2, 0, &dh) <= 0))
-        return *prev = 0;
-    u = sign * cap;
     h = to_h(m, k, f, w, v2, u, &dh);
     if (!(h > 0))
         return *prev = u;
@@ -88,20 +84,40 @@ static fs_real iq_bound(const struct motor_params *m, const struct to_limits *li
     return *prev = u;
 }
 
+// Returns nothing; writes the torque current bounds (iq_bounds) at speed w into *hi and *lo (with lo_too), both
+// 0 where even no torque exceeds the bus; *hi and *lo come in as the previous grid point's roots (warm starts).
+// trig holds sin, cos and cot of the torque angle cap.
+static void iq_pair(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[3], fs_real w,
+                    fs_real v2, bool lo_too, fs_real *hi, fs_real *lo)
+{
+    fs_real k = trig[2], f = floor_current(lim, w), dh;
+    fs_real room = lim->i_max * lim->i_max - f * f;
+    fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
+    if (!(to_h(m, k, f, w, v2, 0, &dh) <= 0)) {
+        *hi = *lo = 0;
+        return;
+    }
+    newton_side(m, lim, k, f, cap, w, v2, 1, hi);
+    if (lo_too)
+        newton_side(m, lim, k, f, cap, w, v2, -1, lo);
+}
+
 // Returns the grid length (>= 2), or 0 when the motor cannot start; writes the envelope at gamma
 // (time_optimal.envelope).
 static size_t envelope(const struct motor_params *m, const struct to_limits *lim, fs_real gamma, struct to_work *w)
 {
     fs_real v2 = gamma * lim->v_bus * gamma * lim->v_bus, w_max = gamma * lim->v_bus / m->Km, top, hi = 0, lo = 0;
-    fs_real acc, prev = 0, trig[2], thr = 0, x, x_prev = 0, a_prev = 0;
+    fs_real acc, prev = 0, unused = 0, trig[3], thr = 0, x, x_prev = 0, a_prev = 0;
     size_t i;
     fs_sincos(lim->torque_angle_max, &trig[0], &trig[1]);
+    trig[2] = trig[1] / trig[0];
     if (lim->speed_max > 0 && lim->speed_max < w_max)
         w_max = lim->speed_max;
     top = w_max;
     for (i = 0; i < TO_PROBE; i++) {  // the probe: where a+ first falls to TO_TOP_ACCEL of a+(0), interpolated
         x = linspace(0, w_max, TO_PROBE, i);
-        acc = (m->Km * iq_bound(m, lim, trig, x, v2, 1, &prev) - m->B * x) / m->J;
+        iq_pair(m, lim, trig, x, v2, false, &prev, &unused);
+        acc = (m->Km * prev - m->B * x) / m->J;
         if (i == 0) {
             if (!(acc > 0))
                 return 0;
@@ -115,8 +131,9 @@ static size_t envelope(const struct motor_params *m, const struct to_limits *lim
     for (i = 0; i < TO_GRID; i++) {
         fs_real x = linspace(0, top, TO_GRID, i);
         w->omega[i] = x;
-        w->ap[i] = (m->Km * iq_bound(m, lim, trig, x, v2, 1, &hi) - m->B * x) / m->J;
-        w->am[i] = (m->Km * iq_bound(m, lim, trig, x, v2, -1, &lo) - m->B * x) / m->J;
+        iq_pair(m, lim, trig, x, v2, true, &hi, &lo);
+        w->ap[i] = (m->Km * hi - m->B * x) / m->J;
+        w->am[i] = (m->Km * lo - m->B * x) / m->J;
         if (lim->accel_max > 0) {
             w->ap[i] = fs_min(w->ap[i], lim->accel_max);
             w->am[i] = fs_max(w->am[i], -lim->accel_max);
@@ -418,6 +435,12 @@ static fs_real horner(const fs_real *c, int deg, fs_real tau)
     return out;
 }
 
+// Horner's rule on 5 to 8 coefficients (highest power first), unrolled: what horner does for those degrees.
+#define HORNER5(c, t) ((((c[0] * (t) + c[1]) * (t) + c[2]) * (t) + c[3]) * (t) + c[4])
+#define HORNER6(c, t) (HORNER5(c, t) * (t) + c[5])
+#define HORNER7(c, t) (HORNER6(c, t) * (t) + c[6])
+#define HORNER8(c, t) (HORNER7(c, t) * (t) + c[7])
+
 // Returns the degree of the k-th time derivative; writes its coefficients in tau from the row over h (the
 // reference's deriv: the tau-derivative over h^k).
 static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
@@ -455,8 +478,14 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
         int g4 = deriv_row(rh, 1, h, c4), g0 = deriv_row(rh, 0, h, c0);
         for (j = 0; j < TO_CHECK + (i == tr->n - 1); j++) {
             fs_real tau = (fs_real)j / TO_CHECK;  // j = TO_CHECK on the last segment: its end
-            fs_real w = horner(c1, g1, tau), acc = horner(c2, g2, tau), jerk = horner(c3, g3, tau);
-            fs_real rho = horner(c0, g0, tau), drho = horner(c4, g4, tau);
+            fs_real w, acc, jerk, rho, drho;
+            if (g0 == 7 && g1 == 6) {  // the planner's own degree-7 rows: Horner unrolled
+                w = HORNER7(c1, tau), acc = HORNER6(c2, tau), jerk = HORNER5(c3, tau);
+                rho = HORNER8(c0, tau), drho = HORNER7(c4, tau);
+            } else {
+                w = horner(c1, g1, tau), acc = horner(c2, g2, tau), jerk = horner(c3, g3, tau);
+                rho = horner(c0, g0, tau), drho = horner(c4, g4, tau);
+            }
             rho_max = fs_max(rho_max, rho);
             w_max = fs_max(w_max, fs_fabs(w));
             a_max = fs_max(a_max, fs_fabs(acc));
