@@ -580,7 +580,7 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
 static void search_width(struct to_search *s, fs_real width, fs_real start)
 {
     const fs_real nan = (fs_real)NAN;
-    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, g = start, x, g_last = nan, s_last = nan, g_prev, s_prev;
+    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, g = start, x, aim, g_last = nan, s_last = nan, g_prev, s_prev;
     int side = 0, it;
     s->width_tf = (fs_real)INFINITY;
     s->width_gamma = 0;
@@ -589,9 +589,10 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
         if (g < TO_GAMMA_MIN)
             break;
         x = try_table(s, g, width);
-        g_prev = g_last, s_prev = s_last, g_last = g, s_last = x;
+        aim = x + FS_C(0.5) * TO_S_TOL;  // the guesses aim at the middle of the accepted band (-TO_S_TOL, 0]
+        g_prev = g_last, s_prev = s_last, g_last = g, s_last = aim;
         if (x <= 0) {
-            lo = g, s_lo = x;
+            lo = g, s_lo = aim;
             if (g >= 1 || x > -TO_S_TOL)
                 break;
             if (side == -1 && !isnan(s_hi))
@@ -600,7 +601,7 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
         } else {
             if (s->found && s->w.breaks[s->w.tr.n] >= s->out->breaks[s->out->n] && s->env_gamma == g)
                 break;  // every feasible gamma of this width lies below g, and is slower still
-            hi = g, s_hi = x;
+            hi = g, s_hi = aim;
             if (side == 1 && !isnan(s_lo))
                 s_lo *= FS_C(0.5);
             side = 1;
@@ -613,7 +614,7 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
             g = g_last - s_last * (g_last - g_prev) / (s_last - s_prev);
             g = fs_min(fs_max(g, FS_C(0.5) * g_last), FS_C(1.5) * g_last);
         } else if (fs_isfinite(s_last))
-            g = FS_C(0.999) * g_last / (1 + s_last);
+            g = g_last / (1 + s_last);
         else
             g = FS_C(0.5) * (lo + hi);
         if (!isnan(s_hi))  // inside a measured bracket

@@ -414,11 +414,12 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
             s = c.margins["worst"] if c is not None else math.inf
         except ValueError:  # the motor cannot start at this gamma
             c, s = None, math.inf
-        g_last, s_last, g_prev, s_prev = g, s, g_last, s_last
+        aim = s + 0.5 * _S_TOL  # the guesses aim at the middle of the accepted band (-_S_TOL, 0]
+        g_last, s_last, g_prev, s_prev = g, aim, g_last, s_last
         if c is not None and s <= 0:
             if best is None or c.tf < best.tf:
                 best = c
-            lo, s_lo = g, s
+            lo, s_lo = g, aim
             if g >= 1.0 or s > -_S_TOL:
                 break
             if side == -1 and not math.isnan(s_hi):
@@ -427,7 +428,7 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
         else:
             if c is not None and c.tf >= min(bound, best.tf if best is not None else math.inf):
                 break
-            hi, s_hi = g, s
+            hi, s_hi = g, aim
             if side == 1 and not math.isnan(s_lo):
                 s_lo *= 0.5
             side = 1
@@ -439,7 +440,7 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
             g = g_last - s_last * (g_last - g_prev) / (s_last - s_prev)
             g = min(max(g, 0.5 * g_last), 1.5 * g_last)
         elif math.isfinite(s_last):  # one point: the voltage about proportional to gamma
-            g = 0.999 * g_last / (1.0 + s_last)
+            g = g_last / (1.0 + s_last)
         else:  # an infinite measure: halve the bracket
             g = 0.5 * (lo + hi)
         if not math.isnan(s_hi):  # inside a measured bracket
