@@ -396,10 +396,12 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
                  start: float = 1.0, bound: float = math.inf) -> Optional[Candidate]:
     """The regula falsi on gamma at ``width`` from ``start`` (module docstring): its shortest feasible table or None.
 
-    Until both a feasible and an infeasible gamma are known, the next guess scales gamma by ``1 / (1 + s)`` (the
-    voltage about proportional to gamma); then regula falsi (Illinois) inside the bracket. It stops at a feasible
-    table within ``_S_TOL`` of the bus target, at a feasible gamma of 1, after ``_SEARCH`` tables, or at an
-    infeasible table not shorter than ``bound`` [s] (every feasible gamma lies below it, and is slower still).
+    Until both a feasible and an infeasible gamma are known, the next guess is the secant through the last two
+    tables, or scales gamma by ``1 / (1 + s)`` after one (the voltage about proportional to gamma); then regula
+    falsi (Illinois) inside the bracket; every guess aims at ``s = -_S_TOL / 2``, inside the accepted band. It
+    stops at a feasible table within ``_S_TOL`` of the bus target, at a feasible gamma of 1, after ``_SEARCH``
+    tables, or at an infeasible table not shorter than ``bound`` [s] (every feasible gamma lies below it, and is
+    slower still).
     """
     best: Optional[Candidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan  # nan: not measured
