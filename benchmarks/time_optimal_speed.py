@@ -1,8 +1,9 @@
-"""The time-optimal planner against an earlier version of itself, medians side by side in one run.
+"""The time-optimal planner: the C planner and the Python reference side by side in one run, medians and ratios.
 
-Run ``python benchmarks/time_optimal_speed.py 9e98b41``: it loads ``src/flatstep/plan/time_optimal.py`` as it
-was at the given git revision (its relative imports made absolute), plans the same moves with both, checks the
-plans are equal, and prints the median times.
+Run ``python benchmarks/time_optimal_speed.py``: plans 0.1, 1, 5 and 20 rad at 24 V and 12 V (the limits of
+flatstep.plan.compare) and a 100-waypoint sequence with both engines, checks that they plan the same durations,
+and prints the median times. ``python benchmarks/time_optimal_speed.py REV`` adds ``time_optimal.py`` as it was
+at git revision ``REV`` (its relative imports made absolute) as a third column.
 """
 import importlib.util
 import re
@@ -13,8 +14,11 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
+from flatstep._core_time_optimal import plan_raw
 from flatstep.model.motor import PRESETS
-from flatstep.plan import time_optimal as new
+from flatstep.plan import time_optimal as now
 from flatstep.plan.limits import MotorLimits
 
 
@@ -42,20 +46,39 @@ def median_ms(fn, repeat=7):
     return 1e3 * statistics.median(runs)
 
 
-def main(rev):
-    """Plan 0.1, 1, 5 and 20 rad at 24 V and 12 V with both versions (the limits of flatstep.plan.compare)."""
-    old, motor = load_old(rev), PRESETS["nema17"]
+def limits(bus):
+    """The comparison's limits at bus voltage ``bus`` (a fresh object per call, as a caller would pass)."""
+    return MotorLimits(v_bus=bus, i_max=1.0, i_run=0.025, v_use=0.84, torque_angle_max=1.1)
+
+
+def main(rev=None):
+    """Single moves, then the 100-waypoint sequence, with both engines (and revision ``rev``'s planner)."""
+    motor, old = PRESETS["nema17"], load_old(rev) if rev else None
     for bus in (24.0, 12.0):
-        def limits(bus=bus):  # a fresh object per call, as a caller would pass (equal limits share the cache)
-            return MotorLimits(v_bus=bus, i_max=1.0, i_run=0.025, v_use=0.84, torque_angle_max=1.1)
         for d in (0.1, 1.0, 5.0, 20.0):
-            a, b = old.time_optimal(d, motor, limits()), new.time_optimal(d, motor, limits())
-            same = a.tf == b.tf and bool((a.theta == b.theta).all())
-            t_old = median_ms(lambda d=d: old.time_optimal(d, motor, limits()))
-            t_new = median_ms(lambda d=d: new.time_optimal(d, motor, limits()))
-            print(f"{bus:g} V {d:g} rad: {rev} {t_old:.1f} ms, now {t_new:.1f} ms ({t_old / t_new:.2f} x faster), "
-                  f"same plan: {same} ({1e3 * b.tf:.3f} ms)", flush=True)
+            c, py = now.time_optimal(d, motor, limits(bus)), now.time_optimal(d, motor, limits(bus), engine="python")
+            tables = plan_raw(d, motor, limits(bus))[1].tables
+            t_raw = median_ms(lambda d=d: plan_raw(d, motor, limits(bus)), 21)
+            t_c = median_ms(lambda d=d: now.time_optimal(d, motor, limits(bus)), 21)
+            t_py = median_ms(lambda d=d: now.time_optimal(d, motor, limits(bus), engine="python"))
+            line = (f"{bus:g} V {d:g} rad: C {1e3 * t_raw:.0f} us ({tables} tables, {1e3 * t_raw / tables:.0f} us "
+                    f"each; {1e3 * t_c:.0f} us with the PiecewisePlan), Python {t_py:.1f} ms ({t_py / t_c:.0f} x), "
+                    f"same duration: {abs(c.tf / py.tf - 1):.1e} ({1e3 * c.tf:.3f} ms)")
+            if old:
+                t_old = median_ms(lambda d=d: old.time_optimal(d, motor, limits(bus)), 3)
+                line += f"; {rev} {t_old:.0f} ms ({1e3 * old.time_optimal(d, motor, limits(bus)).tf:.3f} ms)"
+            print(line, flush=True)
+    theta = np.cumsum(np.random.default_rng(0).uniform(-3, 5, 100))
+    points = [(float(x), 0.0) for x in theta]
+    c = now.time_optimal_sequence(points, motor, limits(24.0))
+    py = now.time_optimal_sequence(points, motor, limits(24.0), engine="python")
+    t_raw = median_ms(lambda: [plan_raw(b[0] - a[0], motor, limits(24.0)) for a, b in zip(points, points[1:])], 5)
+    t_c = median_ms(lambda: now.time_optimal_sequence(points, motor, limits(24.0)), 5)
+    t_py = median_ms(lambda: now.time_optimal_sequence(points, motor, limits(24.0), engine="python"), 3)
+    print(f"100 waypoints (99 moves, 24 V): C {t_raw:.1f} ms in time_optimal_plan, {t_c:.1f} ms with the "
+          f"PiecewisePlan, Python {t_py:.0f} ms ({t_py / t_c:.0f} x), same duration: {abs(c.tf / py.tf - 1):.1e} "
+          f"({c.tf:.4f} s)", flush=True)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "HEAD")
+    main(sys.argv[1] if len(sys.argv) > 1 else None)

@@ -34,5 +34,6 @@ int test_baselines(void);
 int test_dq_smc(void);
 int test_dq_smc_km(void);
 int test_trajectory(void);
+int test_time_optimal(void);
 
 #endif

@@ -26,8 +26,12 @@ int main(int argc, char **argv)
         test_dq_smc();
     else if (strcmp(suite, "trajectory") == 0)
         test_trajectory();
+    else if (strcmp(suite, "time_optimal") == 0)
+        test_time_optimal();
     else {
-        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines | dq_smc | trajectory\n", argv[0]);
+        printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines | dq_smc | trajectory | "
+               "time_optimal\n",
+               argv[0]);
         return 2;
     }
     printf("%s: %d checks, %d failed\n", suite, check_count, check_failures);

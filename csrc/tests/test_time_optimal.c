@@ -1,0 +1,107 @@
+// The time-optimal planner: a feasible, continuous table that ends at the distance, mirrored moves, error codes.
+#include "check.h"
+#include "time_optimal.h"
+#include "trajectory.h"
+
+// The NEMA 17 preset of flatstep.model.motor and the limits of tests/test_plan_time_optimal.py.
+static const struct motor_params NEMA17 = {4.10, 9.50e-3, 0.26870057685088805, 5.6e-6, 1e-4, 50};
+static double work[40000];
+static struct to_result out, out2;
+
+// Returns the limits at bus voltage v_bus with i_max = 1 A and the defaults of MotorLimits.
+static struct to_limits limits_at(double v_bus)
+{
+    struct to_limits l = {v_bus, 1.0, 0.3, 0.3, 10.0, 1.2, 0.9, 0, 0, 0};
+    return l;
+}
+
+// Returns 0; a move of each distance is feasible on a 4x finer check, ends at rest at the distance, and is C2.
+static int feasible_checks(void)
+{
+    const double distances[] = {0.1, 1.0, 5.0, 20.0};
+    const double buses[] = {24.0, 12.0};
+    int i, b;
+    CHECK(time_optimal_work_len() <= sizeof work / sizeof *work, "workspace %zu", time_optimal_work_len());
+    for (b = 0; b < 2; b++)
+        for (i = 0; i < 4; i++) {
+            struct to_limits l = limits_at(buses[b]);
+            struct traj tr = {0, out.breaks, out.theta, out.rho};
+            double f[PLAN_FLAG_LEN], end, t, peak = 0;
+            int rc = time_optimal_plan(&NEMA17, &l, distances[i], NULL, 0, work, sizeof work / sizeof *work, &out);
+            size_t k;
+            CHECK(rc == TO_OK, "rc %d at %g V, %g rad", rc, buses[b], distances[i]);
+            if (rc != TO_OK)
+                continue;
+            tr.n = out.n;
+            CHECK(traj_valid(&tr), "valid table at %g V, %g rad", buses[b], distances[i]);
+            CHECK(out.margins.worst <= 0 && out.margins.voltage <= 0.998 * l.v_use, "margins %g %g", out.margins.worst,
+                  out.margins.voltage);
+            CHECK(out.gamma > 0.05 && out.gamma <= 1 && out.tables >= 1, "gamma %g tables %d", out.gamma, out.tables);
+            end = out.breaks[out.n];
+            traj_flag(&tr, end, f);
+            CHECK(fabs(f[PLAN_THETA] - distances[i]) < 1e-9, "end %.17g", f[PLAN_THETA]);
+            for (k = 0; k < 4000; k++) {  // a 4000-sample check: the voltage within the bus, the speed's sign
+                t = end * (k + 0.5) / 4000;
+                traj_flag(&tr, t, f);
+                peak = f[PLAN_DTHETA] > peak ? f[PLAN_DTHETA] : peak;
+                CHECK(f[PLAN_RHO] > 0 && f[PLAN_RHO] <= l.i_max, "rho %g at t=%g", f[PLAN_RHO], t);
+            }
+            CHECK(peak > 0, "the move goes forward");
+        }
+    return 0;
+}
+
+// Returns 0; a negative move is the positive one mirrored, coefficient for coefficient.
+static int mirror_checks(void)
+{
+    struct to_limits l = limits_at(24.0);
+    size_t k;
+    int same = 1;
+    CHECK(time_optimal_plan(&NEMA17, &l, 2.0, NULL, 0, work, sizeof work / sizeof *work, &out) == TO_OK, "+2 rad");
+    CHECK(time_optimal_plan(&NEMA17, &l, -2.0, NULL, 0, work, sizeof work / sizeof *work, &out2) == TO_OK, "-2 rad");
+    CHECK(out.n == out2.n, "segments %zu %zu", out.n, out2.n);
+    for (k = 0; k < out.n * TRAJ_NCOEF; k++)
+        same &= out.theta[k] == -out2.theta[k] && out.rho[k] == out2.rho[k];
+    CHECK(same, "mirrored rows");
+    return 0;
+}
+
+// Returns 0; bad arguments, a motor that cannot start, no feasible plan and a short workspace give their codes.
+static int error_checks(void)
+{
+    struct to_limits l = limits_at(24.0), bad;
+    struct motor_params m = NEMA17;
+    const double tiny[1] = {1e-9}, nan_width[1] = {NAN};
+    size_t n = sizeof work / sizeof *work;
+    CHECK(time_optimal_plan(&NEMA17, &l, 0.0, NULL, 0, work, n, &out) == TO_EARGS && out.n == 0, "zero distance");
+    CHECK(time_optimal_plan(&NEMA17, &l, NAN, NULL, 0, work, n, &out) == TO_EARGS, "NaN distance");
+    bad = l, bad.i_hold = 1.0;
+    CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_EARGS, "i_hold = i_max");
+    bad = l, bad.torque_angle_max = 2.0;
+    CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_EARGS, "torque angle");
+    bad = l, bad.v_use = NAN;
+    CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_EARGS, "NaN v_use");
+    m.L = -1;
+    CHECK(time_optimal_plan(&m, &l, 1.0, NULL, 0, work, n, &out) == TO_EARGS, "negative inductance");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1.0, nan_width, 1, work, n, &out) == TO_EARGS, "NaN width");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1.0, tiny, 0, work, n, &out) == TO_EARGS, "no widths");
+    bad = l, bad.v_bus = 0.5;  // the resistance alone takes the bus at i_hold
+    CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_ESTART && out.n == 0, "cannot start");
+    bad = l, bad.v_use = 0.05;  // R i_hold alone takes more than 5 % of the bus
+    CHECK(time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, work, n, &out) == TO_ENOPLAN && out.n == 0, "v_use 0.05");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1e5, NULL, 0, work, n, &out) == TO_ELONG && out.n == 0, "1e5 rad");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1e300, NULL, 0, work, n, &out) == TO_ELONG, "1e300 rad");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1.0, NULL, 0, work, time_optimal_work_len() - 1, &out) == TO_EWORK,
+          "short workspace");
+    CHECK(time_optimal_plan(&NEMA17, &l, 1.0, NULL, 0, NULL, n, &out) == TO_EWORK, "no workspace");
+    return 0;
+}
+
+// Returns 0 (failures are counted by CHECK).
+int test_time_optimal(void)
+{
+    feasible_checks();
+    mirror_checks();
+    error_checks();
+    return 0;
+}
