@@ -18,5 +18,5 @@ def test_the_limits_are_the_codes():
     assert limits.BYTES_PER_SAMPLE == 256 and "(256)" in DOC
     assert limits.MIN_PERIODS_PER_MOVE == 10 and "at least 10 control periods" in DOC
     assert limits.MAX_PLAN_SAMPLES == 2_000_000 and "| `MAX_PLAN_SAMPLES` | 2e6" in DOC
-    assert limits.MAX_OPTIMAL_MOVES == 50 and "| `MAX_OPTIMAL_MOVES` | 50" in DOC
+    assert limits.MAX_OPTIMAL_MOVES == 1000 and "| `MAX_OPTIMAL_MOVES` | 1000" in DOC
     assert limits.MAX_STUDY_STEPS == 50_000_000 and "| `MAX_STUDY_STEPS` | 5e7" in DOC

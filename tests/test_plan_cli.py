@@ -58,6 +58,8 @@ def test_ten_waypoints_run_on_the_drive(tmp_path):
     ('[plan]\nplanner = "psi"\nwaypoints = [0.0, 1.0]\n', "neither durations nor caps"),
     ('[motor]\npreset = "nema23"\n[plan]\nwaypoints = [0.0, 1.0]\n', "unknown motor preset"),
     ('[plan]\nplanner = "psi"\n', "waypoints must be a list"),
+    ('[limits]\nv_bus = 24\ni_max = 1\n[plan]\nwaypoints = [' + ", ".join(str(i % 2) for i in range(1002)) + "]\n",
+     "1001 time-optimal moves, above the limit of 1000"),
 ])
 def test_bad_plan_files_are_refused(tmp_path, capsys, text, match):
     path = tmp_path / "bad.toml"

@@ -213,7 +213,7 @@ def load_plan_file(path: Union[str, Path]) -> PlanFile:
                 raise ValueError(f"{len(points)} waypoint(s): a move needs at least 2")
             if len(points) - 1 > MAX_OPTIMAL_MOVES:
                 raise ValueError(f"{len(points)} waypoints are {len(points) - 1} time-optimal moves, above the limit "
-                                 f"of {MAX_OPTIMAL_MOVES} (flatstep.validate.limits.MAX_OPTIMAL_MOVES, about 0.1 s "
+                                 f"of {MAX_OPTIMAL_MOVES} (flatstep.validate.limits.MAX_OPTIMAL_MOVES, under 1 ms "
                                  "of planning each); split the sequence into several files, or use a spline planner")
             plan, steps = _optimal_sequence(points, motor, limits, t0)
         else:

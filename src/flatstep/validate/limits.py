@@ -34,8 +34,8 @@ MAX_STEPS = 100_000_000
 MAX_STEPS_REFERENCE = 200_000
 #: Most time samples of one move in the time-optimal planner (flatstep.plan.time_optimal; about 1 s of work).
 MAX_PLAN_SAMPLES = 2_000_000
-#: Most moves of one time-optimal waypoint sequence in a plan file (about 0.1 s of planning each).
-MAX_OPTIMAL_MOVES = 50
+#: Most moves of one time-optimal waypoint sequence in a plan file (under 1 ms of planning each in C).
+MAX_OPTIMAL_MOVES = 1000
 #: Segments of one PWM period in switched mode (csrc/drive.h ``DRIVE_PWM_SEGMENTS``).
 PWM_SEGMENTS = 9
 
