@@ -3,18 +3,8 @@
 # of smc_step, and (with QEMU) the instructions one smc_step call executes. Run from the repo root: make embedded
 set -eu
 
-PREFIX=${ARM_PREFIX:-arm-none-eabi-}
-OUT=${EMBEDDED_OUT:-build/embedded}
-QEMU=${QEMU_SYSTEM_ARM:-qemu-system-arm}
-CFLAGS="-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard -Os -std=c99 -DFS_SINGLE
-        -ffunction-sections -fdata-sections -Wall -Wextra -Wdouble-promotion -Werror -Icsrc"
-
-if ! command -v "${PREFIX}gcc" >/dev/null 2>&1; then
-    echo "embedded: skipped: ${PREFIX}gcc not found" \
-         "(Debian/Ubuntu: apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi)"
-    exit 0
-fi
-mkdir -p "$OUT"
+. embedded/common.sh
+require_gcc "embedded"
 echo "== ${PREFIX}gcc $("${PREFIX}gcc" -dumpversion): csrc/*.c with $(echo $CFLAGS | sed 's/ -W.*//')"
 
 # 1. Every module of the core, unchanged, in single precision (fs_real = float); -Werror -Wdouble-promotion
@@ -49,9 +39,9 @@ printf '   %-20s %5d  (smc_step and the core functions it calls; libm not includ
 elf="$OUT/smc_step_m4.elf"
 # shellcheck disable=SC2086
 if ! "${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/count_main.c csrc/motor.c csrc/plan.c csrc/trajectory.c csrc/flat.c \
-        csrc/smc.c -nostartfiles --specs=nosys.specs -Wl,--gc-sections -T embedded/mps2_an386.ld -lm \
+        csrc/smc.c csrc/torque_model.c -nostartfiles --specs=nosys.specs -Wl,--gc-sections -T embedded/mps2_an386.ld -lm \
         -o "$elf" 2>"$OUT/link.log"; then
-    echo "-- emulation: skipped: linking against newlib's libm failed (see $OUT/link.log;" \
+    echo "-- emulation: skipped: the link failed (see $OUT/link.log; without newlib's libm:" \
          "Debian: apt-get install libnewlib-arm-none-eabi)"
     exit 0
 fi

@@ -5,17 +5,8 @@
 # qemu-system-arm for the executed count)
 set -eu
 
-PREFIX=${ARM_PREFIX:-arm-none-eabi-}
-OUT=${EMBEDDED_OUT:-build/embedded}
-QEMU=${QEMU_SYSTEM_ARM:-qemu-system-arm}
-CFLAGS="-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard -Os -std=c99 -DFS_SINGLE
-        -ffunction-sections -fdata-sections -Wall -Wextra -Wdouble-promotion -Werror -Icsrc"
-
-if ! command -v "${PREFIX}gcc" >/dev/null 2>&1; then
-    echo "time_optimal embedded: skipped: ${PREFIX}gcc not found (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi)"
-    exit 0
-fi
-mkdir -p "$OUT"
+. embedded/common.sh
+require_gcc "time_optimal embedded"
 # shellcheck disable=SC2086
 "${PREFIX}gcc" $CFLAGS -c csrc/time_optimal.c -o "$OUT/time_optimal.o"
 echo "== ${PREFIX}gcc $("${PREFIX}gcc" -dumpversion), float, -Os: csrc/time_optimal.c"

@@ -4,17 +4,8 @@
 # Run from the repo root: sh embedded/traj_build.sh (needs gcc-arm-none-eabi, libnewlib-arm-none-eabi, qemu-system-arm)
 set -eu
 
-PREFIX=${ARM_PREFIX:-arm-none-eabi-}
-OUT=${EMBEDDED_OUT:-build/embedded}
-QEMU=${QEMU_SYSTEM_ARM:-qemu-system-arm}
-CFLAGS="-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard -Os -std=c99 -DFS_SINGLE
-        -ffunction-sections -fdata-sections -Wall -Wextra -Wdouble-promotion -Werror -Icsrc"
-
-if ! command -v "${PREFIX}gcc" >/dev/null 2>&1; then
-    echo "traj embedded: skipped: ${PREFIX}gcc not found (apt-get install gcc-arm-none-eabi libnewlib-arm-none-eabi)"
-    exit 0
-fi
-mkdir -p "$OUT"
+. embedded/common.sh
+require_gcc "traj embedded"
 # shellcheck disable=SC2086
 "${PREFIX}gcc" $CFLAGS -c csrc/trajectory.c -o "$OUT/trajectory.o"
 echo "== ${PREFIX}gcc $("${PREFIX}gcc" -dumpversion), float, -Os: csrc/trajectory.c"
