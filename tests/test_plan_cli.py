@@ -8,7 +8,7 @@ import pytest
 
 from flatstep.cli.main import main
 from flatstep.model.motor import MotorParams
-from flatstep.plan.plan_file import is_plan_file, load_plan_file
+from flatstep.plan.plan_file import _waypoint, is_plan_file, load_plan_file, runs
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -31,17 +31,19 @@ def test_plan_runs_on_every_example(path, tmp_path, capsys):
     assert report["total_duration"] == pytest.approx(report["tf"] - report["t0"])
     assert sum(s["duration"] for s in report["steps"]) == pytest.approx(report["total_duration"], rel=1e-9)
     moves = [s for s in report["steps"] if s["step"].startswith("move")]
-    waypoints = tomllib.loads(path.read_text())["plan"]["waypoints"]
-    assert len(moves) == len(waypoints) - 1  # every move found, in order
-    assert [s["step"] for s in moves] == [f"move {i} -> {i + 1}" for i in range(len(moves))]
+    sec = tomllib.loads(path.read_text())["plan"]
+    waypoints = [_waypoint(path.name, i, w) for i, w in enumerate(sec["waypoints"])]
+    # every move found, in order: one per waypoint, or one per run of them with through = true
+    ends = runs(waypoints) if sec.get("through") else [(i, i + 1) for i in range(len(waypoints) - 1)]
+    assert [s["step"].split(" (")[0] for s in moves] == [f"move {i} -> {j}" for i, j in ends]
     if "margins" in report:
         assert report["feasible"] and report["margins"]["worst"] <= 1.0
     out = capsys.readouterr().out
-    assert "move 0 -> 1" in out and "plan.json" in out
+    assert f"move {ends[0][0]} -> {ends[0][1]}" in out and "plan.json" in out
 
 
 def test_ten_waypoints_run_on_the_drive(tmp_path):
-    path = next(p for p in EXAMPLES if "ten" in p.stem)
+    path = next(p for p in EXAMPLES if p.stem == "ten-waypoints")
     assert main(["plan", str(path), "--out", str(tmp_path), "--simulate"]) == 0
     report = json.loads((tmp_path / "plan.json").read_text())
     tr = report["tracking"]
@@ -77,7 +79,7 @@ SHORT = "[limits]\nv_bus = 24.0\ni_max = 1.0\ni_run = 0.1\nv_use = 0.87\n[plan]\
 
 
 def test_simulate_runs_the_ten_waypoints_end_to_end(tmp_path, capsys):
-    path = next(p for p in EXAMPLES if "ten" in p.stem)
+    path = next(p for p in EXAMPLES if p.stem == "ten-waypoints")
     assert main(["simulate", str(path), "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "move 8 -> 9" in out and out.strip().endswith("status: ok")

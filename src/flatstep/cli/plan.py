@@ -114,8 +114,9 @@ def _print_steps(pf: "PlanFile") -> None:
     plan = pf.plan
     print(f"{pf.name}: {_count(len(pf.steps), 'step')} in {_count(plan.n, 'segment')}, {plan.tf - plan.t0:.6g} s "
           f"(t = {plan.t0:g} .. {plan.tf:.6g} s)")
+    width = max([14] + [len(label) for label, _, _ in pf.steps])
     for label, start, duration in pf.steps:
-        print(f"  {label:<14} start {start:10.6f} s  duration {duration:10.6f} s")
+        print(f"  {label:<{width}} start {start:10.6f} s  duration {duration:10.6f} s")
 
 
 def run_plan_file(path: str, x0: Optional[Sequence[float]] = None,

@@ -14,7 +14,13 @@
     rho = 0.4                  # the families' constant current magnitude [A]
     caps = {v_max = 100.0, a_max = 2e4, j_max = 1e7}   # the families' speed, acceleration and jerk caps
     durations = [0.05, 0.05]   # or each move's duration (psi, hermite, spline)
+    through = false            # time_optimal: true passes a waypoint at speed where the motion keeps its direction
     waypoints = [0.0, {theta = 2.0, dwell = 0.02}, {theta = 5.0, velocity = 10.0}]
+
+The time_optimal planner rests at every waypoint unless ``through = true``: then a run of waypoints in one
+direction without a dwell is one move, the fastest over the run, which passes the waypoints inside it at the
+speed it has there (on one axis the fastest path through them; :func:`runs`). It still rests where the motion
+reverses, where a dwell is asked and at the end.
 """
 from __future__ import annotations
 
@@ -43,7 +49,7 @@ MIN_MOVE = 1e-6
 
 PLANNERS = ("time_optimal",) + FAMILIES
 _KEYS = {"": ("name", "description", "motor", "limits", "plan", "simulate"),
-         "plan": ("planner", "t0", "rho", "caps", "durations", "waypoints"),
+         "plan": ("planner", "t0", "rho", "caps", "durations", "through", "waypoints"),
          "simulate": ("control_rate", "t_after")}
 
 
@@ -133,24 +139,49 @@ def _label(i: int) -> str:
     return f"move {i} -> {i + 1}"
 
 
-def _optimal_sequence(points: list[Waypoint], motor: MotorParams, limits: MotorLimits,
-                      t0: float) -> tuple[PiecewisePlan, list[tuple[str, float, float]]]:
-    """Time-optimal moves from rest to rest through the waypoints, with their dwells (velocities: rests)."""
-    parts: list[tuple[str, PiecewisePlan]] = []
-    t = t0
+def runs(points: list[Waypoint]) -> list[tuple[int, int]]:
+    """The moves ``(i, j)`` of a time-optimal sequence through ``points`` that rests only where it must.
+
+    A move from waypoint ``i`` goes on through the next waypoints while the motion keeps its direction and no
+    dwell is asked there; it ends at ``j``, where it reverses, dwells, or the list ends.
+    """
+    moves, i = [], 0
+    while i + 1 < len(points):
+        sign, j = np.sign(points[i + 1].theta - points[i].theta), i + 1
+        while (j + 1 < len(points) and points[j].dwell == 0
+               and np.sign(points[j + 1].theta - points[j].theta) == sign):
+            j += 1
+        moves.append((i, j))
+        i = j
+    return moves
+
+
+def _optimal_sequence(points: list[Waypoint], motor: MotorParams, limits: MotorLimits, t0: float,
+                      through: bool = False) -> tuple[PiecewisePlan, list[tuple[str, float, float]]]:
+    """Time-optimal moves through the waypoints, with their dwells (velocities: rests).
+
+    From rest to rest at every waypoint, or with ``through`` only at the ends of :func:`runs`.
+    """
     for i, p in enumerate(points):
         if p.velocity not in (None, 0.0):
-            raise ValueError(f"waypoint {i}: velocity={p.velocity!r} rad/s; the time_optimal planner rests at "
-                             "every waypoint: give 0 or None")
-        if p.dwell > 0:
-            parts.append((f"dwell at {i}", PiecewisePlan.hold(p.theta, limits.i_hold, t, t + p.dwell)))
-            t = parts[-1][1].tf
-        if i + 1 < len(points):
-            if abs(points[i + 1].theta - p.theta) < MIN_MOVE:
-                raise ValueError(f"waypoints {i} and {i + 1} sit at {p.theta} and {points[i + 1].theta} rad, less "
-                                 f"than {MIN_MOVE:g} rad apart: give a rest as a dwell, or merge them")
-            parts.append((_label(i), time_optimal(points[i + 1].theta - p.theta, motor, limits, theta1=p.theta,
-                                                  t0=t)))
+            raise ValueError(f"waypoint {i}: velocity={p.velocity!r} rad/s; the time_optimal planner chooses the "
+                             "speed at a waypoint (0, or what it has there with through = true): give 0 or None")
+        if i + 1 < len(points) and abs(points[i + 1].theta - p.theta) < MIN_MOVE:
+            raise ValueError(f"waypoints {i} and {i + 1} sit at {p.theta} and {points[i + 1].theta} rad, less "
+                             f"than {MIN_MOVE:g} rad apart: give a rest as a dwell, or merge them")
+    moves = runs(points) if through else [(i, i + 1) for i in range(len(points) - 1)]
+    parts: list[tuple[str, PiecewisePlan]] = []
+    t = t0
+    if points[0].dwell > 0:
+        parts.append(("dwell at 0", PiecewisePlan.hold(points[0].theta, limits.i_hold, t, t + points[0].dwell)))
+        t = parts[-1][1].tf
+    for i, j in moves:
+        label = f"move {i} -> {j}" + (f" (through {', '.join(str(k) for k in range(i + 1, j))})" if j > i + 1 else "")
+        parts.append((label, time_optimal(points[j].theta - points[i].theta, motor, limits, theta1=points[i].theta,
+                                          t0=t)))
+        t = parts[-1][1].tf
+        if points[j].dwell > 0:
+            parts.append((f"dwell at {j}", PiecewisePlan.hold(points[j].theta, limits.i_hold, t, t + points[j].dwell)))
             t = parts[-1][1].tf
     steps = [(label, part.t0, part.tf - part.t0) for label, part in parts]
     return PiecewisePlan.concatenate([part for _, part in parts]), steps
@@ -205,6 +236,12 @@ def load_plan_file(path: Union[str, Path]) -> PlanFile:
         t0 = check_quantity("time", sec.get("t0", 0.0), as_name="t0")
     except ValueError as exc:
         raise ValueError(f"{where}:plan.t0: {exc}") from None
+    through = sec.get("through", False)
+    if not isinstance(through, bool):
+        raise ValueError(f"{where}: [plan] through={through!r} must be true or false")
+    if through and planner != "time_optimal":
+        raise ValueError(f"{where}: [plan] through = true is for the time_optimal planner; the {planner!r} family "
+                         "passes a waypoint at the velocity it gives (or its own choice)")
     try:
         if planner == "time_optimal":
             if limits is None:
@@ -215,7 +252,7 @@ def load_plan_file(path: Union[str, Path]) -> PlanFile:
                 raise ValueError(f"{len(points)} waypoints are {len(points) - 1} time-optimal moves, above the limit "
                                  f"of {MAX_OPTIMAL_MOVES} (flatstep.validate.limits.MAX_OPTIMAL_MOVES, under 1 ms "
                                  "of planning each); split the sequence into several files, or use a spline planner")
-            plan, steps = _optimal_sequence(points, motor, limits, t0)
+            plan, steps = _optimal_sequence(points, motor, limits, t0, through)
         else:
             caps = Caps(**sec["caps"]) if "caps" in sec else None
             plan = plan_waypoints(points, family=planner, rho=float(sec.get("rho", 0.5)), t0=t0,
