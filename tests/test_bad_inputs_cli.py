@@ -39,7 +39,8 @@ PLAN_CASES = [("waypoints", "[0.0, nan]", "nan"), ("waypoints", "[0.0]", "1 wayp
               ("waypoints", "[0.0, {theta = 1.0, dwell = 1e9}]", "dwell=1000000000.0"),
               ("waypoints", "5.0", "waypoints"), ("planner", '"bogus"', "'bogus'"), ("t0", "-1", "t0=-1.0"),
               ("t0", "nan", "t0=nan"), ("t0", "true", "t0=True"),
-              ("waypoints", "[" + ", ".join(str(float(i % 2)) for i in range(60)) + "]", "59 time-optimal moves")]
+              ("waypoints", "[" + ", ".join(str(float(i % 2)) for i in range(1010)) + "]", "1009 time-optimal moves"),
+              ("through", '"yes"', "through='yes'")]
 
 
 #: (scenario file text, what the error must show), run through ``flatstep simulate``
