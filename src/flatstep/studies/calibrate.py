@@ -108,7 +108,7 @@ class Calibration:
                 "std": self.std, "settings": self.settings}
 
 
-def _check_drive(scenario: Scenario) -> None:
+def check_drive(scenario: Scenario) -> None:
     """Refuse a scenario whose drive cannot calibrate: no sampled loop, no sensors, or a load that varies."""
     if not isinstance(scenario, Scenario):
         raise ValueError(f"scenario={scenario!r} is not a Scenario")
@@ -150,14 +150,14 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
     (Recording, float)
         What the drive measured over both moves, and the peak speed [rad/s].
     """
-    _check_drive(scenario)
+    check_drive(scenario)
     if controller not in CALIBRATION_TYPES:
         raise ValueError(f"controller={controller!r} cannot run a calibration; valid: {list(CALIBRATION_TYPES)} "
                          "(a type that needs no torque model: the torques are what is calibrated)")
     periods = check_count("periods", periods, why="detent periods each way")
     h = check_integer("detent_harmonic", detent_harmonic)
     loop, motor = scenario.loop, scenario.motor
-    assert loop is not None and loop.sensors is not None  # _check_drive
+    assert loop is not None and loop.sensors is not None  # check_drive
     sensors = loop.sensors if current_noise is None else replace(
         loop.sensors, current_noise=check_nonnegative("current_noise", current_noise, unit=" A"))
     if peak_speed is None:
