@@ -29,7 +29,8 @@ from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SMC_TYPES
 from ..engine.result import STATUSES, SimResult
 from ..plan.rest_to_rest import RestToRest
 from .batch import run_batch
-from .calibrate import Calibration, calibrate as calibrate_unit, check_drive
+from .calibrate import Calibration, check_drive
+from .calibrate import calibrate as calibrate_unit
 from .robustness import encoder_count, perturbed, plant_errors
 from .scenario import Scenario
 from .scenario_file import Robustness
@@ -130,23 +131,27 @@ def check_calibrate(calibrate: Optional[str], scenario: Scenario, kinds: Sequenc
 
 
 def unit_scenario(scenario: Scenario, calibration: Calibration) -> Scenario:
-    """``scenario`` run by a drive that calibrated its own motor: the calibrated ``[feedforward]`` table, and the
-    back-EMF ``Km`` of the calibration in the controller's model (its maps, its observer, its rule-tuned gains).
+    """``scenario`` run by a drive that calibrated its own motor (its table and back-EMF ``Km``).
 
-    The plant is unchanged; so are the scenario's SMC gains (designed for the model's uncertainty, not its values).
+    The calibrated ``[feedforward]`` table replaces the scenario's, and the calibration's back-EMF ``Km`` the
+    model's (the law's maps, the observer's model, the baselines' rule-tuned gains). The plant is unchanged; so
+    are the scenario's SMC gains (designed for the model's uncertainty, not its values).
     """
     return replace(scenario, torques=calibration.torques,
                    motor=scenario.motor.replace(Km=calibration.estimates["Km"]))
 
 
 def calibrate_units(scenarios: Sequence[Scenario]) -> list[Calibration]:
-    """Each scenario's plant calibrated on its own drive (:func:`~flatstep.studies.calibrate.calibrate`, the
-    nominal model running the move)."""
+    """Each scenario's plant calibrated on its own drive (the nominal model running the move).
+
+    One :func:`~flatstep.studies.calibrate.calibrate` per scenario, in order.
+    """
     return [calibrate_unit(sc) for sc in scenarios]
 
 
 def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band: Optional[float] = None,
-            bandwidth_scale: float = 1.0, engine: str = "c", calibrate: Optional[str] = None) -> dict[str, dict[str, Any]]:
+            bandwidth_scale: float = 1.0, engine: str = "c",
+            calibrate: Optional[str] = None) -> dict[str, dict[str, Any]]:
     """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects).
 
     With ``calibrate="each"`` the types that read a calibration run with the scenario's plant calibrated on its
