@@ -88,3 +88,13 @@ def test_the_command_line_flag(km_study, tmp_path, capsys):
     assert "--calibrate-each" in capsys.readouterr().err
     assert main(["compare", "--help"]) == 0
     assert "--calibrate-each" in capsys.readouterr().out
+
+
+def test_the_calibration_horizon_is_what_the_moves_simulate(km_study):
+    """The study limit counts each calibration by the time its moves simulate."""
+    from flatstep.studies.calibrate import calibration_horizon, calibration_moves
+
+    scenario, _ = km_study
+    rec, _ = calibration_moves(scenario)
+    period = scenario.loop.control_period
+    assert calibration_horizon(scenario) == pytest.approx(rec.t[-1] - rec.t[0], abs=3 * period)

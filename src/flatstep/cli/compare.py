@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from dataclasses import replace
@@ -9,6 +10,7 @@ from typing import Any, Literal, Optional, Sequence
 
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, LABELS, SMC_TYPES
 from ..json_out import strict_json
+from ..studies.calibrate import calibration_horizon
 from ..studies.compare import bandwidth_sweep, check_calibrate, compare, compare_worst, default_band, scenario_kinds
 from ..studies.robustness import encoder_count, plant_errors
 from ..studies.scenario import Scenario
@@ -103,7 +105,12 @@ def _check_work(scenario: Scenario, study: Optional[Robustness], kinds: Sequence
     scales = len(args.scales.split(",")) if args.scales else 0
     baselines = [k for k in kinds if k not in SMC_TYPES]
     runs = len(kinds) * (1 + plants) + scales * len(baselines) * max(plants, 1)
-    check_study(runs, cost, engine=args.engine, what=f"the comparison of {len(kinds)} controllers on {plants} plants")
+    if args.calibrate_each:  # one calibration per plant and one for the scenario's, each as long as this many runs
+        calibration = estimate(calibration_horizon(scenario), control_period=loop.control_period,
+                               substeps=loop.substeps, pwm_per_period=pwm)
+        runs += (1 + plants) * math.ceil(calibration.steps / max(cost.steps, 1))
+    check_study(runs, cost, engine=args.engine, what=f"the comparison of {len(kinds)} controllers on {plants} plants"
+                + (" with each calibrated" if args.calibrate_each else ""))
 
 
 def cmd_compare(args: argparse.Namespace) -> int:

@@ -123,6 +123,27 @@ def check_drive(scenario: Scenario) -> None:
                          "estimates a constant load (give a constant [load] torque)")
 
 
+def _move(scenario: Scenario, periods: int, peak_speed: float | None, h: int) -> tuple[float, float, float]:
+    """The calibration move's peak speed [rad/s] (default or checked), distance [rad] and duration [s]."""
+    loop, motor = scenario.loop, scenario.motor
+    assert loop is not None  # check_drive
+    if peak_speed is None:
+        _, wn = bandwidths(loop.control_period, loop.compute_delay)
+        peak_speed = DETENT_FRACTION_OF_WN * wn / (h * motor.Nr)
+    peak_speed = check_positive("peak_speed", peak_speed, unit=" rad/s")
+    distance = periods * 2.0 * math.pi / (h * motor.Nr)
+    return peak_speed, distance, _PSI_PEAK * distance / peak_speed
+
+
+def calibration_horizon(scenario: Scenario, *, periods: int = 16, peak_speed: float | None = None,
+                        detent_harmonic: int = 4) -> float:
+    """The time :func:`calibration_moves` simulates on ``scenario``'s drive [s]: both moves with their rests."""
+    check_drive(scenario)
+    periods = check_count("periods", periods, why="detent periods each way")
+    _, _, duration = _move(scenario, periods, peak_speed, check_integer("detent_harmonic", detent_harmonic))
+    return 2.0 * (duration + 2 * REST)
+
+
 def calibration_moves(scenario: Scenario, *, controller: str = "cascade", periods: int = 16,
                       peak_speed: float | None = None, detent_harmonic: int = 4,
                       current_noise: float | None = None) -> tuple[Recording, float]:
@@ -160,12 +181,7 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
     assert loop is not None and loop.sensors is not None  # check_drive
     sensors = loop.sensors if current_noise is None else replace(
         loop.sensors, current_noise=check_nonnegative("current_noise", current_noise, unit=" A"))
-    if peak_speed is None:
-        _, wn = bandwidths(loop.control_period, loop.compute_delay)
-        peak_speed = DETENT_FRACTION_OF_WN * wn / (h * motor.Nr)
-    peak_speed = check_positive("peak_speed", peak_speed, unit=" rad/s")
-    distance = periods * 2.0 * math.pi / (h * motor.Nr)
-    duration = _PSI_PEAK * distance / peak_speed
+    peak_speed, distance, duration = _move(scenario, periods, peak_speed, h)
     plant, rho = scenario.simulated_plant, scenario.plan.rho2
     theta, x, elapsed, parts = scenario.plan.theta1, scenario.plan.x0(motor.Nr), 0.0, []
     for k, sign in enumerate((1.0, -1.0)):
