@@ -105,10 +105,10 @@ def _check_work(scenario: Scenario, study: Optional[Robustness], kinds: Sequence
     scales = len(args.scales.split(",")) if args.scales else 0
     baselines = [k for k in kinds if k not in SMC_TYPES]
     runs = len(kinds) * (1 + plants) + scales * len(baselines) * max(plants, 1)
-    if args.calibrate_each:  # one calibration per plant and one for the scenario's, each as long as this many runs
+    if args.calibrate_each:  # per plant and the scenario's, once and again per scale at most; each as many runs
         calibration = estimate(calibration_horizon(scenario), control_period=loop.control_period,
                                substeps=loop.substeps, pwm_per_period=pwm)
-        runs += (1 + plants) * math.ceil(calibration.steps / max(cost.steps, 1))
+        runs += (1 + scales) * (1 + plants) * math.ceil(calibration.steps / max(cost.steps, 1))
     check_study(runs, cost, engine=args.engine, what=f"the comparison of {len(kinds)} controllers on {plants} plants"
                 + (" with each calibrated" if args.calibrate_each else ""))
 
@@ -164,8 +164,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.scales:
         scales = _scales(args.scales)
         baselines = [k for k in kinds if k not in SMC_TYPES]
+        calibrated = mode if any(k in FEEDFORWARD_TYPES for k in baselines) else None  # cascade_ff, cascade_model
         sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,
-                                engine=args.engine, progress=not args.quiet, log=log)
+                                engine=args.engine, progress=not args.quiet, log=log, calibrate=calibrated)
         report["bandwidth_sweep"] = {str(s): v for s, v in sweep.items()}
     if args.out:
         from .plots_compare import plot_overlay, plot_plants

@@ -236,19 +236,21 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
 
 def bandwidth_sweep(scenario: Scenario, kinds: Sequence[str], scales: Sequence[float], *,
                     study: Optional[Robustness] = None, band: Optional[float] = None,
-                    log: Optional[Callable[[str], None]] = None,
+                    log: Optional[Callable[[str], None]] = None, calibrate: Optional[str] = None,
                     **batch_options: Any) -> dict[float, dict[str, dict[str, Optional[float]]]]:
     """The baselines' metrics with every bandwidth scaled by each factor.
 
     The metrics are the worst over the study's plants, or those on the scenario's plant without a study: the
-    check that the tuning rule does not cripple the baselines.
+    check that the tuning rule does not cripple the baselines. ``calibrate`` is that of :func:`compare_worst`.
     """
     out: dict[float, dict[str, dict[str, Optional[float]]]] = {}
     for scale in scales:
         if study is None:
-            res = compare(scenario, kinds, band=band, bandwidth_scale=scale, engine=batch_options.get("engine", "c"))
+            res = compare(scenario, kinds, band=band, bandwidth_scale=scale, engine=batch_options.get("engine", "c"),
+                          calibrate=calibrate)
             out[float(scale)] = {k: v["metrics"] for k, v in res.items()}
         else:
-            res = compare_worst(scenario, study, kinds, band=band, bandwidth_scale=scale, log=log, **batch_options)
+            res = compare_worst(scenario, study, kinds, band=band, bandwidth_scale=scale, log=log, calibrate=calibrate,
+                                **batch_options)
             out[float(scale)] = {k: v["worst"] for k, v in res.items()}
     return out
