@@ -134,7 +134,7 @@ def unit_scenario(scenario: Scenario, calibration: Calibration) -> Scenario:
     """``scenario`` run by a drive that calibrated its own motor (its table and back-EMF ``Km``).
 
     The calibrated ``[feedforward]`` table replaces the scenario's, and the calibration's back-EMF ``Km`` the
-    model's (the law's maps, the observer's model, the baselines' rule-tuned gains). The plant is unchanged; so
+    model's (the law's maps, the observer's model, the cascade's q current and back EMF). The plant is unchanged; so
     are the scenario's SMC gains (designed for the model's uncertainty, not its values).
     """
     return replace(scenario, torques=calibration.torques,
