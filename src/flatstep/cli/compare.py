@@ -2,14 +2,16 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from dataclasses import replace
 from typing import Any, Literal, Optional, Sequence
 
-from ..control.tuning import CONTROLLER_TYPES, LABELS, SMC_TYPES
+from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, LABELS, SMC_TYPES
 from ..json_out import strict_json
-from ..studies.compare import bandwidth_sweep, compare, compare_worst, default_band, scenario_kinds
+from ..studies.calibrate import calibration_horizon
+from ..studies.compare import bandwidth_sweep, check_calibrate, compare, compare_worst, default_band, scenario_kinds
 from ..studies.robustness import encoder_count, plant_errors
 from ..studies.scenario import Scenario
 from ..studies.scenario_file import Robustness, load_scenario
@@ -103,7 +105,12 @@ def _check_work(scenario: Scenario, study: Optional[Robustness], kinds: Sequence
     scales = len(args.scales.split(",")) if args.scales else 0
     baselines = [k for k in kinds if k not in SMC_TYPES]
     runs = len(kinds) * (1 + plants) + scales * len(baselines) * max(plants, 1)
-    check_study(runs, cost, engine=args.engine, what=f"the comparison of {len(kinds)} controllers on {plants} plants")
+    if args.calibrate_each:  # per plant and the scenario's, once and again per scale at most; each as many runs
+        calibration = estimate(calibration_horizon(scenario), control_period=loop.control_period,
+                               substeps=loop.substeps, pwm_per_period=pwm)
+        runs += (1 + scales) * (1 + plants) * math.ceil(calibration.steps / max(cost.steps, 1))
+    check_study(runs, cost, engine=args.engine, what=f"the comparison of {len(kinds)} controllers on {plants} plants"
+                + (" with each calibrated" if args.calibrate_each else ""))
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
@@ -113,7 +120,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
         scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None)
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
-    kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else scenario_kinds(scenario)
+    mode = "each" if args.calibrate_each else None
+    every = CONTROLLER_TYPES if mode == "each" else scenario_kinds(scenario)  # each unit brings its own table
+    kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else every
     unknown = [k for k in kinds if k not in CONTROLLER_TYPES]
     if unknown or not kinds or len(set(kinds)) != len(kinds):
         raise ValueError(f"--controllers {args.controllers!r}: give distinct names among {list(CONTROLLER_TYPES)}, "
@@ -125,12 +134,16 @@ def cmd_compare(args: argparse.Namespace) -> int:
         raise ValueError(f"--scales {args.scales!r} sweeps the baselines' bandwidth, and --controllers "
                          f"{args.controllers!r} names none: add one of "
                          f"{[k for k in CONTROLLER_TYPES if k not in SMC_TYPES]}, or drop --scales")
+    try:
+        check_calibrate(mode, scenario, kinds)
+    except ValueError as exc:
+        raise ValueError(f"--calibrate-each: {exc}") from None
     _check_work(scenario, study, kinds, args)
     count = encoder_count(scenario)
     log = _Log(enabled=not args.quiet)
-    nominal = compare(scenario, kinds, band=band, engine=args.engine)
-    log(f"{len(nominal)} controllers on the scenario's plant")
-    report: dict[str, Any] = {"scenario": scenario.name, "band_rad": band, "count_rad": count,
+    nominal = compare(scenario, kinds, band=band, engine=args.engine, calibrate=mode)
+    log(f"{len(nominal)} controllers on the scenario's plant{', calibrated on its drive' if mode else ''}")
+    report: dict[str, Any] = {"scenario": scenario.name, "band_rad": band, "count_rad": count, "calibrate": mode,
                               "controllers": {k: {"label": LABELS[k], "metrics": v["metrics"], "faults": v["faults"],
                                                   "status": v["status"], "lost_at": v["lost_at"],
                                                   "gains": v["result"].meta["gains"],
@@ -139,16 +152,21 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if study is not None and not args.no_robustness:
         study = replace(study, samples=args.samples) if args.samples is not None else study
         worst = compare_worst(scenario, study, kinds, band=band, engine=args.engine, progress=not args.quiet,
-                              log=log)
+                              log=log, calibrate=mode)
+        units = next((v["calibrations"] for v in worst.values() if v["calibrations"] is not None), None)
         report["robustness"] = {"relative_error": study.relative_error, "parameters": list(study.parameters),
-                                "plants": len(next(iter(worst.values()))["rows"]),
+                                "plants": len(next(iter(worst.values()))["rows"]), "calibrate": mode,
+                                "calibrations": None if units is None else [
+                                    {"plant": u.source, "feedforward": u.torques.as_dict(), "Km": u.estimates["Km"]}
+                                    for u in units],
                                 "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"],
                                               "statuses": v["statuses"]} for k, v in worst.items()}}
     if args.scales:
         scales = _scales(args.scales)
         baselines = [k for k in kinds if k not in SMC_TYPES]
+        calibrated = mode if any(k in FEEDFORWARD_TYPES for k in baselines) else None  # cascade_ff, cascade_model
         sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,
-                                engine=args.engine, progress=not args.quiet, log=log)
+                                engine=args.engine, progress=not args.quiet, log=log, calibrate=calibrated)
         report["bandwidth_sweep"] = {str(s): v for s, v in sweep.items()}
     if args.out:
         from .plots_compare import plot_overlay, plot_plants
@@ -168,7 +186,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.json:
         print(strict_json(report, indent=2))
         return code
-    print(f"{scenario.name}: the scenario's plant (settling band {band:.3g} rad)")
+    print(f"{scenario.name}: the scenario's plant (settling band {band:.3g} rad)"
+          + (", calibrated on its own drive" if mode else ""))
     rows = {k: v["metrics"] for k, v in nominal.items()}
     print(table(rows, count))
     print("status: " + ", ".join(f"{LABELS[k]} {v['status']}" for k, v in nominal.items()))
@@ -177,7 +196,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     line = _target_line(rows, count)
     if worst is not None:
         r = report["robustness"]
-        print(f"\nworst over {r['plants']} plants, {', '.join(r['parameters'])} off by +-{r['relative_error']:.0%}")
+        print(f"\nworst over {r['plants']} plants, {', '.join(r['parameters'])} off by +-{r['relative_error']:.0%}"
+              + (", each calibrated on its own drive" if mode else ""))
         rows = {k: v["worst"] for k, v in worst.items() if v["worst"]}
         print(table(rows, count))
         print("status over the plants: " + ", ".join(
@@ -220,6 +240,11 @@ def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]
                       help="random plants instead of all sign combinations")
     cmp_.add_argument("--scales", default=None, help="also run the baselines with every bandwidth scaled by these "
                       "comma-separated factors (e.g. 0.5,2): the check that their tuning does not cripple them")
+    cmp_.add_argument("--calibrate-each", action="store_true",
+                      help="calibrate each plant on its own drive first ('flatstep calibrate' on it, as firmware "
+                      "calibrates each unit) and run the types that read a calibration "
+                      f"({','.join(FEEDFORWARD_TYPES)}) with that plant's [feedforward] table and back-EMF Km in "
+                      "their model; the other types run as without it. Needs [sensors]")
     cmp_.add_argument("--engine", choices=("c", "python"), default="c",
                       help="who runs the loops: the C core (default) or the Python reference loop (slow)")
     cmp_.add_argument("--quiet", action="store_true", help="no progress on stderr")

@@ -108,7 +108,7 @@ class Calibration:
                 "std": self.std, "settings": self.settings}
 
 
-def _check_drive(scenario: Scenario) -> None:
+def check_drive(scenario: Scenario) -> None:
     """Refuse a scenario whose drive cannot calibrate: no sampled loop, no sensors, or a load that varies."""
     if not isinstance(scenario, Scenario):
         raise ValueError(f"scenario={scenario!r} is not a Scenario")
@@ -121,6 +121,27 @@ def _check_drive(scenario: Scenario) -> None:
     if scenario.simulated_plant.constant_load is None:
         raise ValueError(f"scenario {scenario.name!r}: the plant's load is a function of time; a calibration "
                          "estimates a constant load (give a constant [load] torque)")
+
+
+def _move(scenario: Scenario, periods: int, peak_speed: float | None, h: int) -> tuple[float, float, float]:
+    """The calibration move's peak speed [rad/s] (default or checked), distance [rad] and duration [s]."""
+    loop, motor = scenario.loop, scenario.motor
+    assert loop is not None  # check_drive
+    if peak_speed is None:
+        _, wn = bandwidths(loop.control_period, loop.compute_delay)
+        peak_speed = DETENT_FRACTION_OF_WN * wn / (h * motor.Nr)
+    peak_speed = check_positive("peak_speed", peak_speed, unit=" rad/s")
+    distance = periods * 2.0 * math.pi / (h * motor.Nr)
+    return peak_speed, distance, _PSI_PEAK * distance / peak_speed
+
+
+def calibration_horizon(scenario: Scenario, *, periods: int = 16, peak_speed: float | None = None,
+                        detent_harmonic: int = 4) -> float:
+    """The time :func:`calibration_moves` simulates on ``scenario``'s drive [s]: both moves with their rests."""
+    check_drive(scenario)
+    periods = check_count("periods", periods, why="detent periods each way")
+    _, _, duration = _move(scenario, periods, peak_speed, check_integer("detent_harmonic", detent_harmonic))
+    return 2.0 * (duration + 2 * REST)
 
 
 def calibration_moves(scenario: Scenario, *, controller: str = "cascade", periods: int = 16,
@@ -150,22 +171,17 @@ def calibration_moves(scenario: Scenario, *, controller: str = "cascade", period
     (Recording, float)
         What the drive measured over both moves, and the peak speed [rad/s].
     """
-    _check_drive(scenario)
+    check_drive(scenario)
     if controller not in CALIBRATION_TYPES:
         raise ValueError(f"controller={controller!r} cannot run a calibration; valid: {list(CALIBRATION_TYPES)} "
                          "(a type that needs no torque model: the torques are what is calibrated)")
     periods = check_count("periods", periods, why="detent periods each way")
     h = check_integer("detent_harmonic", detent_harmonic)
     loop, motor = scenario.loop, scenario.motor
-    assert loop is not None and loop.sensors is not None  # _check_drive
+    assert loop is not None and loop.sensors is not None  # check_drive
     sensors = loop.sensors if current_noise is None else replace(
         loop.sensors, current_noise=check_nonnegative("current_noise", current_noise, unit=" A"))
-    if peak_speed is None:
-        _, wn = bandwidths(loop.control_period, loop.compute_delay)
-        peak_speed = DETENT_FRACTION_OF_WN * wn / (h * motor.Nr)
-    peak_speed = check_positive("peak_speed", peak_speed, unit=" rad/s")
-    distance = periods * 2.0 * math.pi / (h * motor.Nr)
-    duration = _PSI_PEAK * distance / peak_speed
+    peak_speed, distance, duration = _move(scenario, periods, peak_speed, h)
     plant, rho = scenario.simulated_plant, scenario.plan.rho2
     theta, x, elapsed, parts = scenario.plan.theta1, scenario.plan.x0(motor.Nr), 0.0, []
     for k, sign in enumerate((1.0, -1.0)):

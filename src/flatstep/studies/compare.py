@@ -29,6 +29,8 @@ from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SMC_TYPES
 from ..engine.result import STATUSES, SimResult
 from ..plan.rest_to_rest import RestToRest
 from .batch import run_batch
+from .calibrate import Calibration, check_drive
+from .calibrate import calibrate as calibrate_unit
 from .robustness import encoder_count, perturbed, plant_errors
 from .scenario import Scenario
 from .scenario_file import Robustness
@@ -37,6 +39,10 @@ METRICS = ("move_max", "move_rms", "final", "settling_time", "peak_voltage", "pe
            "copper_loss")
 #: Series a robustness run keeps for the metrics and the figures.
 KEEP = ("t", "theta_error", "ia", "ib", "va", "vb")
+#: How the types of :data:`~flatstep.control.tuning.FEEDFORWARD_TYPES` learn their torques: ``None``, the
+#: scenario's ``[feedforward]`` table and nominal model on every plant; ``"each"``, each plant calibrated on its
+#: own drive (:func:`unit_scenario`).
+CALIBRATE_MODES = (None, "each")
 
 
 def _trapezoid(f: NDArray[np.float64], t: NDArray[np.float64]) -> float:
@@ -107,16 +113,60 @@ def scenario_kinds(scenario: Scenario) -> tuple[str, ...]:
     return tuple(k for k in CONTROLLER_TYPES if scenario.torques is not None or k not in FEEDFORWARD_TYPES)
 
 
+def check_calibrate(calibrate: Optional[str], scenario: Scenario, kinds: Sequence[str]) -> Optional[str]:
+    """``calibrate`` if it is a mode of :data:`CALIBRATE_MODES` that can apply to the scenario and ``kinds``.
+
+    ``"each"`` needs a drive that can calibrate (:func:`~flatstep.studies.calibrate.check_drive`, whose error is
+    raised) and at least one type that reads the calibration.
+    """
+    if calibrate not in CALIBRATE_MODES:
+        raise ValueError(f"calibrate={calibrate!r} is not a calibration mode; valid: {list(CALIBRATE_MODES)}")
+    if calibrate is None:
+        return None
+    if not any(k in FEEDFORWARD_TYPES for k in kinds):
+        raise ValueError(f"calibrate={calibrate!r} changes only the types that read a calibration "
+                         f"({list(FEEDFORWARD_TYPES)}), and the controllers {list(kinds)!r} name none")
+    check_drive(scenario)
+    return calibrate
+
+
+def unit_scenario(scenario: Scenario, calibration: Calibration) -> Scenario:
+    """``scenario`` run by a drive that calibrated its own motor (its table and back-EMF ``Km``).
+
+    The calibrated ``[feedforward]`` table replaces the scenario's, and the calibration's back-EMF ``Km`` the
+    model's (the law's maps, the observer's model, the cascade's q current and back EMF). The plant is unchanged; so
+    are the scenario's SMC gains (designed for the model's uncertainty, not its values).
+    """
+    return replace(scenario, torques=calibration.torques,
+                   motor=scenario.motor.replace(Km=calibration.estimates["Km"]))
+
+
+def calibrate_units(scenarios: Sequence[Scenario]) -> list[Calibration]:
+    """Each scenario's plant calibrated on its own drive (the nominal model running the move).
+
+    One :func:`~flatstep.studies.calibrate.calibrate` per scenario, in order.
+    """
+    return [calibrate_unit(sc) for sc in scenarios]
+
+
 def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band: Optional[float] = None,
-            bandwidth_scale: float = 1.0, engine: str = "c") -> dict[str, dict[str, Any]]:
+            bandwidth_scale: float = 1.0, engine: str = "c",
+            calibrate: Optional[str] = None) -> dict[str, dict[str, Any]]:
     """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects).
 
-    Returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n, "status": ..., "lost_at": ...}}``.
+    With ``calibrate="each"`` the types that read a calibration run with the scenario's plant calibrated on its
+    drive (:func:`unit_scenario`). Returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n,
+    "status": ..., "lost_at": ...}}``.
     """
     band = default_band(scenario) if band is None else band
+    kinds = _check_kinds(kinds)
+    mode = check_calibrate(calibrate, scenario, kinds)
+    unit = calibrate_units([scenario])[0] if mode == "each" else None
     out: dict[str, dict[str, Any]] = {}
-    for kind in _check_kinds(kinds):
+    for kind in kinds:
         sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind not in SMC_TYPES else 1.0)
+        if unit is not None and kind in FEEDFORWARD_TYPES:
+            sc = unit_scenario(sc, unit)
         r = sc.run(engine)
         out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.simulated_plant.motor.R),
                      "result": r, "faults": int(r.meta.get("controller_faults", 0)), "status": r.status,
@@ -136,20 +186,35 @@ def _worse(a: Optional[float], b: Optional[float]) -> Optional[float]:
 
 
 def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = CONTROLLER_TYPES, *,
-                  band: Optional[float] = None, bandwidth_scale: float = 1.0,
+                  band: Optional[float] = None, bandwidth_scale: float = 1.0, calibrate: Optional[str] = None,
                   log: Optional[Callable[[str], None]] = None, **batch_options: Any) -> dict[str, dict[str, Any]]:
     """Each controller on every plant of the study (the controllers keep the nominal model).
 
-    Returns per kind the worst of each metric over the plants (``"worst"``), the failed runs, and the rows with
-    the series of :data:`KEEP` for figures. ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch`
-    (``engine``, ``workers``, ...); ``log`` is told when each controller's batch is done.
+    With ``calibrate="each"``, each plant is first calibrated on its own drive (once, shared by every type that
+    reads the calibration), and the types of :data:`~flatstep.control.tuning.FEEDFORWARD_TYPES` run on it with
+    its own table and ``Km`` (:func:`unit_scenario`); the other types run as without it.
+
+    Returns per kind the worst of each metric over the plants (``"worst"``), the failed runs, the rows with
+    the series of :data:`KEEP` for figures, and ``"calibrations"`` (one per plant, or ``None`` for a type that
+    read none). ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch` (``engine``, ``workers``,
+    ...); ``log`` is told when the calibrations and each controller's batch are done.
     """
     band = default_band(scenario) if band is None else band
+    kinds = _check_kinds(kinds)
+    mode = check_calibrate(calibrate, scenario, kinds)
     errors = plant_errors(study)
+    units: Optional[list[Calibration]] = None
     out: dict[str, dict[str, Any]] = {}
-    for kind in _check_kinds(kinds):
+    for kind in kinds:
         sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind not in SMC_TYPES else 1.0)
         runs = perturbed(sc, errors, f"/{kind}")
+        calibrated = mode == "each" and kind in FEEDFORWARD_TYPES
+        if calibrated:
+            if units is None:
+                units = calibrate_units(perturbed(scenario, errors, "/calibration"))
+                if log is not None:
+                    log(f"{len(units)} plants calibrated, each on its own drive")
+            runs = [unit_scenario(run, unit) for run, unit in zip(runs, units, strict=True)]
         rows = run_batch(runs, keep=KEEP, **batch_options)
         worst: dict[str, Optional[float]] = {}
         for row, run in zip(rows, runs, strict=True):  # run_batch returns one row per run
@@ -162,28 +227,30 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
         failed = [r["error"] for r in rows if r["error"] is not None]
         statuses = {s: sum(r.get("status") == s for r in rows if r["error"] is None) for s in STATUSES}
         out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed,
-                     "statuses": statuses, "rows": rows}
+                     "statuses": statuses, "rows": rows, "calibrations": units if calibrated else None}
         if log is not None:
             log(f"{kind}{'' if bandwidth_scale == 1 or kind in SMC_TYPES else f' x{bandwidth_scale:g}'} on "
-                f"{len(rows)} plants")
+                f"{len(rows)} plants{', each calibrated' if calibrated else ''}")
     return out
 
 
 def bandwidth_sweep(scenario: Scenario, kinds: Sequence[str], scales: Sequence[float], *,
                     study: Optional[Robustness] = None, band: Optional[float] = None,
-                    log: Optional[Callable[[str], None]] = None,
+                    log: Optional[Callable[[str], None]] = None, calibrate: Optional[str] = None,
                     **batch_options: Any) -> dict[float, dict[str, dict[str, Optional[float]]]]:
     """The baselines' metrics with every bandwidth scaled by each factor.
 
     The metrics are the worst over the study's plants, or those on the scenario's plant without a study: the
-    check that the tuning rule does not cripple the baselines.
+    check that the tuning rule does not cripple the baselines. ``calibrate`` is that of :func:`compare_worst`.
     """
     out: dict[float, dict[str, dict[str, Optional[float]]]] = {}
     for scale in scales:
         if study is None:
-            res = compare(scenario, kinds, band=band, bandwidth_scale=scale, engine=batch_options.get("engine", "c"))
+            res = compare(scenario, kinds, band=band, bandwidth_scale=scale, engine=batch_options.get("engine", "c"),
+                          calibrate=calibrate)
             out[float(scale)] = {k: v["metrics"] for k, v in res.items()}
         else:
-            res = compare_worst(scenario, study, kinds, band=band, bandwidth_scale=scale, log=log, **batch_options)
+            res = compare_worst(scenario, study, kinds, band=band, bandwidth_scale=scale, log=log, calibrate=calibrate,
+                                **batch_options)
             out[float(scale)] = {k: v["worst"] for k, v in res.items()}
     return out
