@@ -10,6 +10,7 @@
 #define TO_CAP_PLAN FS_C(0.995)
 #define TO_GAMMA_STEPS FS_C(65536.0)  // 2^16
 #define TO_V_MARGIN FS_C(0.998)
+#define TO_PEAK_OVER_STEADY FS_C(0.994)  // a table's peak voltage over the steady one at its peak speed
 #define TO_NEWTON_TOL (FS_REAL_EPSILON > FS_C(1e-12) ? 16 * FS_REAL_EPSILON : FS_C(1e-12))  // of i_max
 #define TO_FINE_LEN (TO_FINE_MAX + 2)
 
@@ -617,10 +618,34 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
             g = g_last / (1 + s_last);
         else
             g = FS_C(0.5) * (lo + hi);
-        if (!isnan(s_hi))  // inside a measured bracket
+        if (!isnan(s_lo) && !isnan(s_hi))  // inside a measured bracket
             g = fs_min(fs_max(g, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));
+        else if (!isnan(s_hi))  // below an infeasible gamma, by at least half the band
+            g = fs_min(g, hi * (1 - FS_C(0.5) * TO_S_TOL));
         g = fs_min(g, 1);
     }
+}
+
+// Returns the first gamma the search tries (time_optimal.first_gamma): for a move that cruises, predicted from the
+// steady voltage at the full-bus move mv's peak speed (w holds the envelope at gamma = 1), else 1.
+static fs_real first_gamma(const struct motor_params *m, const struct to_limits *plan, const struct to_work *w,
+                           const struct to_move *mv)
+{
+    fs_real k = fs_cos(plan->torque_angle_max) / fs_sin(plan->torque_angle_max), f, v2 = 0, u, x, dh, s;
+    fs_real acc[2];
+    int i;
+    if (!(mv->cruise > 0))
+        return 1;
+    f = floor_current(plan, mv->w_peak);
+    acc[0] = interp(mv->w_peak, w->omega, w->ap, TO_GRID);
+    acc[1] = interp(mv->w_peak, w->omega, w->am, TO_GRID);
+    for (i = 0; i < 2; i++) {
+        u = (m->J * acc[i] + m->B * mv->w_peak) / m->Km;
+        x = to_h(m, k, f, mv->w_peak, 0, u, &dh);
+        v2 = fs_max(v2, x);
+    }
+    s = TO_PEAK_OVER_STEADY * fs_sqrt(v2) / (TO_V_MARGIN * plan->v_use * plan->v_bus) - 1;
+    return fs_min(1, 1 / (1 + s + FS_C(0.5) * TO_S_TOL));
 }
 
 // Returns the duration of width i's shortest feasible table (inf when none, or when its full-bus duration cannot
@@ -707,6 +732,7 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
             return TO_ELONG;
         s.full[i] = (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
     }
+    s.start = first_gamma(m, &s.plan, &s.w, &mv);
     // from the middle width down while the duration falls, then up unless down found a shorter table (both ways
     // from an infeasible middle width)
     f0 = run_width(&s, nw / 2);

@@ -72,6 +72,7 @@ _V_MARGIN = 0.998    # of v_use: the sampled check may miss the peak between its
 _ANGLE_PLAN = 0.98   # the torque angle cap planned with, of the true one (planning_limits)
 _CAP_PLAN = 0.995    # the speed and acceleration caps planned with, of the true ones (planning_limits)
 _S_TOL = 0.003       # a feasible table within 0.3 % of the bus target ends a width's search
+_PEAK_OVER_STEADY = 0.994  # a table's peak voltage over the steady one at its move's peak speed (first_gamma)
 _NEWTON_TOL = 1e-12  # Newton stops when its step is below this fraction of i_max
 #: The most segments of a table the planner writes (csrc/time_optimal.h ``TO_MAX_SEGMENTS``).
 MAX_SEGMENTS = _KNOTS + 4
@@ -445,8 +446,10 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
             g = g_last / (1.0 + s_last)
         else:  # an infinite measure: halve the bracket
             g = 0.5 * (lo + hi)
-        if not math.isnan(s_hi):  # inside a measured bracket
+        if not math.isnan(s_lo) and not math.isnan(s_hi):  # inside a measured bracket
             g = min(max(g, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
+        elif not math.isnan(s_hi):  # below an infeasible gamma, by at least half the band
+            g = min(g, hi * (1.0 - 0.5 * _S_TOL))
         g = min(g, 1.0)
     return best
 
@@ -475,6 +478,29 @@ def check_samples(distance: float, tm: Timing) -> None:
                          "MAX_PLAN_SAMPLES); split it into shorter moves with waypoints, or plan it with a spline")
 
 
+def first_gamma(distance: float, motor: MotorParams, limits: MotorLimits, full: Envelope) -> float:
+    """The first bus fraction the search tries: predicted from the steady voltage at the full-bus move's peak speed.
+
+    The full-bus bang-bang move over ``distance`` on ``full`` (the envelope at gamma = 1 within the planning
+    ``limits``) peaks at the speed ``w_peak``; the steady voltage there, on the envelope's torque current of
+    either side, times ``_PEAK_OVER_STEADY``, predicts the table's peak voltage at gamma = 1. Its measure ``s``
+    predicted so, the guess ``1 / (1 + s + _S_TOL / 2)`` aims at the middle of the accepted band (at most 1).
+    Only a move that cruises holds its peak speed long enough for this; any other starts on the full bus (the
+    smoothing lowers a short move's peak, and the inductance rather than the steady voltage sets its margin).
+    A poor guess costs a table, never feasibility: the search measures every table.
+    """
+    m, b = motor, bang_bang(distance, full)
+    if not b.cruise > 0:
+        return 1.0
+    w = b.w_peak
+    v2 = 0.0
+    for a in (np.interp(w, full.omega, full.a_plus), np.interp(w, full.omega, full.a_minus)):
+        u = (m.J * float(a) + m.B * w) / m.Km
+        v2 = max(v2, float(_h(np.array([u]), np.array([w]), m, limits, 0.0)[0][0]))
+    s = _PEAK_OVER_STEADY * math.sqrt(v2) / (_V_MARGIN * limits.v_use * limits.v_bus) - 1.0
+    return min(1.0, 1.0 / (1.0 + s + 0.5 * _S_TOL))
+
+
 def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
               widths: Optional[tuple[float, ...]] = None) -> Candidate:
     """The shortest feasible candidate over ``distance`` != 0 (module docstring); a ValueError when there is none.
@@ -488,10 +514,10 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
     full = envelope(motor, planning_limits(limits), 1.0)
     best: Optional[Candidate] = None
-    start = 1.0
 
     for w in ws:
         check_samples(distance, timing(d, full, w))
+    start = first_gamma(d, motor, planning_limits(limits), full)
 
     def run(i: int) -> float:
         nonlocal best, start
