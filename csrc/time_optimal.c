@@ -50,28 +50,42 @@ static fs_real linspace(fs_real start, fs_real stop, size_t num, size_t i)
     return i == num - 1 ? stop : (fs_real)i * ((stop - start) / (fs_real)(num - 1)) + start;
 }
 
-// Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
-static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2, fs_real u, fs_real *dh)
+// The envelope's h(u) at one speed as h = a2 u^2 + a1 u + ar sqrt(f2 + k2 u^2) + a0 (to_h: the speed's terms once).
+struct to_hcoef {
+    fs_real a2, a1, ar, a0, f2, k2;
+};
+
+// Returns the coefficients of h at speed w, floor f, cot k of the torque angle cap and squared bus v2.
+static struct to_hcoef to_hcoef(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2)
 {
+    struct to_hcoef hc;
     fs_real c = m->Km * w, e = (fs_real)m->Nr * w * m->L, z = m->R * m->R + e * e;
-    fs_real root = fs_sqrt(f * f + k * k * u * u);
-    *dh = 2 * z * (1 + k * k) * u + 2 * c * m->R + 2 * c * e * k * k * u / root;
-    return z * ((1 + k * k) * u * u + f * f) + 2 * c * m->R * u + 2 * c * e * root + c * c - v2;
+    hc.k2 = k * k, hc.f2 = f * f;
+    hc.a2 = z * (1 + hc.k2), hc.a1 = 2 * c * m->R, hc.ar = 2 * c * e, hc.a0 = z * hc.f2 + c * c - v2;
+    return hc;
 }
 
-// Returns the torque current bound on side sign (+1 or -1) at speed w, where the across-axis floor is f, the
-// current cap cap and no torque is within the bus: the cap, or Newton's root from outside, started at the
-// previous grid point's root *prev when that lies outside (h > 0), else at the cap.
-static fs_real newton_side(const struct motor_params *m, const struct to_limits *lim, fs_real k, fs_real f, fs_real cap,
-                           fs_real w, fs_real v2, fs_real sign, fs_real *prev)
+// Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
+static fs_real to_h(const struct to_hcoef *hc, fs_real u, fs_real *dh)
+{
+    fs_real root = fs_sqrt(hc->f2 + hc->k2 * u * u);
+    *dh = 2 * hc->a2 * u + hc->a1 + hc->ar * hc->k2 * u / root;
+    return (hc->a2 * u + hc->a1) * u + hc->ar * root + hc->a0;
+}
+
+// Returns the torque current bound on side sign (+1 or -1) of h (hc), the current cap cap and no torque within the
+// bus: the cap, or Newton's root from outside, started at the previous grid point's root *prev when that lies
+// outside (h > 0), else at the cap.
+static fs_real newton_side(const struct to_limits *lim, const struct to_hcoef *hc, fs_real cap, fs_real sign,
+                           fs_real *prev)
 {
     fs_real dh, h, u = sign * cap, step, dh_prev, h_prev;
     int i;
-    h = to_h(m, k, f, w, v2, u, &dh);
+    h = to_h(hc, u, &dh);
     if (!(h > 0))
         return *prev = u;
     if (sign * *prev < cap && sign * *prev > 0) {
-        h_prev = to_h(m, k, f, w, v2, *prev, &dh_prev);
+        h_prev = to_h(hc, *prev, &dh_prev);
         if (h_prev > 0)
             u = *prev, h = h_prev, dh = dh_prev;
     }
@@ -80,7 +94,7 @@ static fs_real newton_side(const struct motor_params *m, const struct to_limits 
         u -= step;
         if (!(fs_fabs(step) > TO_NEWTON_TOL * lim->i_max))
             break;
-        h = to_h(m, k, f, w, v2, u, &dh);
+        h = to_h(hc, u, &dh);
     }
     return *prev = u;
 }
@@ -91,16 +105,17 @@ static fs_real newton_side(const struct motor_params *m, const struct to_limits 
 static void iq_pair(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[3], fs_real w,
                     fs_real v2, bool lo_too, fs_real *hi, fs_real *lo)
 {
-    fs_real k = trig[2], f = floor_current(lim, w), dh;
+    fs_real f = floor_current(lim, w);
     fs_real room = lim->i_max * lim->i_max - f * f;
     fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
-    if (!(to_h(m, k, f, w, v2, 0, &dh) <= 0)) {
+    struct to_hcoef hc = to_hcoef(m, trig[2], f, w, v2);
+    if (!(hc.ar * f + hc.a0 <= 0)) {  // h(0): the root is f
         *hi = *lo = 0;
         return;
     }
-    newton_side(m, lim, k, f, cap, w, v2, 1, hi);
+    newton_side(lim, &hc, cap, 1, hi);
     if (lo_too)
-        newton_side(m, lim, k, f, cap, w, v2, -1, lo);
+        newton_side(lim, &hc, cap, -1, lo);
 }
 
 // Returns the grid length (>= 2), or 0 when the motor cannot start; writes the envelope at gamma
@@ -458,15 +473,16 @@ static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
     deg = TRAJ_NCOEF - 1 - k - lead;
     for (q = 0; q < k; q++)
         p *= h;
+    p = 1 / p;  // one division per row, not per coefficient
     for (j = 0; j <= deg; j++)
-        out[j] = row[j + lead] * FALL[k][TRAJ_NCOEF - 1 - (j + lead)] / p;
+        out[j] = row[j + lead] * FALL[k][TRAJ_NCOEF - 1 - (j + lead)] * p;
     return deg;
 }
 
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim, const struct traj *tr)
 {
     struct to_margins out = {0, 0, 0, 0, 0, 0, 0};
-    fs_real rho_max = 0, w_max = 0, a_max = 0, j_max = 0, c_max = 0, v2_max = 0, kr, a, s, dphi, x, y;
+    fs_real rho_max = 0, w_max = 0, a_max = 0, j_max = 0, c_max = 0, v2_max = 0, kr, inv_kr, a, s, dphi, x, y;
     fs_real sin_max = fs_sin(lim->torque_angle_max);
     bool bad = false;
     size_t i;
@@ -498,10 +514,11 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
                 continue;
             }
             s = fs_sqrt(kr * kr - a * a);
-            c_max = fs_max(c_max, fs_fabs(a) / kr);
+            inv_kr = 1 / kr;
+            c_max = fs_max(c_max, fs_fabs(a) * inv_kr);
             dphi = -((m->J * jerk + m->B * acc) * rho - a * drho) / (rho * s) - (fs_real)m->Nr * w;
-            x = m->L * drho + m->R * rho + m->Km * w * (a / kr);
-            y = m->L * rho * dphi - m->Km * w * (s / kr);
+            x = m->L * drho + m->R * rho + m->Km * w * (a * inv_kr);
+            y = m->L * rho * dphi - m->Km * w * (s * inv_kr);
             v2_max = fs_max(v2_max, x * x + y * y);
         }
     }
@@ -631,17 +648,18 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
 static fs_real first_gamma(const struct motor_params *m, const struct to_limits *plan, const struct to_work *w,
                            const struct to_move *mv)
 {
-    fs_real k = fs_cos(plan->torque_angle_max) / fs_sin(plan->torque_angle_max), f, v2 = 0, u, x, dh, s;
+    fs_real k = fs_cos(plan->torque_angle_max) / fs_sin(plan->torque_angle_max), v2 = 0, u, x, dh, s;
     fs_real acc[2];
+    struct to_hcoef hc;
     int i;
     if (!(mv->cruise > 0))
         return 1;
-    f = floor_current(plan, mv->w_peak);
+    hc = to_hcoef(m, k, floor_current(plan, mv->w_peak), mv->w_peak, 0);  // h at v2 = 0: the squared voltage
     acc[0] = interp(mv->w_peak, w->omega, w->ap, TO_GRID);
     acc[1] = interp(mv->w_peak, w->omega, w->am, TO_GRID);
     for (i = 0; i < 2; i++) {
         u = (m->J * acc[i] + m->B * mv->w_peak) / m->Km;
-        x = to_h(m, k, f, mv->w_peak, 0, u, &dh);
+        x = to_h(&hc, u, &dh);
         v2 = fs_max(v2, x);
     }
     s = TO_PEAK_OVER_STEADY * fs_sqrt(v2) / (TO_V_MARGIN * plan->v_use * plan->v_bus) - 1;
