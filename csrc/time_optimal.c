@@ -50,27 +50,29 @@ static fs_real linspace(fs_real start, fs_real stop, size_t num, size_t i)
     return i == num - 1 ? stop : (fs_real)i * ((stop - start) / (fs_real)(num - 1)) + start;
 }
 
-// The envelope's h(u) at one speed as h = a2 u^2 + a1 u + ar sqrt(f2 + k2 u^2) + a0 (to_h: the speed's terms once).
+// The envelope's h(u) at one speed: its products of the speed's terms, formed once (to_h then rounds as the
+// reference's _h does, operation for operation).
 struct to_hcoef {
-    fs_real a2, a1, ar, a0, f2, k2;
+    fs_real z, opk, kk, f2, r2c, ce2, cc, v2, dz, dr;
 };
 
 // Returns the coefficients of h at speed w, floor f, cot k of the torque angle cap and squared bus v2.
 static struct to_hcoef to_hcoef(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2)
 {
     struct to_hcoef hc;
-    fs_real c = m->Km * w, e = (fs_real)m->Nr * w * m->L, z = m->R * m->R + e * e;
-    hc.k2 = k * k, hc.f2 = f * f;
-    hc.a2 = z * (1 + hc.k2), hc.a1 = 2 * c * m->R, hc.ar = 2 * c * e, hc.a0 = z * hc.f2 + c * c - v2;
+    fs_real c = m->Km * w, e = (fs_real)m->Nr * w * m->L;
+    hc.z = m->R * m->R + e * e, hc.opk = 1 + k * k, hc.kk = k * k, hc.f2 = f * f;
+    hc.r2c = 2 * c * m->R, hc.ce2 = 2 * c * e, hc.cc = c * c, hc.v2 = v2;
+    hc.dz = 2 * hc.z * hc.opk, hc.dr = hc.ce2 * k * k;
     return hc;
 }
 
 // Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
 static fs_real to_h(const struct to_hcoef *hc, fs_real u, fs_real *dh)
 {
-    fs_real root = fs_sqrt(hc->f2 + hc->k2 * u * u);
-    *dh = 2 * hc->a2 * u + hc->a1 + hc->ar * hc->k2 * u / root;
-    return (hc->a2 * u + hc->a1) * u + hc->ar * root + hc->a0;
+    fs_real root = fs_sqrt(hc->f2 + hc->kk * u * u);
+    *dh = hc->dz * u + hc->r2c + hc->dr * u / root;
+    return hc->z * (hc->opk * u * u + hc->f2) + hc->r2c * u + hc->ce2 * root + hc->cc - hc->v2;
 }
 
 // Returns the torque current bound on side sign (+1 or -1) of h (hc), the current cap cap and no torque within the
@@ -105,11 +107,11 @@ static fs_real newton_side(const struct to_limits *lim, const struct to_hcoef *h
 static void iq_pair(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[3], fs_real w,
                     fs_real v2, bool lo_too, fs_real *hi, fs_real *lo)
 {
-    fs_real f = floor_current(lim, w);
+    fs_real f = floor_current(lim, w), dh;
     fs_real room = lim->i_max * lim->i_max - f * f;
     fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
     struct to_hcoef hc = to_hcoef(m, trig[2], f, w, v2);
-    if (!(hc.ar * f + hc.a0 <= 0)) {  // h(0): the root is f
+    if (!(to_h(&hc, 0, &dh) <= 0)) {
         *hi = *lo = 0;
         return;
     }
@@ -635,10 +637,8 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
             g = g_last / (1 + s_last);
         else
             g = FS_C(0.5) * (lo + hi);
-        if (!isnan(s_lo) && !isnan(s_hi))  // inside a measured bracket
+        if (!isnan(s_hi))  // inside a measured bracket
             g = fs_min(fs_max(g, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));
-        else if (!isnan(s_hi))  // below an infeasible gamma, by at least half the band
-            g = fs_min(g, hi * (1 - FS_C(0.5) * TO_S_TOL));
         g = fs_min(g, 1);
     }
 }

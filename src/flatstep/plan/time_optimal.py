@@ -446,10 +446,8 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
             g = g_last / (1.0 + s_last)
         else:  # an infinite measure: halve the bracket
             g = 0.5 * (lo + hi)
-        if not math.isnan(s_lo) and not math.isnan(s_hi):  # inside a measured bracket
+        if not math.isnan(s_hi):  # inside a measured bracket
             g = min(max(g, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
-        elif not math.isnan(s_hi):  # below an infeasible gamma, by at least half the band
-            g = min(g, hi * (1.0 - 0.5 * _S_TOL))
         g = min(g, 1.0)
     return best
 
