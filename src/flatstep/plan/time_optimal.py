@@ -459,10 +459,15 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
     return _plan(table, distance, theta1, t0)
 
 
-def _plan(table: Table, distance: float, theta1: float, t0: float) -> PiecewisePlan:
-    """The plan of a table planned over ``|distance|`` from 0 at t = 0: mirrored for a negative distance, shifted."""
+def _plan(table: Table, distance: float, theta1: float, t0: float, from_c: bool = False) -> PiecewisePlan:
+    """The plan of a table planned over ``|distance|`` from 0 at t = 0: mirrored for a negative distance, shifted.
+
+    ``from_c``: the table is csrc/time_optimal.c's own, whose search checked rho > 0 (PiecewisePlan._of_checked_table).
+    """
     theta = (1.0 if distance >= 0 else -1.0) * table.theta
     theta[:, -1] += theta1
+    if from_c:
+        return PiecewisePlan._of_checked_table(table.breaks + t0, theta, table.rho)
     return PiecewisePlan(table.breaks + t0, theta, table.rho)
 
 
@@ -572,7 +577,7 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
     if engine == "c":
         from .._core_time_optimal import plan_table
 
-        return _plan(plan_table(d, motor, limits, widths), d, theta1, t0)
+        return _plan(plan_table(d, motor, limits, widths), d, theta1, t0, from_c=True)
     if engine != "python":
         raise ValueError(f"engine={engine!r} is not a planner engine; valid: 'c', 'python'")
     return _plan(plan_move(d, motor, limits, widths).table, d, theta1, t0)
@@ -621,4 +626,6 @@ def time_optimal_sequence(waypoints: list[tuple[float, float]], motor: MotorPara
             rows.append(move)
             rho_rows.append(table.rho)
             t = float(breaks[-1][-1])
+    if engine == "c":  # the C planner's checked tables and dwells at i_hold > 0
+        return PiecewisePlan._of_checked_table(np.concatenate(breaks), np.vstack(rows), np.vstack(rho_rows))
     return PiecewisePlan(np.concatenate(breaks), np.vstack(rows), np.vstack(rho_rows))
