@@ -19,6 +19,7 @@ struct to_work {
     fs_real *omega, *ap, *am, *tacc, *tdec, *dboth;  // TO_GRID each: the envelope and its integrals
     fs_real *a, *b, *c;                              // TO_FINE_LEN + 1 each: the sampled profile
     fs_real *knot;                                   // TO_MAX_SEGMENTS + 1 sample indices
+    bool integrals;                                  // tacc, tdec and dboth hold the envelope's integrals
     struct traj tr;                                  // the candidate table over the arrays below
     fs_real *breaks, *theta, *rho;
 };
@@ -158,6 +159,7 @@ static size_t envelope(const struct motor_params *m, const struct to_limits *lim
         }
     }
     w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);
+    w->integrals = false;
     return TO_GRID;
 }
 
@@ -209,16 +211,20 @@ static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_mov
     size_t i, g = TO_GRID;
     long keep, first, last;
     fs_real total, dt, core, x;
-    for (i = 0; i < g; i++) {  // the integrands, then their running integrals in place
+    // the integrands, then their running integrals in place, once per envelope (every width and distance reads them)
+    for (i = 0; i < g && !w->integrals; i++) {
         w->tacc[i] = 1 / w->ap[i];
         w->tdec[i] = 1 / -w->am[i];
         w->dboth[i] = w->omega[i] / w->ap[i] + w->omega[i] / -w->am[i];
     }
-    cumtrapz(w->tacc, w->omega, 0, g, w->a);
-    cumtrapz(w->tdec, w->omega, 0, g, w->b);
-    cumtrapz(w->dboth, w->omega, 0, g, w->c);
-    for (i = 0; i < g; i++)
-        w->tacc[i] = w->a[i], w->tdec[i] = w->b[i], w->dboth[i] = w->c[i];
+    if (!w->integrals) {
+        cumtrapz(w->tacc, w->omega, 0, g, w->a);
+        cumtrapz(w->tdec, w->omega, 0, g, w->b);
+        cumtrapz(w->dboth, w->omega, 0, g, w->c);
+        for (i = 0; i < g; i++)
+            w->tacc[i] = w->a[i], w->tdec[i] = w->b[i], w->dboth[i] = w->c[i];
+        w->integrals = true;
+    }
     if (d >= w->dboth[g - 1]) {
         mv->w_peak = w->omega[g - 1];
         mv->cruise = (d - w->dboth[g - 1]) / w->omega[g - 1];
