@@ -600,6 +600,22 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
     return mg.worst;
 }
 
+// Returns the duration of the table at gamma and width from its timing alone, before the table is built
+// (time_optimal._duration): 0 when the table would not be built (the motor cannot start, or too many samples).
+static fs_real duration(struct to_search *s, fs_real gamma, fs_real width)
+{
+    struct to_move mv;
+    if (s->env_gamma != gamma) {
+        s->env_gamma = gamma;
+        if (!envelope(s->m, &s->plan, gamma, &s->w)) {
+            s->env_gamma = -1;
+            return 0;
+        }
+    }
+    bang_bang(s->d, width, &s->w, &mv);
+    return mv.n > TO_MAX_SAMPLES ? 0 : (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
+}
+
 // Returns nothing; the search on gamma at one width from start (time_optimal.search_width): regula falsi in a
 // measured bracket, else the secant through the last two tables, else the proportional guess; s->width_tf and
 // s->width_gamma are the width's shortest feasible table's duration and gamma (inf and 0 when none).
@@ -614,6 +630,8 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
         g = fs_rint(g * TO_GAMMA_STEPS) / TO_GAMMA_STEPS;  // on a grid: both planners try the same gamma
         if (g < TO_GAMMA_MIN)
             break;
+        if (side == 1 && s->found && duration(s, g, width) >= s->out->breaks[s->out->n])
+            break;  // below an infeasible gamma, the guess of the bus target is no faster than the best: no table
         x = try_table(s, g, width);
         aim = x + FS_C(0.5) * TO_S_TOL;  // the guesses aim at the middle of the accepted band (-TO_S_TOL, 0]
         g_prev = g_last, s_prev = s_last, g_last = g, s_last = aim;

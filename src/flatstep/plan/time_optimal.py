@@ -393,6 +393,19 @@ def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
     return Candidate(float(table.breaks[-1]), gamma, width, table_margins(table, motor, limits), table)
 
 
+def _duration(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float) -> float:
+    """The duration [s] of the table at ``gamma`` and ``width`` from its timing alone, before the table is built.
+
+    0 when the table would not be built (the motor cannot start, or the move has too many samples): the search
+    then tries it and measures the failure as before.
+    """
+    try:
+        tm = timing(distance, envelope(motor, planning_limits(limits), gamma), width)
+    except ValueError:
+        return 0.0
+    return 0.0 if tm.n > MAX_PLAN_SAMPLES else (tm.n + 2 * (tm.n_box - 1) - 1) * tm.dt
+
+
 def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width: float,
                  start: float = 1.0, bound: float = math.inf) -> Optional[Candidate]:
     """The regula falsi on gamma at ``width`` from ``start`` (module docstring): its shortest feasible table or None.
@@ -401,8 +414,10 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
     tables, or scales gamma by ``1 / (1 + s)`` after one (the voltage about proportional to gamma); then regula
     falsi (Illinois) inside the bracket; every guess aims at ``s = -_S_TOL / 2``, inside the accepted band. It
     stops at a feasible table within ``_S_TOL`` of the bus target, at a feasible gamma of 1, after ``_SEARCH``
-    tables, or at an infeasible table not shorter than ``bound`` [s] (every feasible gamma lies below it, and is
-    slower still).
+    tables, at an infeasible table not shorter than ``bound`` [s] (every feasible gamma lies below it, and is
+    slower still), or, after an infeasible table, at a guess whose duration (:func:`_duration`, known before its
+    table) is not shorter than the best: the guess estimates the feasible gamma, and a table slower than the best
+    cannot win (a heuristic: a feasible gamma well above the guess would be missed).
     """
     best: Optional[Candidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan  # nan: not measured
@@ -412,6 +427,8 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
         g = float(np.rint(g * _GAMMA_STEPS)) / _GAMMA_STEPS  # on a grid: the C planner tries the same gamma
         if g < _GAMMA_MIN:
             break
+        if side == 1 and _duration(distance, motor, limits, g, width) >= min(bound, best.tf if best else math.inf):
+            break  # below an infeasible gamma, the guess of the bus target is no faster than the best: no table
         try:
             c: Optional[Candidate] = _try(distance, motor, limits, g, width)
             s = c.margins["worst"] if c is not None else math.inf
