@@ -108,11 +108,11 @@ static fs_real newton_side(const struct to_limits *lim, const struct to_hcoef *h
 static void iq_pair(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[3], fs_real w,
                     fs_real v2, bool lo_too, fs_real *hi, fs_real *lo)
 {
-    fs_real f = floor_current(lim, w), dh;
+    fs_real f = floor_current(lim, w);
     fs_real room = lim->i_max * lim->i_max - f * f;
     fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
     struct to_hcoef hc = to_hcoef(m, trig[2], f, w, v2);
-    if (!(to_h(&hc, 0, &dh) <= 0)) {
+    if (!(hc.z * hc.f2 + hc.ce2 * f + hc.cc - hc.v2 <= 0)) {  // h(0) as to_h rounds it: sqrt(f * f) is f
         *hi = *lo = 0;
         return;
     }
