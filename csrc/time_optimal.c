@@ -261,14 +261,15 @@ static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_mov
 static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
 {
     size_t i, out_len = len + n - 1;
-    for (i = 0; i < n; i++)  // the running sum of x padded by n - 1 zeros at each end
+    fs_real unit = 1 / (fs_real)n;  // the box's height (unit area)
+    for (i = 0; i < n; i++)         // the running sum of x padded by n - 1 zeros at each end
         s[i] = 0;
     for (i = 0; i < len; i++)
         s[n + i] = s[n - 1 + i] + x[i];
     for (i = n + len; i < len + 2 * n - 1; i++)
         s[i] = s[i - 1];
     for (i = 0; i < out_len; i++)
-        out[i] = (s[i + n] - s[i]) / (fs_real)n;
+        out[i] = (s[i + n] - s[i]) * unit;
     return out_len;
 }
 

@@ -193,7 +193,7 @@ def bang_bang_time(distance: float, motor: MotorParams, limits: MotorLimits) -> 
 def _box(x: Array, n: int) -> Array:
     """``x`` convolved with a unit-area box of ``n`` samples (the output is ``n - 1`` samples longer)."""
     c = np.concatenate([[0.0], np.cumsum(np.concatenate([np.zeros(n - 1), x, np.zeros(n - 1)]))])
-    return (c[n:] - c[:-n]) / n
+    return (c[n:] - c[:-n]) * (1.0 / n)  # times the box's height, as csrc/time_optimal.c rounds it
 
 
 class Timing(NamedTuple):
