@@ -33,7 +33,8 @@ theta'', theta''') at its knots (:func:`.segments.hermite_rows`), with :math:`\r
 **Search.** The inductance needs voltage headroom, which the envelope's :math:`\gamma < 1` leaves. The table's
 worst margin :math:`s(\gamma)` (:func:`table_margins`: the voltage over ``0.998 v_use``, every other ratio over
 1, less 1) is driven to 0 by :func:`search_width`: the proportional guess :math:`\gamma/(1 + s)`, the secant,
-then regula falsi (Illinois) once a bracket is measured, in at most ``_SEARCH`` tables. :func:`plan_move` walks
+then regula falsi (Illinois) once a bracket is measured, in at most ``_SEARCH`` tables, from a first gamma
+predicted by the steady voltage at a cruising move's peak speed (:func:`first_gamma`). :func:`plan_move` walks
 the smoothing widths (multiples of :math:`L/R`) from the middle one towards shorter plans; the shortest feasible
 table wins.
 """
