@@ -10,6 +10,7 @@
 #define TO_CAP_PLAN FS_C(0.995)
 #define TO_GAMMA_STEPS FS_C(65536.0)  // 2^16
 #define TO_V_MARGIN FS_C(0.998)
+#define TO_PEAK_OVER_STEADY FS_C(0.994)  // a table's peak voltage over the steady one at its peak speed
 #define TO_NEWTON_TOL (FS_REAL_EPSILON > FS_C(1e-12) ? 16 * FS_REAL_EPSILON : FS_C(1e-12))  // of i_max
 #define TO_FINE_LEN (TO_FINE_MAX + 2)
 
@@ -18,6 +19,7 @@ struct to_work {
     fs_real *omega, *ap, *am, *tacc, *tdec, *dboth;  // TO_GRID each: the envelope and its integrals
     fs_real *a, *b, *c;                              // TO_FINE_LEN + 1 each: the sampled profile
     fs_real *knot;                                   // TO_MAX_SEGMENTS + 1 sample indices
+    bool integrals;                                  // tacc, tdec and dboth hold the envelope's integrals
     struct traj tr;                                  // the candidate table over the arrays below
     fs_real *breaks, *theta, *rho;
 };
@@ -49,28 +51,44 @@ static fs_real linspace(fs_real start, fs_real stop, size_t num, size_t i)
     return i == num - 1 ? stop : (fs_real)i * ((stop - start) / (fs_real)(num - 1)) + start;
 }
 
-// Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
-static fs_real to_h(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2, fs_real u, fs_real *dh)
+// The envelope's h(u) at one speed: its products of the speed's terms, formed once (to_h then rounds as the
+// reference's _h does, operation for operation).
+struct to_hcoef {
+    fs_real z, opk, kk, f2, r2c, ce2, cc, v2, dz, dr;
+};
+
+// Returns the coefficients of h at speed w, floor f, cot k of the torque angle cap and squared bus v2.
+static struct to_hcoef to_hcoef(const struct motor_params *m, fs_real k, fs_real f, fs_real w, fs_real v2)
 {
-    fs_real c = m->Km * w, e = (fs_real)m->Nr * w * m->L, z = m->R * m->R + e * e;
-    fs_real root = fs_sqrt(f * f + k * k * u * u);
-    *dh = 2 * z * (1 + k * k) * u + 2 * c * m->R + 2 * c * e * k * k * u / root;
-    return z * ((1 + k * k) * u * u + f * f) + 2 * c * m->R * u + 2 * c * e * root + c * c - v2;
+    struct to_hcoef hc;
+    fs_real c = m->Km * w, e = (fs_real)m->Nr * w * m->L;
+    hc.z = m->R * m->R + e * e, hc.opk = 1 + k * k, hc.kk = k * k, hc.f2 = f * f;
+    hc.r2c = 2 * c * m->R, hc.ce2 = 2 * c * e, hc.cc = c * c, hc.v2 = v2;
+    hc.dz = 2 * hc.z * hc.opk, hc.dr = hc.ce2 * k * k;
+    return hc;
 }
 
-// Returns the torque current bound on side sign (+1 or -1) at speed w, where the across-axis floor is f, the
-// current cap cap and no torque is within the bus: the cap, or Newton's root from outside, started at the
-// previous grid point's root *prev when that lies outside (h > 0), else at the cap.
-static fs_real newton_side(const struct motor_params *m, const struct to_limits *lim, fs_real k, fs_real f, fs_real cap,
-                           fs_real w, fs_real v2, fs_real sign, fs_real *prev)
+// Returns h(u) of the module's envelope (steady voltage squared less (gamma v_bus)^2); writes dh/du.
+static fs_real to_h(const struct to_hcoef *hc, fs_real u, fs_real *dh)
+{
+    fs_real root = fs_sqrt(hc->f2 + hc->kk * u * u);
+    *dh = hc->dz * u + hc->r2c + hc->dr * u / root;
+    return hc->z * (hc->opk * u * u + hc->f2) + hc->r2c * u + hc->ce2 * root + hc->cc - hc->v2;
+}
+
+// Returns the torque current bound on side sign (+1 or -1) of h (hc), the current cap cap and no torque within the
+// bus: the cap, or Newton's root from outside, started at the previous grid point's root *prev when that lies
+// outside (h > 0), else at the cap.
+static fs_real newton_side(const struct to_limits *lim, const struct to_hcoef *hc, fs_real cap, fs_real sign,
+                           fs_real *prev)
 {
     fs_real dh, h, u = sign * cap, step, dh_prev, h_prev;
     int i;
-    h = to_h(m, k, f, w, v2, u, &dh);
+    h = to_h(hc, u, &dh);
     if (!(h > 0))
         return *prev = u;
     if (sign * *prev < cap && sign * *prev > 0) {
-        h_prev = to_h(m, k, f, w, v2, *prev, &dh_prev);
+        h_prev = to_h(hc, *prev, &dh_prev);
         if (h_prev > 0)
             u = *prev, h = h_prev, dh = dh_prev;
     }
@@ -79,7 +97,7 @@ static fs_real newton_side(const struct motor_params *m, const struct to_limits 
         u -= step;
         if (!(fs_fabs(step) > TO_NEWTON_TOL * lim->i_max))
             break;
-        h = to_h(m, k, f, w, v2, u, &dh);
+        h = to_h(hc, u, &dh);
     }
     return *prev = u;
 }
@@ -90,16 +108,17 @@ static fs_real newton_side(const struct motor_params *m, const struct to_limits 
 static void iq_pair(const struct motor_params *m, const struct to_limits *lim, const fs_real trig[3], fs_real w,
                     fs_real v2, bool lo_too, fs_real *hi, fs_real *lo)
 {
-    fs_real k = trig[2], f = floor_current(lim, w), dh;
+    fs_real f = floor_current(lim, w);
     fs_real room = lim->i_max * lim->i_max - f * f;
     fs_real cap = fs_sqrt(room > 0 ? room : 0) * trig[0];
-    if (!(to_h(m, k, f, w, v2, 0, &dh) <= 0)) {
+    struct to_hcoef hc = to_hcoef(m, trig[2], f, w, v2);
+    if (!(hc.z * hc.f2 + hc.ce2 * f + hc.cc - hc.v2 <= 0)) {  // h(0) as to_h rounds it: sqrt(f * f) is f
         *hi = *lo = 0;
         return;
     }
-    newton_side(m, lim, k, f, cap, w, v2, 1, hi);
+    newton_side(lim, &hc, cap, 1, hi);
     if (lo_too)
-        newton_side(m, lim, k, f, cap, w, v2, -1, lo);
+        newton_side(lim, &hc, cap, -1, lo);
 }
 
 // Returns the grid length (>= 2), or 0 when the motor cannot start; writes the envelope at gamma
@@ -140,6 +159,7 @@ static size_t envelope(const struct motor_params *m, const struct to_limits *lim
         }
     }
     w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);
+    w->integrals = false;
     return TO_GRID;
 }
 
@@ -191,16 +211,20 @@ static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_mov
     size_t i, g = TO_GRID;
     long keep, first, last;
     fs_real total, dt, core, x;
-    for (i = 0; i < g; i++) {  // the integrands, then their running integrals in place
+    // the integrands, then their running integrals in place, once per envelope (every width and distance reads them)
+    for (i = 0; i < g && !w->integrals; i++) {
         w->tacc[i] = 1 / w->ap[i];
         w->tdec[i] = 1 / -w->am[i];
         w->dboth[i] = w->omega[i] / w->ap[i] + w->omega[i] / -w->am[i];
     }
-    cumtrapz(w->tacc, w->omega, 0, g, w->a);
-    cumtrapz(w->tdec, w->omega, 0, g, w->b);
-    cumtrapz(w->dboth, w->omega, 0, g, w->c);
-    for (i = 0; i < g; i++)
-        w->tacc[i] = w->a[i], w->tdec[i] = w->b[i], w->dboth[i] = w->c[i];
+    if (!w->integrals) {
+        cumtrapz(w->tacc, w->omega, 0, g, w->a);
+        cumtrapz(w->tdec, w->omega, 0, g, w->b);
+        cumtrapz(w->dboth, w->omega, 0, g, w->c);
+        for (i = 0; i < g; i++)
+            w->tacc[i] = w->a[i], w->tdec[i] = w->b[i], w->dboth[i] = w->c[i];
+        w->integrals = true;
+    }
     if (d >= w->dboth[g - 1]) {
         mv->w_peak = w->omega[g - 1];
         mv->cruise = (d - w->dboth[g - 1]) / w->omega[g - 1];
@@ -237,14 +261,15 @@ static void bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_mov
 static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
 {
     size_t i, out_len = len + n - 1;
-    for (i = 0; i < n; i++)  // the running sum of x padded by n - 1 zeros at each end
+    fs_real unit = 1 / (fs_real)n;  // the box's height (unit area)
+    for (i = 0; i < n; i++)         // the running sum of x padded by n - 1 zeros at each end
         s[i] = 0;
     for (i = 0; i < len; i++)
         s[n + i] = s[n - 1 + i] + x[i];
     for (i = n + len; i < len + 2 * n - 1; i++)
         s[i] = s[i - 1];
     for (i = 0; i < out_len; i++)
-        out[i] = (s[i + n] - s[i]) / (fs_real)n;
+        out[i] = (s[i + n] - s[i]) * unit;
     return out_len;
 }
 
@@ -457,15 +482,16 @@ static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
     deg = TRAJ_NCOEF - 1 - k - lead;
     for (q = 0; q < k; q++)
         p *= h;
+    p = 1 / p;  // one division per row, not per coefficient
     for (j = 0; j <= deg; j++)
-        out[j] = row[j + lead] * FALL[k][TRAJ_NCOEF - 1 - (j + lead)] / p;
+        out[j] = row[j + lead] * FALL[k][TRAJ_NCOEF - 1 - (j + lead)] * p;
     return deg;
 }
 
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim, const struct traj *tr)
 {
     struct to_margins out = {0, 0, 0, 0, 0, 0, 0};
-    fs_real rho_max = 0, w_max = 0, a_max = 0, j_max = 0, c_max = 0, v2_max = 0, kr, a, s, dphi, x, y;
+    fs_real rho_max = 0, w_max = 0, a_max = 0, j_max = 0, c_max = 0, v2_max = 0, kr, inv_kr, a, s, dphi, x, y;
     fs_real sin_max = fs_sin(lim->torque_angle_max);
     bool bad = false;
     size_t i;
@@ -497,10 +523,11 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
                 continue;
             }
             s = fs_sqrt(kr * kr - a * a);
-            c_max = fs_max(c_max, fs_fabs(a) / kr);
+            inv_kr = 1 / kr;
+            c_max = fs_max(c_max, fs_fabs(a) * inv_kr);
             dphi = -((m->J * jerk + m->B * acc) * rho - a * drho) / (rho * s) - (fs_real)m->Nr * w;
-            x = m->L * drho + m->R * rho + m->Km * w * (a / kr);
-            y = m->L * rho * dphi - m->Km * w * (s / kr);
+            x = m->L * drho + m->R * rho + m->Km * w * (a * inv_kr);
+            y = m->L * rho * dphi - m->Km * w * (s * inv_kr);
             v2_max = fs_max(v2_max, x * x + y * y);
         }
     }
@@ -574,6 +601,22 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
     return mg.worst;
 }
 
+// Returns the duration of the table at gamma and width from its timing alone, before the table is built
+// (time_optimal._duration): 0 when the table would not be built (the motor cannot start, or too many samples).
+static fs_real duration(struct to_search *s, fs_real gamma, fs_real width)
+{
+    struct to_move mv;
+    if (s->env_gamma != gamma) {
+        s->env_gamma = gamma;
+        if (!envelope(s->m, &s->plan, gamma, &s->w)) {
+            s->env_gamma = -1;
+            return 0;
+        }
+    }
+    bang_bang(s->d, width, &s->w, &mv);
+    return mv.n > TO_MAX_SAMPLES ? 0 : (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
+}
+
 // Returns nothing; the search on gamma at one width from start (time_optimal.search_width): regula falsi in a
 // measured bracket, else the secant through the last two tables, else the proportional guess; s->width_tf and
 // s->width_gamma are the width's shortest feasible table's duration and gamma (inf and 0 when none).
@@ -588,6 +631,8 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
         g = fs_rint(g * TO_GAMMA_STEPS) / TO_GAMMA_STEPS;  // on a grid: both planners try the same gamma
         if (g < TO_GAMMA_MIN)
             break;
+        if (side == 1 && s->found && duration(s, g, width) >= s->out->breaks[s->out->n])
+            break;  // below an infeasible gamma, the guess of the bus target is no faster than the best: no table
         x = try_table(s, g, width);
         aim = x + FS_C(0.5) * TO_S_TOL;  // the guesses aim at the middle of the accepted band (-TO_S_TOL, 0]
         g_prev = g_last, s_prev = s_last, g_last = g, s_last = aim;
@@ -621,6 +666,29 @@ static void search_width(struct to_search *s, fs_real width, fs_real start)
             g = fs_min(fs_max(g, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));
         g = fs_min(g, 1);
     }
+}
+
+// Returns the first gamma the search tries (time_optimal.first_gamma): for a move that cruises, predicted from the
+// steady voltage at the full-bus move mv's peak speed (w holds the envelope at gamma = 1), else 1.
+static fs_real first_gamma(const struct motor_params *m, const struct to_limits *plan, const struct to_work *w,
+                           const struct to_move *mv)
+{
+    fs_real k = fs_cos(plan->torque_angle_max) / fs_sin(plan->torque_angle_max), v2 = 0, u, x, dh, s;
+    fs_real acc[2];
+    struct to_hcoef hc;
+    int i;
+    if (!(mv->cruise > 0))
+        return 1;
+    hc = to_hcoef(m, k, floor_current(plan, mv->w_peak), mv->w_peak, 0);  // h at v2 = 0: the squared voltage
+    acc[0] = interp(mv->w_peak, w->omega, w->ap, TO_GRID);
+    acc[1] = interp(mv->w_peak, w->omega, w->am, TO_GRID);
+    for (i = 0; i < 2; i++) {
+        u = (m->J * acc[i] + m->B * mv->w_peak) / m->Km;
+        x = to_h(&hc, u, &dh);
+        v2 = fs_max(v2, x);
+    }
+    s = TO_PEAK_OVER_STEADY * fs_sqrt(v2) / (TO_V_MARGIN * plan->v_use * plan->v_bus) - 1;
+    return fs_min(1, 1 / (1 + s + FS_C(0.5) * TO_S_TOL));
 }
 
 // Returns the duration of width i's shortest feasible table (inf when none, or when its full-bus duration cannot
@@ -707,6 +775,7 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
             return TO_ELONG;
         s.full[i] = (fs_real)(mv.n + 2 * (mv.n_box - 1) - 1) * mv.dt;
     }
+    s.start = first_gamma(m, &s.plan, &s.w, &mv);
     // from the middle width down while the duration falls, then up unless down found a shorter table (both ways
     // from an infeasible middle width)
     f0 = run_width(&s, nw / 2);

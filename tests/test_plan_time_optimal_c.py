@@ -116,3 +116,28 @@ def test_speed_acceleration_and_jerk_caps_are_kept(caps):
         assert math.isclose(c.tf, py.tf, rel_tol=1e-12)
         m = plan_margins(c, MOTOR, limits, samples_per_segment=97)
         assert m["worst"] <= 1.0 and m["voltage"] <= limits.v_use * 1.005, (d, m)
+
+
+def test_the_c_plans_skip_only_the_rho_sampling():
+    """engine="c" builds its plan without the constructor's rho sampling; the plan is the constructor's, bad tables fail."""
+    from flatstep.plan.piecewise import PiecewisePlan
+
+    limits = MotorLimits(v_bus=24.0, i_max=1.0, i_run=0.025)
+    fast = time_optimal(-1.0, MOTOR, limits, theta1=0.5, t0=0.25)
+    full = PiecewisePlan(fast.breaks, fast.theta, fast.rho)
+    for a, b in ((fast.breaks, full.breaks), (fast.theta, full.theta), (fast.rho, full.rho)):
+        np.testing.assert_array_equal(a, b)
+        assert not a.flags.writeable
+    t = np.linspace(fast.t0, fast.tf, 101)
+    np.testing.assert_array_equal(fast.theta_deriv(t, 1), full.theta_deriv(t, 1))
+    b, th, rh = fast.breaks.copy(), fast.theta.copy(), fast.rho.copy()
+    bad_breaks = b.copy()
+    bad_breaks[3] = bad_breaks[2]
+    bad_rho = rh.copy()
+    bad_rho[5, 2] = math.nan
+    for args in ((bad_breaks, th, rh), (b, th, bad_rho), (b, th[:, 1:], rh), (b[:1], th[:0], rh[:0])):
+        with pytest.raises(ValueError, match="not a finished C plan"):
+            PiecewisePlan._of_checked_table(*args)
+    seq = time_optimal_sequence([(0.0, 0.01), (2.0, 0.0), (-1.0, 0.02)], MOTOR, limits)
+    ref = PiecewisePlan(seq.breaks, seq.theta, seq.rho)
+    np.testing.assert_array_equal(seq.rho, ref.rho)

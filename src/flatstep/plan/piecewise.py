@@ -117,6 +117,30 @@ class PiecewisePlan:
         for a in (self.breaks, self.theta, self.rho):
             a.flags.writeable = False
 
+    @classmethod
+    def _of_checked_table(cls, breaks: Array, theta: Array, rho: Array) -> PiecewisePlan:
+        """The plan of a table csrc/time_optimal.c planned, without the constructor's sampling of rho (private).
+
+        Only for the C planner's own tables (flatstep.plan.time_optimal.time_optimal and time_optimal_sequence with
+        ``engine="c"``, their dwells' rows held at ``i_hold`` > 0 added): its search accepts a table only where rho
+        > 0 on the 9 points ``tau = j/8`` of every segment (time_optimal_margins), not the constructor's 17, and it
+        writes (n + 1,) breaks and (n, 11) rows. The breaks must still be finite and increasing and every
+        coefficient finite (checked here: a ValueError otherwise); any other table goes through the constructor.
+        """
+        b = np.asarray(breaks, dtype=float)
+        th, rh = np.asarray(theta, dtype=float), np.asarray(rho, dtype=float)
+        n = b.size - 1
+        if not (n >= 1 and th.shape == rh.shape == (n, NCOEF) and np.isfinite(b).all() and (np.diff(b) > 0).all()
+                and np.isfinite(th).all() and np.isfinite(rh).all()):
+            raise ValueError(f"a table of {n} segment(s) with breaks {b.tolist()!r} is not a finished C plan: its "
+                             f"breaks must increase, its rows be ({n}, {NCOEF}) and every value finite")
+        plan = object.__new__(cls)
+        for name, value in (("breaks", b), ("theta", th), ("rho", rh), ("_c", {})):
+            object.__setattr__(plan, name, value)
+        for a in (b, th, rh):
+            a.flags.writeable = False
+        return plan
+
     @property
     def n(self) -> int:
         """The number of segments."""

@@ -33,7 +33,8 @@ theta'', theta''') at its knots (:func:`.segments.hermite_rows`), with :math:`\r
 **Search.** The inductance needs voltage headroom, which the envelope's :math:`\gamma < 1` leaves. The table's
 worst margin :math:`s(\gamma)` (:func:`table_margins`: the voltage over ``0.998 v_use``, every other ratio over
 1, less 1) is driven to 0 by :func:`search_width`: the proportional guess :math:`\gamma/(1 + s)`, the secant,
-then regula falsi (Illinois) once a bracket is measured, in at most ``_SEARCH`` tables. :func:`plan_move` walks
+then regula falsi (Illinois) once a bracket is measured, in at most ``_SEARCH`` tables, from a first gamma
+predicted by the steady voltage at a cruising move's peak speed (:func:`first_gamma`). :func:`plan_move` walks
 the smoothing widths (multiples of :math:`L/R`) from the middle one towards shorter plans; the shortest feasible
 table wins.
 """
@@ -72,6 +73,7 @@ _V_MARGIN = 0.998    # of v_use: the sampled check may miss the peak between its
 _ANGLE_PLAN = 0.98   # the torque angle cap planned with, of the true one (planning_limits)
 _CAP_PLAN = 0.995    # the speed and acceleration caps planned with, of the true ones (planning_limits)
 _S_TOL = 0.003       # a feasible table within 0.3 % of the bus target ends a width's search
+_PEAK_OVER_STEADY = 0.994  # a table's peak voltage over the steady one at its move's peak speed (first_gamma)
 _NEWTON_TOL = 1e-12  # Newton stops when its step is below this fraction of i_max
 #: The most segments of a table the planner writes (csrc/time_optimal.h ``TO_MAX_SEGMENTS``).
 MAX_SEGMENTS = _KNOTS + 4
@@ -192,7 +194,7 @@ def bang_bang_time(distance: float, motor: MotorParams, limits: MotorLimits) -> 
 def _box(x: Array, n: int) -> Array:
     """``x`` convolved with a unit-area box of ``n`` samples (the output is ``n - 1`` samples longer)."""
     c = np.concatenate([[0.0], np.cumsum(np.concatenate([np.zeros(n - 1), x, np.zeros(n - 1)]))])
-    return (c[n:] - c[:-n]) / n
+    return (c[n:] - c[:-n]) * (1.0 / n)  # times the box's height, as csrc/time_optimal.c rounds it
 
 
 class Timing(NamedTuple):
@@ -392,6 +394,19 @@ def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
     return Candidate(float(table.breaks[-1]), gamma, width, table_margins(table, motor, limits), table)
 
 
+def _duration(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float) -> float:
+    """The duration [s] of the table at ``gamma`` and ``width`` from its timing alone, before the table is built.
+
+    0 when the table would not be built (the motor cannot start, or the move has too many samples): the search
+    then tries it and measures the failure as before.
+    """
+    try:
+        tm = timing(distance, envelope(motor, planning_limits(limits), gamma), width)
+    except ValueError:
+        return 0.0
+    return 0.0 if tm.n > MAX_PLAN_SAMPLES else (tm.n + 2 * (tm.n_box - 1) - 1) * tm.dt
+
+
 def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width: float,
                  start: float = 1.0, bound: float = math.inf) -> Optional[Candidate]:
     """The regula falsi on gamma at ``width`` from ``start`` (module docstring): its shortest feasible table or None.
@@ -400,8 +415,10 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
     tables, or scales gamma by ``1 / (1 + s)`` after one (the voltage about proportional to gamma); then regula
     falsi (Illinois) inside the bracket; every guess aims at ``s = -_S_TOL / 2``, inside the accepted band. It
     stops at a feasible table within ``_S_TOL`` of the bus target, at a feasible gamma of 1, after ``_SEARCH``
-    tables, or at an infeasible table not shorter than ``bound`` [s] (every feasible gamma lies below it, and is
-    slower still).
+    tables, at an infeasible table not shorter than ``bound`` [s] (every feasible gamma lies below it, and is
+    slower still), or, after an infeasible table, at a guess whose duration (:func:`_duration`, known before its
+    table) is not shorter than the best: the guess estimates the feasible gamma, and a table slower than the best
+    cannot win (a heuristic: a feasible gamma well above the guess would be missed).
     """
     best: Optional[Candidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan  # nan: not measured
@@ -411,6 +428,8 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
         g = float(np.rint(g * _GAMMA_STEPS)) / _GAMMA_STEPS  # on a grid: the C planner tries the same gamma
         if g < _GAMMA_MIN:
             break
+        if side == 1 and _duration(distance, motor, limits, g, width) >= min(bound, best.tf if best else math.inf):
+            break  # below an infeasible gamma, the guess of the bus target is no faster than the best: no table
         try:
             c: Optional[Candidate] = _try(distance, motor, limits, g, width)
             s = c.margins["worst"] if c is not None else math.inf
@@ -458,10 +477,15 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
     return _plan(table, distance, theta1, t0)
 
 
-def _plan(table: Table, distance: float, theta1: float, t0: float) -> PiecewisePlan:
-    """The plan of a table planned over ``|distance|`` from 0 at t = 0: mirrored for a negative distance, shifted."""
+def _plan(table: Table, distance: float, theta1: float, t0: float, from_c: bool = False) -> PiecewisePlan:
+    """The plan of a table planned over ``|distance|`` from 0 at t = 0: mirrored for a negative distance, shifted.
+
+    ``from_c``: the table is csrc/time_optimal.c's own, whose search checked rho > 0 (PiecewisePlan._of_checked_table).
+    """
     theta = (1.0 if distance >= 0 else -1.0) * table.theta
     theta[:, -1] += theta1
+    if from_c:
+        return PiecewisePlan._of_checked_table(table.breaks + t0, theta, table.rho)
     return PiecewisePlan(table.breaks + t0, theta, table.rho)
 
 
@@ -473,6 +497,29 @@ def check_samples(distance: float, tm: Timing) -> None:
                          f"speed limit, which the time-optimal planner would sample {tm.n:.3g} times (every "
                          f"{tm.dt:.3g} s), above the limit of {MAX_PLAN_SAMPLES:.3g} (flatstep.validate.limits."
                          "MAX_PLAN_SAMPLES); split it into shorter moves with waypoints, or plan it with a spline")
+
+
+def first_gamma(distance: float, motor: MotorParams, limits: MotorLimits, full: Envelope) -> float:
+    """The first bus fraction the search tries: predicted from the steady voltage at the full-bus move's peak speed.
+
+    The full-bus bang-bang move over ``distance`` on ``full`` (the envelope at gamma = 1 within the planning
+    ``limits``) peaks at the speed ``w_peak``; the steady voltage there, on the envelope's torque current of
+    either side, times ``_PEAK_OVER_STEADY``, predicts the table's peak voltage at gamma = 1. Its measure ``s``
+    predicted so, the guess ``1 / (1 + s + _S_TOL / 2)`` aims at the middle of the accepted band (at most 1).
+    Only a move that cruises holds its peak speed long enough for this; any other starts on the full bus (the
+    smoothing lowers a short move's peak, and the inductance rather than the steady voltage sets its margin).
+    A poor guess costs a table, never feasibility: the search measures every table.
+    """
+    m, b = motor, bang_bang(distance, full)
+    if not b.cruise > 0:
+        return 1.0
+    w = b.w_peak
+    v2 = 0.0
+    for a in (np.interp(w, full.omega, full.a_plus), np.interp(w, full.omega, full.a_minus)):
+        u = (m.J * float(a) + m.B * w) / m.Km
+        v2 = max(v2, float(_h(np.array([u]), np.array([w]), m, limits, 0.0)[0][0]))
+    s = _PEAK_OVER_STEADY * math.sqrt(v2) / (_V_MARGIN * limits.v_use * limits.v_bus) - 1.0
+    return min(1.0, 1.0 / (1.0 + s + 0.5 * _S_TOL))
 
 
 def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
@@ -488,10 +535,10 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
     full = envelope(motor, planning_limits(limits), 1.0)
     best: Optional[Candidate] = None
-    start = 1.0
 
     for w in ws:
         check_samples(distance, timing(d, full, w))
+    start = first_gamma(d, motor, planning_limits(limits), full)
 
     def run(i: int) -> float:
         nonlocal best, start
@@ -548,7 +595,7 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
     if engine == "c":
         from .._core_time_optimal import plan_table
 
-        return _plan(plan_table(d, motor, limits, widths), d, theta1, t0)
+        return _plan(plan_table(d, motor, limits, widths), d, theta1, t0, from_c=True)
     if engine != "python":
         raise ValueError(f"engine={engine!r} is not a planner engine; valid: 'c', 'python'")
     return _plan(plan_move(d, motor, limits, widths).table, d, theta1, t0)
@@ -597,4 +644,6 @@ def time_optimal_sequence(waypoints: list[tuple[float, float]], motor: MotorPara
             rows.append(move)
             rho_rows.append(table.rho)
             t = float(breaks[-1][-1])
+    if engine == "c":  # the C planner's checked tables and dwells at i_hold > 0
+        return PiecewisePlan._of_checked_table(np.concatenate(breaks), np.vstack(rows), np.vstack(rho_rows))
     return PiecewisePlan(np.concatenate(breaks), np.vstack(rows), np.vstack(rho_rows))
