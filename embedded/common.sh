@@ -16,3 +16,11 @@ require_gcc() {
     fi
     mkdir -p "$OUT"
 }
+
+# compile_object NAME: csrc/NAME.c alone to $OUT/NAME.o, with its code size.
+compile_object() {
+    # shellcheck disable=SC2086
+    "${PREFIX}gcc" $CFLAGS -c "csrc/$1.c" -o "$OUT/$1.o"
+    echo "== ${PREFIX}gcc $("${PREFIX}gcc" -dumpversion), float, -Os: csrc/$1.c"
+    "${PREFIX}size" "$OUT/$1.o"
+}

@@ -7,10 +7,7 @@ set -eu
 
 . embedded/common.sh
 require_gcc "time_optimal embedded"
-# shellcheck disable=SC2086
-"${PREFIX}gcc" $CFLAGS -c csrc/time_optimal.c -o "$OUT/time_optimal.o"
-echo "== ${PREFIX}gcc $("${PREFIX}gcc" -dumpversion), float, -Os: csrc/time_optimal.c"
-"${PREFIX}size" "$OUT/time_optimal.o"
+compile_object time_optimal
 echo "-- static instructions (${PREFIX}objdump -d; static functions are inlined where -Os chose to):"
 "${PREFIX}objdump" -d "$OUT/time_optimal.o" | awk '
     /^[0-9a-f]+ <[^>]+>:$/ {name = substr($2, 2, length($2) - 3); next}

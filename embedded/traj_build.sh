@@ -6,10 +6,7 @@ set -eu
 
 . embedded/common.sh
 require_gcc "traj embedded"
-# shellcheck disable=SC2086
-"${PREFIX}gcc" $CFLAGS -c csrc/trajectory.c -o "$OUT/trajectory.o"
-echo "== ${PREFIX}gcc $("${PREFIX}gcc" -dumpversion), float, -Os: csrc/trajectory.c"
-"${PREFIX}size" "$OUT/trajectory.o"
+compile_object trajectory
 echo "-- static instructions (${PREFIX}objdump -d):"
 for f in traj_flag traj_flag_seg traj_segment traj_value traj_eval traj_valid; do
     n=$("${PREFIX}objdump" -d "$OUT/trajectory.o" | awk -v f="<$f>:" '$2 == f {on = 1; next} on && NF == 0 {exit}
