@@ -7,9 +7,10 @@ set -eu
 
 . embedded/common.sh
 require_gcc "time_optimal embedded"
-compile_object time_optimal
+PLANNER="time_optimal time_optimal_envelope time_optimal_table"
+for f in $PLANNER; do compile_object "$f"; done
 echo "-- static instructions (${PREFIX}objdump -d; static functions are inlined where -Os chose to):"
-"${PREFIX}objdump" -d "$OUT/time_optimal.o" | awk '
+for f in $PLANNER; do "${PREFIX}objdump" -d "$OUT/$f.o"; done | awk '
     /^[0-9a-f]+ <[^>]+>:$/ {name = substr($2, 2, length($2) - 3); next}
     name != "" && $1 ~ /^[0-9a-f]+:$/ && $0 ~ /\t/ {n[name]++; total++}
     END {for (f in n) printf "   %-24s %5d\n", f, n[f] | "sort -k2 -n -r"; close("sort -k2 -n -r");
@@ -17,7 +18,8 @@ echo "-- static instructions (${PREFIX}objdump -d; static functions are inlined 
 
 elf="$OUT/time_optimal_m4.elf"
 # shellcheck disable=SC2086
-"${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/time_optimal_main.c csrc/time_optimal.c csrc/motor.c \
+"${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/time_optimal_main.c csrc/time_optimal.c \
+    csrc/time_optimal_envelope.c csrc/time_optimal_table.c csrc/motor.c \
     -nostartfiles --specs=nosys.specs -Wl,--gc-sections -T embedded/mps2_an386.ld -lm -o "$elf"
 echo "-- firmware image with the planner, its 15000-float workspace and result, and the libm it needs (bytes):"
 "${PREFIX}size" "$elf"

@@ -12,9 +12,11 @@ import numpy as np
 
 from ._flatstep_core import ffi, lib
 from .model.motor import MotorParams
+from .plan.envelope import envelope
 from .plan.limits import MotorLimits
 from .plan.piecewise import NCOEF
-from .plan.time_optimal import DEFAULT_WIDTHS, MAX_SEGMENTS, Table, check_samples, envelope, planning_limits, timing
+from .plan.smoothing import MAX_SEGMENTS, Table, timing
+from .plan.time_optimal import DEFAULT_WIDTHS, check_samples, planning_limits
 from .validate import InputError
 from .validate.limits import MAX_PLAN_SAMPLES
 
