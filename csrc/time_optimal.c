@@ -12,7 +12,7 @@
 
 size_t time_optimal_work_len(void)
 {
-    return 6 * (size_t)TO_GRID + 3 * ((size_t)TO_FINE_LEN + 1) + (TO_MAX_SEGMENTS + 1) * 2
+    return 6 * (size_t)TO_GRID + 2 * ((size_t)TO_FINE_LEN + 1) + (size_t)TO_SUM_LEN + (TO_MAX_SEGMENTS + 1) * 2
            + 2 * (size_t)TO_MAX_SEGMENTS * TRAJ_NCOEF;
 }
 
@@ -226,7 +226,7 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
     s.w.omega = work, s.w.ap = work + TO_GRID, s.w.am = work + 2 * TO_GRID, s.w.tacc = work + 3 * TO_GRID;
     s.w.tdec = work + 4 * TO_GRID, s.w.dboth = work + 5 * TO_GRID;
     s.w.a = work + 6 * TO_GRID, s.w.b = s.w.a + TO_FINE_LEN + 1, s.w.c = s.w.b + TO_FINE_LEN + 1;
-    s.w.knot = s.w.c + TO_FINE_LEN + 1;
+    s.w.knot = s.w.c + TO_SUM_LEN;
     s.w.breaks = s.w.knot + TO_MAX_SEGMENTS + 1;
     s.w.theta = s.w.breaks + TO_MAX_SEGMENTS + 1;
     s.w.rho = s.w.theta + TO_MAX_SEGMENTS * TRAJ_NCOEF;

@@ -10,11 +10,15 @@
 
 #define TO_V_MARGIN FS_C(0.998)  // of v_use: the sampled check may miss the peak between its samples by this much
 #define TO_FINE_LEN (TO_FINE_MAX + 2)
+// The box filter's running sum: a profile of up to TO_FINE_LEN samples padded by n_box - 1 zeros at each end, with
+// n_box <= TO_FINE_MAX / 2 (a smoothing width is at most half the sampled core, whose step is >= core / TO_FINE_MAX).
+#define TO_SUM_LEN (TO_FINE_LEN + TO_FINE_MAX / 2 + 2)
 
 // Scratch arrays carved out of the caller's workspace.
 struct to_work {
     fs_real *omega, *ap, *am, *tacc, *tdec, *dboth;  // TO_GRID each: the envelope and its integrals
-    fs_real *a, *b, *c;                              // TO_FINE_LEN + 1 each: the sampled profile
+    fs_real *a, *b;                                  // TO_FINE_LEN + 1 each: the sampled profile
+    fs_real *c;                                      // TO_SUM_LEN: the box filter's running sum
     fs_real *knot;                                   // TO_MAX_SEGMENTS + 1 sample indices
     bool integrals;                                  // tacc, tdec and dboth hold the envelope's integrals
     struct traj tr;                                  // the candidate table over the arrays below

@@ -123,7 +123,9 @@ bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim
     fs_real cot = fs_cos(lim->torque_angle_max) / fs_sin(lim->torque_angle_max);
     to_bang_bang(d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
-    if (mv.n > TO_MAX_SAMPLES || mv.n - mv.k + 2 * (mv.n_box - 1) > TO_FINE_LEN)
+    // the profile after both boxes (in a) and the second box's running sum (in c) must fit their arrays
+    if (mv.n > TO_MAX_SAMPLES || mv.n - mv.k + 2 * (mv.n_box - 1) > TO_FINE_LEN
+        || mv.n - mv.k + 3 * mv.n_box - 2 > TO_SUM_LEN)
         return false;
     for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt: the cut is not sampled
         t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
@@ -144,7 +146,10 @@ bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim
     }
     r = mv.r < len - 1 ? mv.r : len - 1;  // no cut (k = 0): r only has to index the profile
     cruise = mv.k ? speed[r] : 0;
-    scale = d / (sum + (fs_real)mv.k * mv.dt * cruise);
+    scale = sum + (fs_real)mv.k * mv.dt * cruise;
+    if (!(scale > 0 && fs_isfinite(scale)))  // a width so long that the profile vanishes: no table
+        return false;
+    scale = d / scale;
     for (i = 0; i < len; i++)
         speed[i] *= scale;
     last = len - 1;

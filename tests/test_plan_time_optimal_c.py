@@ -141,3 +141,26 @@ def test_the_c_plans_skip_only_the_rho_sampling():
     seq = time_optimal_sequence([(0.0, 0.01), (2.0, 0.0), (-1.0, 0.02)], MOTOR, limits)
     ref = PiecewisePlan(seq.breaks, seq.theta, seq.rho)
     np.testing.assert_array_equal(seq.rho, ref.rho)
+
+
+@pytest.mark.parametrize("distance", [1e-7, 3e-6, 1e-5, -1.2e-5, 1.5e-5, 2e-5])
+def test_tiny_moves_plan_alike_in_c_and_the_reference(distance):
+    """Moves of 1e-7 to 2e-5 rad once overflowed the C planner's box filter (heap corruption): now both engines plan."""
+    limits = MotorLimits(v_bus=24.0, i_max=1.0)
+    c, py = time_optimal(distance, MOTOR, limits), time_optimal(distance, MOTOR, limits, engine="python")
+    assert c.tf == py.tf
+    assert c.theta_deriv(np.array([c.tf]), 0)[0] == pytest.approx(distance, abs=1e-15)
+
+
+@pytest.mark.parametrize("widths", [(1e300,), (1e-300,), (math.nan,), (2.0,), (1e-3, "1e-3"), (True,), ()])
+def test_smoothing_widths_out_of_range_are_refused_by_both_engines(widths):
+    limits = MotorLimits(v_bus=24.0, i_max=1.0)
+    for engine in ("c", "python"):
+        with pytest.raises(ValueError, match=r"widths=.*smoothing width"):
+            time_optimal(1.0, MOTOR, limits, widths=widths, engine=engine)
+
+
+@pytest.mark.parametrize("distance", [1e-9, -5e-8])
+def test_moves_below_the_planners_resolution_are_refused(distance):
+    with pytest.raises(ValueError, match="MIN_MOVE_DISTANCE"):
+        time_optimal(distance, MOTOR, MotorLimits(v_bus=24.0, i_max=1.0))

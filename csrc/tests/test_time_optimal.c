@@ -1,4 +1,5 @@
 // The time-optimal planner: a feasible, continuous table that ends at the distance, mirrored moves, error codes.
+#include <stdlib.h>
 #include "check.h"
 #include "time_optimal.h"
 #include "trajectory.h"
@@ -97,11 +98,46 @@ static int error_checks(void)
     return 0;
 }
 
+// Returns 0; moves of 1e-7 to 2e-5 rad and extreme smoothing widths plan or refuse inside a workspace of exactly
+// time_optimal_work_len() (on the heap, so the sanitizer build sees a write past it: these once overflowed the box
+// filter's running sum).
+static int tiny_move_checks(void)
+{
+    const double distances[] = {1e-7, 3e-6, 1e-5, -1e-5, 1.2e-5, 1.5e-5, 2e-5, 1e-9};
+    const double widths[] = {1e300, 1e-300, 1e3, 1e-12};
+    struct to_limits l = limits_at(24.0);
+    size_t n = time_optimal_work_len(), i;
+    double *heap = malloc(n * sizeof *heap);
+    int rc;
+    CHECK(heap != NULL, "workspace");
+    if (!heap)
+        return 0;
+    for (i = 0; i < sizeof distances / sizeof *distances; i++) {
+        rc = time_optimal_plan(&NEMA17, &l, distances[i], NULL, 0, heap, n, &out);
+        CHECK(rc == (i < 7 ? TO_OK : TO_ENOPLAN), "rc %d at %g rad", rc, distances[i]);
+        if (rc == TO_OK) {
+            struct traj tr = {out.n, out.breaks, out.theta, out.rho};
+            double f[PLAN_FLAG_LEN];
+            traj_flag(&tr, out.breaks[out.n], f);
+            CHECK(fabs(f[PLAN_THETA] - distances[i]) < 1e-15, "end %.17g of %g rad", f[PLAN_THETA], distances[i]);
+        }
+    }
+    for (i = 0; i < sizeof widths / sizeof *widths; i++) {
+        rc = time_optimal_plan(&NEMA17, &l, 1.0, &widths[i], 1, heap, n, &out);
+        CHECK(rc == TO_OK || rc == TO_ENOPLAN || rc == TO_ELONG, "rc %d at width %g s", rc, widths[i]);
+        rc = time_optimal_plan(&NEMA17, &l, 1e-5, &widths[i], 1, heap, n, &out);
+        CHECK(rc == TO_OK || rc == TO_ENOPLAN || rc == TO_ELONG, "rc %d at width %g s, 1e-5 rad", rc, widths[i]);
+    }
+    free(heap);
+    return 0;
+}
+
 // Returns 0 (failures are counted by CHECK).
 int test_time_optimal(void)
 {
     feasible_checks();
     mirror_checks();
     error_checks();
+    tiny_move_checks();
     return 0;
 }

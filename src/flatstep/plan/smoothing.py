@@ -127,7 +127,10 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
     inc = 0.5 * (speed[1:] + speed[:-1]) * dt  # the trapezoids of the angle
     r = min(r, speed.size - 1)  # no cut (k = 0): r only has to index the profile
     cruise = speed[r] if k else 0.0
-    scale = distance / (np.sum(inc) + k * dt * cruise)
+    covered = float(np.sum(inc) + k * dt * cruise)
+    if not (covered > 0 and math.isfinite(covered)):  # csrc/time_optimal_table.c builds no table either
+        raise ValueError(f"the smoothed profile of {distance:g} rad at width {width:g} s covers no angle")
+    scale = distance / covered
     # the cruise's knots 4 samples inside it, where the jerk's central differences see only the constant cruise (at
     # its ends the jerk jumps, and a long cruise segment would bulge to meet half of that jump)
     knots = _knots(speed.size - 1 + k, (b.t1 + 2 * width) / dt + 4, (b.t1 + b.cruise) / dt - 4, b.cruise > 0)

@@ -27,6 +27,8 @@ from numpy.typing import NDArray
 
 from ..model.motor import MotorParams
 from ..validate import InputError, check_finite
+from ..validate import limits as limits_mod
+from ..validate.checks import is_real
 from ..validate.limits import MAX_PLAN_SAMPLES
 from .envelope import Envelope, bang_bang, bang_bang_time, envelope, iq_bounds, voltage_excess
 from .limits import MotorLimits
@@ -267,6 +269,19 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     return best
 
 
+def _check_widths(widths: Optional[tuple[float, ...]]) -> None:
+    """Raises an InputError unless ``widths`` is None or 1 to 8 finite smoothing widths within the documented range."""
+    if widths is None:
+        return
+    if isinstance(widths, (str, bytes)) or not hasattr(widths, "__len__") or not 1 <= len(widths) <= 8:
+        raise InputError("widths", widths, f"widths={widths!r}: give a tuple of 1 to 8 smoothing widths [s]")
+    lo, hi = limits_mod.MIN_SMOOTHING_WIDTH, limits_mod.MAX_SMOOTHING_WIDTH
+    for w in widths:
+        if not (is_real(w) and math.isfinite(w) and lo <= w <= hi):
+            raise InputError("widths", widths, f"widths={widths!r}: every smoothing width must be a number of seconds "
+                             f"in [{lo:g}, {hi:g}] (flatstep.validate.limits.MIN_SMOOTHING_WIDTH, MAX_SMOOTHING_WIDTH)")
+
+
 def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, theta1: float = 0.0,
                  t0: float = 0.0, widths: Optional[tuple[float, ...]] = None, engine: str = "c") -> PiecewisePlan:
     """The shortest feasible smoothed envelope move over ``distance`` [rad] (module docstring).
@@ -281,8 +296,11 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
     """
     d = check_finite("distance", distance)
     theta1, t0 = check_finite("theta1", theta1), check_finite("t0", t0)
-    if d == 0:
-        raise ValueError("distance=0.0 rad: a move needs a distance; a rest is a dwell")
+    if abs(d) < limits_mod.MIN_MOVE_DISTANCE:
+        raise InputError("distance", distance, f"distance={distance!r} rad: a move needs at least "
+                         f"{limits_mod.MIN_MOVE_DISTANCE:g} rad (flatstep.validate.limits.MIN_MOVE_DISTANCE); a "
+                         "shorter one is a hold (a dwell)")
+    _check_widths(widths)
     if engine == "c":
         from .._core_time_optimal import plan_table
 

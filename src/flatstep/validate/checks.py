@@ -31,14 +31,14 @@ class InputError(ValueError):
         return InputError(self.name, self.value, f"{source}: {self}")
 
 
-def _is_real(value: object) -> bool:
+def is_real(value: object) -> bool:
     """Whether ``value`` is a real number of a numeric type (not a bool, not a string)."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
 def check_finite(name: str, value: Any) -> float:
     """Return ``value`` as float, or raise if it is not a finite real number (a bool or a string is not)."""
-    if not _is_real(value):
+    if not is_real(value):
         raise InputError(name, value, f"{name}={value!r} is not a number ({type(value).__name__}); "
                                       "give a finite real value")
     try:

@@ -36,6 +36,12 @@ MAX_STEPS_REFERENCE = 200_000
 MAX_PLAN_SAMPLES = 2_000_000
 #: Most moves of one time-optimal waypoint sequence in a plan file (under 1 ms of planning each in C).
 MAX_OPTIMAL_MOVES = 1000
+#: Shortest move the time-optimal planner plans [rad] (far below any encoder's count; a shorter move is a hold).
+MIN_MOVE_DISTANCE = 1e-7
+#: Shortest and longest smoothing width a time-optimal plan may be given [s] (the defaults are 1/4 to 4 times L/R,
+#: 0.1-50 ms for NEMA 14-23 motors).
+MIN_SMOOTHING_WIDTH = 1e-6
+MAX_SMOOTHING_WIDTH = 1.0
 #: Segments of one PWM period in switched mode (csrc/drive.h ``DRIVE_PWM_SEGMENTS``).
 PWM_SEGMENTS = 9
 
