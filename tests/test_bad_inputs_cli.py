@@ -1,16 +1,16 @@
-"""Bad input at the command line, through a subprocess: exit code 2, one line naming the flag or key and the value,
-never a traceback.
+"""Bad input at the command line: exit code 2, one line naming the flag or key and the value, never a traceback.
 
-The cases run concurrently (4 at a time) in one fixture; each parametrized test checks its own case.
+The cases run in this process through ``flatstep.cli.main.main`` (the ``cli`` fixture's runner, no interpreter
+start-up per case), all in one fixture; each parametrized test checks its own case. test_cli.py keeps the few
+subprocess smoke tests (the installed entry point, signals).
 """
 from __future__ import annotations
 
-import subprocess
-import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+
+from conftest import run_cli
 
 SIM_FLAGS = ["--theta1", "--theta2", "--rho1", "--rho2", "--t0", "--tf", "--t-end", "--load-torque", "--W1", "--W2",
              "--eps1", "--eps2", "--xi", "--wn", "--hold-damping"]
@@ -209,12 +209,7 @@ def outcomes(tmp_path_factory):
         (tmp / f"sim_{i}.toml").write_text(text)
     cases = _cases(tmp)
 
-    def run(argv):
-        return subprocess.run([sys.executable, "-m", "flatstep", *argv], capture_output=True, text=True, timeout=60,
-                              cwd=tmp)
-
-    with ThreadPoolExecutor(4) as pool:
-        done = list(pool.map(lambda c: run(c[1]), cases))
+    done = [run_cli(c[1], cwd=tmp) for c in cases]
     return {c[0]: (c, p) for c, p in zip(cases, done, strict=True)}
 
 
