@@ -144,6 +144,12 @@ def test_the_calibrated_examples_are_what_calibrate_writes(name):
     text, fresh = calibrated.read_text(), merged_scenario(source.read_text(), cal)
     assert text.split("[feedforward]")[0] == fresh.split("[feedforward]")[0]
     scenario, _ = load_scenario(calibrated)
+    fresh_table = cal.torques.as_dict()
     for kind in ("dq_smc_ff", "cascade_ff"):  # the compare rows read the calibrated table
         read = replace(scenario, controller_type=kind).controller().torques.as_dict()
-        assert read == pytest.approx(cal.torques.as_dict(), rel=1e-4, abs=1e-6 * cal.torques.detent_torque)
+        assert set(read) == set(fresh_table)
+        for key, value in read.items():
+            # within 3 standard deviations of calibrate's own estimate (the fit's last digits move with the
+            # numerical libraries' versions); keys calibrate does not estimate are equal
+            tol = 3 * cal.std[key] if key in cal.std else 1e-12
+            assert abs(value - fresh_table[key]) <= tol, (kind, key, value, fresh_table[key], tol)
