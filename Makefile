@@ -19,7 +19,7 @@ demo: venv
 	$(BIN)/flatstep reproduce --out $(OUT)
 
 test: venv lint ctest
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto
 
 # ruff (pyflakes, isort, bugbear, numpydoc docstrings) and mypy on the package; clang-format on the C core.
 lint: venv
