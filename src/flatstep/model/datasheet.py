@@ -89,12 +89,16 @@ class MotorModel:
         The figures as given, by key (SI units, :data:`DATASHEET_KEYS`).
     assumptions : tuple of Assumption
         Every assumption made, each with its uncertainty.
+    defaults : dict
+        The keys not given and the values taken for them (``current``, ``holding_torque_phases``,
+        ``holding_torque_rating``, ``viscous_friction``).
     """
 
     params: MotorParams
     rated_rho: float
     datasheet: dict[str, Any]
     assumptions: tuple[Assumption, ...]
+    defaults: dict[str, Any]
 
     @property
     def rated_torque(self) -> float:
@@ -232,7 +236,10 @@ def from_datasheet(*, step_angle: float, rated_current: float, holding_torque: f
                "viscous_friction": viscous_friction, "current": current, "holding_torque_phases": phases,
                "holding_torque_rating": rating, **description}
     notes = _assumptions(params, rho, figures, given, viscous_friction is None, detent)
-    return MotorModel(params, rho, figures, notes)
+    taken = {"current": current, "holding_torque_phases": phases, "holding_torque_rating": rating,
+             "viscous_friction": B}
+    defaults = {k: v for k, v in taken.items() if {**given, "viscous_friction": viscous_friction}[k] is None}
+    return MotorModel(params, rho, figures, notes, defaults)
 
 
 def _positive_torque(name: str, value: Any) -> float:
