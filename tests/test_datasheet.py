@@ -248,3 +248,15 @@ def test_cli_model_keys_and_refusals(cli, tmp_path):
         assert run.stdout == ""
     run = cli(["motor", "preset.toml", "--v-bus", "-24"], cwd=tmp_path)
     assert run.returncode == 2 and "--v-bus" in run.stderr
+
+
+def test_cli_several_files_one_row_each(cli, tmp_path):
+    run = cli(["motor", *MOTORS])
+    assert run.returncode == 0, run.stderr
+    rows = run.stdout.splitlines()
+    assert len(rows) == len(MOTORS) + 1
+    as1010 = [r for r in rows if r.startswith("beckhoff-as1010-0000.toml")][0].split()
+    assert as1010[1:10] == ["1", "4.1", "9.5", "0.38", "56", "0.2687", "2.32", "1.41", "50"]
+    (tmp_path / "bad.toml").write_text(NEMA17_TOML.replace("1.8", "2.0"))
+    run = cli(["motor", MOTORS[0], tmp_path / "bad.toml"])
+    assert run.returncode == 2 and run.stdout == "" and "bad.toml:motor.step_angle: step_angle=2.0 deg" in run.stderr

@@ -139,10 +139,28 @@ def _text(d: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _rows(reports: list[dict[str, Any]]) -> str:
+    """Several motors, one row each: the datasheet's figures and the model's Km, L/R and rated norm."""
+    head = (f"{'file':<40}{'A':>6}{'ohm':>7}{'mH':>7}{'N m':>7}{'g cm^2':>8}{'Km':>8}{'L/R ms':>8}{'i_max':>7}"
+            f"{'Nr':>4}  defaulted")
+    rows = [head]
+    for d in reports:
+        p, x, s = d["params"], d["derived"], d.get("datasheet", {})
+        amps = f"{s['rated_current']:>6.3g}" if s else f"{'-':>6}"
+        torque = f"{s['holding_torque']:>7.3g}" if s else f"{'-':>7}"
+        norm = f"{x['rated_rho']:>7.3g}" if "rated_rho" in x else f"{'-':>7}"
+        rows.append(f"{Path(d['file']).name:<40}{amps}{p['R']:>7.3g}{1e3 * p['L']:>7.3g}{torque}{1e7 * p['J']:>8.4g}"
+                    f"{p['Km']:>8.4g}{1e3 * x['L_over_R']:>8.3g}{norm}{p['Nr']:>4}  {', '.join(d['defaults'])}")
+    return "\n".join(rows)
+
+
 def cmd_motor(args: argparse.Namespace) -> int:
-    """``flatstep motor FILE.toml``: print the model of the file's ``[motor]``, its assumptions and uncertainty."""
-    report = describe(args.file, args.v_bus)
-    print(strict_json(report, indent=2) if args.json else _text(report))
+    """``flatstep motor FILE.toml ...``: the model of each file's ``[motor]``, its assumptions and uncertainty."""
+    reports = [describe(path, args.v_bus) for path in args.file]  # every file checked before anything is printed
+    if args.json:
+        print(strict_json(reports[0] if len(reports) == 1 else reports, indent=2))
+    else:
+        print(_text(reports[0]) if len(reports) == 1 else _rows(reports))
     return 0
 
 
@@ -152,8 +170,9 @@ def add_motor_command(sub: Any) -> None:
                        description="Print the model of a file's [motor] table (datasheet keys, or preset / R, L, "
                        "Km, J, B, Nr): R, L, Km, J, B, Nr, L/R, the electrical frequency and back-EMF per rad/s, "
                        "the rated current-vector norm and torque, every assumption made with the uncertainty it "
-                       "carries, and what was defaulted (docs/motors.md).")
-    p.add_argument("file", help="a TOML file with a [motor] table (examples/motors/*.toml, a scenario or a plan file)")
+                       "carries, and what was defaulted (docs/motors.md). Several files: one row each.")
+    p.add_argument("file", nargs="+", help="a TOML file with a [motor] table (examples/motors/*.toml, a scenario or "
+                   "a plan file); several files: one row each (the full report with --json)")
     p.add_argument("--v-bus", type=quantity("v_bus", "--v-bus"), default=None, metavar="V",
                    help="a bus voltage [V]: also print the speed at which the back-EMF alone reaches it")
     p.add_argument("--json", action="store_true", help="print the same as JSON")
