@@ -257,6 +257,6 @@ def test_cli_several_files_one_row_each(cli, tmp_path):
     assert len(rows) == len(MOTORS) + 1
     as1010 = [r for r in rows if r.startswith("beckhoff-as1010-0000.toml")][0].split()
     assert as1010[1:10] == ["1", "4.1", "9.5", "0.38", "56", "0.2687", "2.32", "1.41", "50"]
-    (tmp_path / "bad.toml").write_text(NEMA17_TOML.replace("1.8", "2.0"))
+    (tmp_path / "bad.toml").write_text(NEMA17_TOML.replace("step_angle = 1.8", "step_angle = 1.7"))
     run = cli(["motor", MOTORS[0], tmp_path / "bad.toml"])
-    assert run.returncode == 2 and run.stdout == "" and "bad.toml:motor.step_angle: step_angle=2.0 deg" in run.stderr
+    assert run.returncode == 2 and run.stdout == "" and "bad.toml:motor.step_angle: step_angle=1.7 deg" in run.stderr
