@@ -188,9 +188,9 @@ def test_plan_file_takes_the_datasheet_keys(tmp_path):
 
 
 def test_example_motors_are_enough_and_cited():
-    assert len(MOTORS) >= 15
+    assert len(MOTORS) >= 24
     makers = {tomllib.loads(p.read_text())["motor"]["maker"] for p in MOTORS}
-    assert len(makers) >= 4
+    assert len(makers) >= 5
 
 
 @pytest.mark.parametrize("path", MOTORS, ids=[p.stem for p in MOTORS])
