@@ -18,6 +18,8 @@ import pytest
 
 import flatstep as fs
 from flatstep import _core
+from flatstep._core_structs import controller_struct
+from flatstep._flatstep_core import ffi
 from flatstep.control.design import design_gains
 from flatstep.control.tuning import CONTROLLER_TYPES, make_controller
 from flatstep.loop.reference import run_reference
@@ -86,6 +88,16 @@ def test_every_planner_output_is_a_plan(plans):
     assert {k: v for k, v in table.c_plan().items() if k != "traj"} == pytest.approx(PAPER_PLAN.as_dict())
     with pytest.raises(ValueError, match=r"not a flatstep plan: it lacks \['theta1'"):
         check_plan(type("Half", (), {"t0": 0.0, "tf": 1.0})())
+
+
+@pytest.mark.parametrize("kind", CONTROLLER_TYPES)
+def test_every_c_twin_reads_the_plan_it_is_given(kind, plans):
+    """The C state's reference is the plan's table (struct plan.traj), or psi (NULL) for the paper's move."""
+    for plan in plans.values():
+        bound = controller_struct(_controller(kind, plan))
+        expected = plan.c_struct() if isinstance(plan, PiecewisePlan) else ffi.NULL
+        assert bound.state.plan.traj == expected and bound.state.p.plan.traj == expected
+        assert bound.state.p.plan.tf == plan.tf and bound.state.p.plan.theta2 == plan.theta2
 
 
 @pytest.mark.parametrize("plan_name", list(PLANS))
