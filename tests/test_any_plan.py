@@ -21,6 +21,7 @@ from flatstep import _core
 from flatstep._core_structs import controller_struct
 from flatstep._flatstep_core import ffi
 from flatstep.control.design import design_gains
+from flatstep.control.protocol import is_static
 from flatstep.control.tuning import CONTROLLER_TYPES, make_controller
 from flatstep.loop.reference import run_reference
 from flatstep.plan.limits import MotorLimits
@@ -140,6 +141,24 @@ def test_c_loop_is_the_python_reference(kind, plan_name):
     assert not (status & _core.FAULT_BITS).any() and py["faults"].size == 0
     np.testing.assert_allclose(X, py["x"], rtol=0, atol=1e-10)
     np.testing.assert_allclose(V, py["v"], rtol=0, atol=1e-7)
+
+
+#: The static types, which also run in continuous time.
+STATIC_TYPES = tuple(k for k in CONTROLLER_TYPES if is_static(_controller(k, PAPER_PLAN)))
+
+
+@pytest.mark.parametrize("kind", [k if k == "exact_linearization" else pytest.param(k, marks=pytest.mark.slow)
+                                  for k in STATIC_TYPES])  # about 2 s of SciPy each: one in the default run
+def test_continuous_c_loop_tracks_a_table_as_scipy_does(kind):
+    """C ``continuous_run`` against SciPy's DOP853 on the short waypoint table, restarted at its breaks."""
+    plan = PARITY_PLANS["short_psi_waypoints"]()
+    ctrl = _controller(kind, plan)
+    solver = fs.Continuous(method="DOP853", rtol=1e-10, atol=1e-12, dt_out=1e-4)
+    c = fs.simulate(PLANT, plan, ctrl, solver=solver, t_end=plan.tf + 0.002)
+    sp = fs.simulate(PLANT, plan, ctrl, solver=solver, t_end=plan.tf + 0.002, engine="scipy")
+    np.testing.assert_array_equal(c.t, sp.t)
+    assert np.max(np.abs(c.theta - c.theta_ref)) < 1e-5 and abs(c.theta[-1] - plan.theta2) < 1e-6
+    np.testing.assert_allclose(c.theta, sp.theta, rtol=0, atol=1e-8)
 
 
 def test_batch_summaries_measure_against_the_table(plans):
