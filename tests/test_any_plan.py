@@ -153,7 +153,7 @@ def test_continuous_c_loop_tracks_a_table_as_scipy_does(kind):
     """C ``continuous_run`` against SciPy's DOP853 on the short waypoint table, restarted at its breaks."""
     plan = PARITY_PLANS["short_psi_waypoints"]()
     ctrl = _controller(kind, plan)
-    solver = fs.Continuous(method="DOP853", rtol=1e-10, atol=1e-12, dt_out=1e-4)
+    solver = fs.Continuous(method="DOP853", rtol=1e-10, atol=1e-12, dt_out=1e-4, max_wall_time=300.0)
     c = fs.simulate(PLANT, plan, ctrl, solver=solver, t_end=plan.tf + 0.002)
     sp = fs.simulate(PLANT, plan, ctrl, solver=solver, t_end=plan.tf + 0.002, engine="scipy")
     np.testing.assert_array_equal(c.t, sp.t)

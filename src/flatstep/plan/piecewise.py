@@ -311,7 +311,7 @@ class PiecewisePlan:
         return np.array([*equilibrium_currents(self.theta2, self.rho2, Nr), 0.0, self.theta2])
 
     def as_dict(self) -> dict[str, float]:
-        """The end points as the C ``struct plan`` takes them (the hold's target, a result's ``meta['plan']``)."""
+        """The end points by name (the hold's target, a result's ``meta['plan']``); :meth:`c_plan` adds the table."""
         return dict(theta1=self.theta1, theta2=self.theta2, rho1=self.rho1, rho2=self.rho2, t0=self.t0, tf=self.tf)
 
     def segments(self) -> dict[str, list[Any]]:
