@@ -87,6 +87,10 @@ def test_every_planner_output_is_a_plan(plans):
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-11 * max(1.0, np.max(np.abs(a))))
     assert "traj" not in PAPER_PLAN.c_plan() and table.c_plan()["traj"] is table.c_struct()
     assert {k: v for k, v in table.c_plan().items() if k != "traj"} == pytest.approx(PAPER_PLAN.as_dict())
+    for plan in (PAPER_PLAN, table, plans["time_optimal"]):  # C plan_eval on struct plan: psi, or the table
+        tt = np.linspace(plan.t0 - 0.001, plan.tf + 0.001, 301)
+        for a, b in zip(_core.plan_flag(plan, tt), plan.flag(tt), strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13 * max(1.0, np.max(np.abs(b))))
     with pytest.raises(ValueError, match=r"not a flatstep plan: it lacks \['theta1'"):
         check_plan(type("Half", (), {"t0": 0.0, "tf": 1.0})())
 
