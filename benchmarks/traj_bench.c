@@ -99,7 +99,7 @@ int main(void)
 {
     static const size_t sizes[] = {1, 10, 100, 1000};
     static double t[NT];
-    const struct plan paper = {0, 1, 0.5, 0.5, 0, 0.01};
+    const struct plan paper = {0, 1, 0.5, 0.5, 0, 0.01, NULL};
     struct plan_coef pc;
     struct traj tr;
     double sum = 0, base, ns;

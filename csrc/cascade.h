@@ -31,7 +31,7 @@ struct cascade_gains {
 
 struct cascade_params {
     struct motor_params motor;  // the controller's nominal model
-    struct plan plan;           // the move
+    struct plan plan;           // the move: psi, or a table (plan.traj)
     struct cascade_gains gains;
     fs_real Ts;                   // control period [s] of the integrators, > 0
     fs_real v_limit;              // the bus its anti-windup knows [V], > 0; INFINITY: no limit

@@ -57,7 +57,7 @@ struct dq_smc_current {
 
 struct dq_smc_params {
     struct motor_params motor;        // the controller's model of the motor
-    struct plan plan;                 // the planned angle (its rho channel is not read)
+    struct plan plan;                 // the planned angle, psi or a table (its rho channel is not read)
     struct dq_smc_current current;    // the planned d current
     struct smc_gains gains;           // W1, eps1 act on s1 = i_d - i_d*; W2, eps2, xi, wn on s2 as in smc
     struct torque_model torques;      // the torques the law knows beyond eq. (1)

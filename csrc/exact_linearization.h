@@ -34,7 +34,7 @@ struct exact_linearization_gains {
 
 struct exact_linearization_params {
     struct motor_params motor;  // the controller's nominal model
-    struct plan plan;           // the move (theta*, theta*', theta*'', theta*''')
+    struct plan plan;           // the move, psi or a table (theta*, theta*', theta*'', theta*''')
     struct exact_linearization_gains gains;
     int measurement;  // enum exact_linearization_measurement
     fs_real v_limit;  // > 0, INFINITY: none; only sets CTRL_SATURATED (the law is static, no windup)

@@ -28,7 +28,7 @@ struct microstep_gains {
 
 struct microstep_params {
     struct motor_params motor;  // the driver's nominal model (R, L, Nr are used)
-    struct plan plan;           // theta*(t) the commanded angle, rho*(t) the run current
+    struct plan plan;           // any plan: theta*(t) the commanded angle, rho*(t) the run current
     struct microstep_gains gains;
     fs_real Ts;       // control period [s] of the PI integrators, > 0
     fs_real v_limit;  // the bus its anti-windup knows [V], > 0; INFINITY: no limit

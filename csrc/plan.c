@@ -21,13 +21,14 @@ static const fs_real psi_coef[11][4] = {
     {-126, 0, 0, 0},
 };
 
-// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
+// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0, and a table, if set,
+// is traj_valid.
 bool plan_valid(const struct plan *p)
 {
     // (tf - t0)^3 > 0 as well: a span whose cube underflows would make psi's third derivative divide by 0.
     return fs_isfinite(p->theta1) && fs_isfinite(p->theta2) && fs_isfinite(p->rho1) && fs_isfinite(p->rho2)
            && fs_isfinite(p->t0) && fs_isfinite(p->tf) && p->rho1 > 0 && p->rho2 > 0 && p->tf > p->t0
-           && fs_pow(p->tf - p->t0, 3) > 0;
+           && fs_pow(p->tf - p->t0, 3) > 0 && (p->traj == NULL || traj_valid(p->traj));
 }
 
 // Returns nothing; writes (tf - t0)^k, k = 0..3, as the reference's T**k (pow), or 0 when tf <= t0.
@@ -92,7 +93,7 @@ bool plan_init(struct plan_coef *c, const struct plan *p)
 {
     fs_real d[4];
     c->p = *p;
-    c->traj = NULL;
+    c->traj = p->traj;
     span_powers(p->t0, p->tf, c->Tk);
     c->dtheta = p->theta2 - p->theta1;
     c->drho = p->rho2 - p->rho1;

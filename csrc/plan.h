@@ -1,4 +1,4 @@
-// Rest-to-rest plans of the flat outputs (rho, theta) through the paper's psi, eqs. (15)-(21).
+// Plans of the flat outputs (rho, theta): the paper's rest-to-rest psi, eqs. (15)-(21), or a segment table.
 #ifndef FS_PLAN_H
 #define FS_PLAN_H
 
@@ -10,26 +10,31 @@
 // Flat flag layout used by plan_eval and the flat maps.
 enum { PLAN_RHO, PLAN_DRHO, PLAN_THETA, PLAN_DTHETA, PLAN_DDTHETA, PLAN_DDDTHETA, PLAN_FLAG_LEN };
 
-// theta*(t) = theta1 + psi(t) (theta2 - theta1), rho*(t) = rho1 + psi(t) (rho2 - rho1), eqs. (16), (18).
-struct plan {
-    fs_real theta1, theta2;  // start and end angle [rad]
-    fs_real rho1, rho2;      // start and end current magnitude [A], > 0
-    fs_real t0, tf;          // start and end of the move [s], tf > t0
-};
-
 // A piecewise-polynomial table of the flat outputs (trajectory.h).
 struct traj;
+
+// The one plan every controller tracks (flatstep.plan.protocol.Plan.c_plan). With traj NULL:
+// theta*(t) = theta1 + psi(t) (theta2 - theta1), rho*(t) = rho1 + psi(t) (rho2 - rho1), eqs. (16), (18).
+// With traj set, the flag is that table's (traj_flag) and the fields above it are its end points: where the move
+// starts and ends (t0 = breaks[0], tf = breaks[n]) and the values held outside it (a hold's target).
+struct plan {
+    fs_real theta1, theta2;   // start and end angle [rad]
+    fs_real rho1, rho2;       // start and end current magnitude [A], > 0
+    fs_real t0, tf;           // start and end of the move [s], tf > t0
+    const struct traj *traj;  // NULL: psi; else a table in caller-owned memory outliving every user of the plan
+};
 
 // A plan ready to evaluate: the plan and the constants plan_flag needs, filled once by plan_init (caller-owned).
 struct plan_coef {
     struct plan p;
-    const struct traj *traj;         // NULL (plan_init): psi of p; else plan_flag evaluates this table (traj_flag)
+    const struct traj *traj;         // p.traj (plan_init): NULL for psi of p, else plan_flag evaluates this table
     fs_real Tk[4];                   // (tf - t0)^k, k = 0..3, by pow once here so that plan_flag calls no pow
     fs_real dtheta, drho;            // theta2 - theta1, rho2 - rho1
     fs_real rest[2][PLAN_FLAG_LEN];  // the flag held up to t0 and from tf on
 };
 
-// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
+// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0, and a table, if set,
+// is traj_valid.
 bool plan_valid(const struct plan *p);
 
 // Returns plan_valid(p); fills c from p either way (for tf <= t0 plan_flag then holds the start values, and
@@ -38,7 +43,7 @@ bool plan_init(struct plan_coef *c, const struct plan *p);
 
 // Returns true while the move runs (t0 < t < tf); writes the flag (rho, rho', theta, theta', theta'',
 // theta''') at time t, exactly as flatstep.plan.RestToRest.flag: one pass over the four psi polynomials.
-// With c->traj set, returns and writes traj_flag(c->traj, t, flag) instead.
+// With a table (c->traj, from p.traj), returns and writes traj_flag(c->traj, t, flag) instead.
 bool plan_flag(const struct plan_coef *c, fs_real t, fs_real flag[PLAN_FLAG_LEN]);
 
 // Returns the order-th time derivative (0..3) of psi(t, t0, tf) of eq. (17): held at 0 before t0 and at 1

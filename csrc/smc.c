@@ -20,7 +20,7 @@
 void smc_params_default(struct smc_params *p)
 {
     struct motor_params m = {FS_C(8.4), FS_C(0.010), FS_C(0.05), FS_C(3.6e-6), FS_C(1e-4), 50};
-    struct plan pl = {0, FS_C(0.02), FS_C(0.4), FS_C(0.4), FS_C(0.02), FS_C(0.04)};
+    struct plan pl = {0, FS_C(0.02), FS_C(0.4), FS_C(0.4), FS_C(0.02), FS_C(0.04), NULL};
     struct smc_gains g = {100, 100, FS_C(0.005), FS_C(0.005), FS_C(0.8), 10, 0};
     struct torque_model none = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
     struct smc_loss_aware plan_rho = {0, 0};
@@ -32,7 +32,6 @@ void smc_params_default(struct smc_params *p)
     p->measurement = SMC_IDEAL;
     p->v_limit = FS_C(1e3);
     p->rho_min = FS_C(1e-6);
-    p->traj = NULL;
 }
 
 // Returns true when x is finite and > 0.
@@ -47,7 +46,7 @@ int smc_init(struct smc *s, const struct smc_params *p)
     const struct smc_gains *g = &p->gains;
     if (!motor_params_valid(&p->motor))
         return SMC_EMOTOR;
-    if (!plan_valid(&p->plan) || (p->traj && !traj_valid(p->traj)))
+    if (!plan_valid(&p->plan))
         return SMC_EPLAN;
     if (!(positive(g->W1) && positive(g->W2) && positive(g->eps1) && positive(g->eps2) && positive(g->xi)
           && positive(g->wn)))
@@ -65,7 +64,6 @@ int smc_init(struct smc *s, const struct smc_params *p)
         return SMC_EPLAN;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
-    s->plan.traj = p->traj;
     s->alpha1 = fs_pow(g->wn, 2);
     s->alpha2 = 2 * g->xi * g->wn;
     s->torques_constant = torque_model_constant(&p->torques);

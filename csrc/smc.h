@@ -57,16 +57,13 @@ struct smc_loss_aware {
 
 struct smc_params {
     struct motor_params motor;  // the controller's model of the motor
-    struct plan plan;           // the planned flat outputs
+    struct plan plan;           // the planned flat outputs: psi, or a table (plan.traj) with its end points
     struct smc_gains gains;
     int measurement;                   // enum smc_measurement
     fs_real v_limit;                   // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3 (no denormal scaling)
     fs_real rho_min;                   // smallest current magnitude the law acts on [A], > 0
     struct torque_model torques;       // torques the law knows beyond eq. (1); all zero: the paper's law bit for bit
     struct smc_loss_aware loss_aware;  // rho_hold > 0: track the loss-aware rho*(t) instead of the plan's rho
-    // NULL: track plan; else track this table (trajectory.h, caller-owned, outliving s), plan then holding the
-    // table's end points (the hold's target and tf)
-    const struct traj *traj;
 };
 
 struct smc {

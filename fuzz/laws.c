@@ -34,7 +34,7 @@ void fz_motor(struct fz_reader *r, bool hostile, struct motor_params *m)
 // Returns nothing; decodes a plan around the nominal one (t0 .. tf) when hostile.
 void fz_plan(struct fz_reader *r, bool hostile, double t0, double tf, struct plan *p)
 {
-    p->theta1 = 0, p->theta2 = 0.02, p->rho1 = 0.4, p->rho2 = 0.4, p->t0 = t0, p->tf = tf;
+    p->theta1 = 0, p->theta2 = 0.02, p->rho1 = 0.4, p->rho2 = 0.4, p->t0 = t0, p->tf = tf, p->traj = NULL;
     if (!hostile)
         return;
     p->theta1 = fz_value(r, p->theta1), p->theta2 = fz_value(r, p->theta2), p->rho1 = fz_value(r, p->rho1);

@@ -41,7 +41,7 @@ def test_c_law_on_a_table_is_the_python_law(sequence, measurement):
 
 def test_the_c_reference_is_the_table(sequence):
     s = smc_struct(FlatnessSMC(MOTOR, sequence))
-    assert s.plan.traj != ffi.NULL and s.p.traj == s.plan.traj
+    assert s.plan.traj != ffi.NULL and s.p.plan.traj == s.plan.traj
     flag = ffi.new("double[6]")
     for t in np.linspace(0.0, sequence.tf + 0.01, 97):
         lib.plan_flag(ffi.addressof(s, "plan"), t, flag)
@@ -50,10 +50,11 @@ def test_the_c_reference_is_the_table(sequence):
 
 def test_smc_init_refuses_a_broken_table():
     params = FlatnessSMC(MOTOR, PiecewisePlan.from_rest_to_rest(RestToRest(0.0, 0.02, 0.4, 0.4))).c_params()
-    broken = ffi.new("struct traj *", dict(n=0, breaks=params["traj"].breaks, theta=params["traj"].theta,
-                                           rho=params["traj"].rho))
+    table = params["plan"]["traj"]
+    broken = ffi.new("struct traj *", dict(n=0, breaks=table.breaks, theta=table.theta, rho=table.rho))
     s = ffi.new("struct smc *")
-    assert lib.smc_init(s, ffi.new("struct smc_params *", {**params, "traj": broken})) == lib.SMC_EPLAN
+    bad = {**params, "plan": {**params["plan"], "traj": broken}}
+    assert lib.smc_init(s, ffi.new("struct smc_params *", bad)) == lib.SMC_EPLAN
     assert lib.smc_init(s, ffi.new("struct smc_params *", params)) == lib.SMC_PARAMS_OK
 
 
@@ -84,11 +85,3 @@ def test_a_waypoint_sequence_runs_on_every_engine(sequence):
     np.testing.assert_allclose(s_c.theta, s_py.theta, atol=1e-10)
     np.testing.assert_allclose(s_c.va, s_py.va, rtol=1e-8, atol=1e-8)
 
-
-
-def test_a_c_twin_without_tables_refuses_one(sequence):
-    from flatstep.control.cascade import CascadeFOC, CascadeGains
-
-    ctrl = CascadeFOC(MOTOR, sequence, CascadeGains(2000.0, 100.0), control_period=5e-5)
-    with pytest.raises(ValueError, match="tracks the paper's move only"):
-        simulate(MOTOR, sequence, ctrl, engine="c", loop=DriveLoop(control_period=5e-5), t_end=sequence.tf)

@@ -10,7 +10,7 @@
 #define TS 1e-4  // control period of the sampled tests [s]; the current bandwidth is 0.3 / TS
 
 static const struct motor_params MOTOR = {8.4, 0.010, 0.05, 3.6e-6, 1e-4, 50};  // the paper's
-static const struct plan PLAN = {0, 0.02, 0.4, 0.4, 0.02, 0.04};                // the paper's move
+static const struct plan PLAN = {0, 0.02, 0.4, 0.4, 0.02, 0.04, NULL};          // the paper's move
 
 // Returns nothing; fills p with the paper's motor and move, wc = 0.3 / TS, feedforward, no voltage limit.
 static void microstep_defaults(struct microstep_params *p)

@@ -63,7 +63,7 @@ static int coef_checks(const struct plan *p)
 // Returns 0; plan validity, the flag at the knots and the moving flag.
 static int plan_checks(void)
 {
-    struct plan p = {0.0, 0.02, 0.4, 0.3, 0.02, 0.04}, bad = p;
+    struct plan p = {0.0, 0.02, 0.4, 0.3, 0.02, 0.04, NULL}, bad = p;
     double f[PLAN_FLAG_LEN];
     CHECK(plan_valid(&p), "paper-like plan is valid");
     bad.rho2 = 0;
@@ -87,7 +87,7 @@ static int plan_checks(void)
 // Returns 0; the motor model and the flat maps against each other.
 static int flat_checks(void)
 {
-    struct plan p = {0.0, 0.02, 0.4, 0.3, 0.02, 0.04};
+    struct plan p = {0.0, 0.02, 0.4, 0.3, 0.02, 0.04, NULL};
     double f[PLAN_FLAG_LEN], g[PLAN_FLAG_LEN], x[4], v[2], dx[4], load = 1e-5;
     struct motor_params m = PAPER;
     int i, k;

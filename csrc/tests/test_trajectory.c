@@ -11,7 +11,7 @@ static const double PSI[TRAJ_NCOEF] = {-126, 700, -1575, 1800, -1050, 252, 0, 0,
 // Returns 0; one psi segment gives plan_flag's flag within rounding, and the held values outside.
 static int psi_segment_checks(void)
 {
-    const struct plan p = {0.1, 2.1, 0.4, 0.7, 0.02, 0.04};
+    const struct plan p = {0.1, 2.1, 0.4, 0.7, 0.02, 0.04, NULL};
     struct plan_coef pc;
     double breaks[2] = {0.02, 0.04}, th[TRAJ_NCOEF], rh[TRAJ_NCOEF], f[PLAN_FLAG_LEN], g[PLAN_FLAG_LEN], t;
     double peak[PLAN_FLAG_LEN] = {0};
@@ -128,10 +128,11 @@ static int smc_checks(void)
     th[2 * TRAJ_NCOEF - 1] += 0.02;
     rh[TRAJ_NCOEF - 1] = rh[2 * TRAJ_NCOEF - 1] = 0.4;
     smc_params_default(&p);
-    CHECK(p.traj == NULL, "no table by default");
-    p.traj = &bad;
+    CHECK(p.plan.traj == NULL, "no table by default");
+    p.plan.traj = &bad;
+    CHECK(!plan_valid(&p.plan), "plan_valid refuses a broken table");
     CHECK(smc_init(&s, &p) == SMC_EPLAN, "a broken table is refused");
-    p.traj = &tr;
+    p.plan.traj = &tr;
     CHECK(smc_init(&s, &p) == SMC_PARAMS_OK, "a valid table is taken");
     for (i = 0; i <= 30; i++) {
         t = 0.002 * i;

@@ -80,7 +80,7 @@ static double check_microstep(int line, const double *a)
     double out[4];
     uint32_t st;
     motor_from(a, &p.motor);
-    p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11]};
+    p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11], NULL};
     p.gains = (struct microstep_gains){a[12], a[13] != 0};
     p.Ts = a[14], p.v_limit = a[15];
     CHECK(microstep_init(&s, &p) == MICROSTEP_PARAMS_OK, "line %d: init", line);
@@ -100,7 +100,7 @@ static double check_cascade(int line, const double *a)
     double out[5];
     uint32_t st;
     motor_from(a, &p.motor);
-    p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11]};
+    p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11], NULL};
     p.gains = (struct cascade_gains){a[12], a[13], a[14] != 0};
     p.Ts = a[15], p.v_limit = a[16];
     CHECK(cascade_init(&s, &p) == CASCADE_PARAMS_OK, "line %d: init", line);
@@ -120,7 +120,7 @@ static double check_linearization(int line, const double *a)
     double out[2];
     uint32_t st;
     motor_from(a, &p.motor);
-    p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11]};
+    p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11], NULL};
     p.gains = (struct exact_linearization_gains){a[12], a[13], a[14], a[15]};
     p.measurement = (int)a[16], p.v_limit = a[17];
     CHECK(exact_linearization_init(&s, &p) == EXACT_LINEARIZATION_PARAMS_OK, "line %d: init", line);
@@ -160,7 +160,7 @@ int test_vectors(const char *path)
             continue;
         n = parse(line + strlen(kind), a);
         if (strcmp(kind, "plan") == 0 && n == 13) {
-            struct plan p = {a[0], a[1], a[2], a[3], a[4], a[5]};
+            struct plan p = {a[0], a[1], a[2], a[3], a[4], a[5], NULL};
             plan_eval(&p, a[6], out);
             r = compare(kind, lineno, out, a + 7, 6), k = 0;
         } else if (strcmp(kind, "fv") == 0 && n == 16) {
@@ -184,7 +184,7 @@ int test_vectors(const char *path)
             struct smc s;
             smc_params_default(&p);
             motor_from(a, &p.motor);
-            p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11]};
+            p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11], NULL};
             p.gains = (struct smc_gains){a[12], a[13], a[14], a[15], a[16], a[17], 0};  // the vectors predate the hold
             p.measurement = (int)a[18];
             CHECK(smc_init(&s, &p) == SMC_PARAMS_OK, "line %d", lineno);

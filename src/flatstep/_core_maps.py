@@ -28,11 +28,11 @@ from ._core_structs import (
 from .control.smc import FlatnessSMC
 from .model.flat import FlatFlag
 from .model.motor import MotorParams
-from .plan.rest_to_rest import RestToRest
+from .plan.protocol import Plan
 
 
-def plan_flag(plan: RestToRest, t: ArrayLike) -> FlatFlag:
-    """C ``plan_eval`` at times ``t``; the same values as :meth:`RestToRest.flag`."""
+def plan_flag(plan: Plan, t: ArrayLike) -> FlatFlag:
+    """C ``plan_eval`` at times ``t``; the same values as ``plan.flag`` (psi, or the plan's table)."""
     t_arr = np.asarray(t, dtype=np.float64)
     tv = _vec(t_arr)
     out = np.empty((tv.size, 6))
@@ -106,7 +106,7 @@ def smc_voltages(controller: FlatnessSMC, t: ArrayLike, x: ArrayLike, ddtheta: O
     return np.ascontiguousarray(v.T), status
 
 
-def plan_to_state(plan: RestToRest, motor: MotorParams, t: ArrayLike, load_torque: float = 0.0) -> tuple[Array, Array]:
+def plan_to_state(plan: Plan, motor: MotorParams, t: ArrayLike, load_torque: float = 0.0) -> tuple[Array, Array]:
     """C ``arrays_plan_flat``: the planned state (4, n) and feedforward voltages (2, n) at the times ``t`` (1-D).
 
     Plan and flat map run in one C loop; the values are those of ``flat_to_state(plan_flag(plan, t), motor)``.

@@ -325,7 +325,7 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         c.plant = _plant_fields(r["motor"], r["load"], r.get("effects"))
         c.loop = _loop_fields(ctrl.motor, r["Ts"], r["substeps"], r.get("drive"), r.get("sensors"),
                               r.get("observer"), r.get("compute_delay", False), getattr(ctrl, "observer_torques", None))
-        c.reference = ctrl.plan.as_dict()
+        c.reference = ctrl.plan.c_plan()
         c.n_periods = r["n_periods"]
         c.x0 = [float(v) for v in r["x0"]]
         c.noise = _in(noise)

@@ -18,8 +18,7 @@ from .control.smc import FlatnessSMC
 from .errors import RunError
 from .model.motor import MotorParams
 from .model.plant import PlantEffects
-from .plan.piecewise import PiecewisePlan
-from .plan.rest_to_rest import RestToRest
+from .plan.protocol import Plan
 from .validate import check_positive
 
 Array = NDArray[np.float64]
@@ -91,9 +90,9 @@ def motor_struct(m: MotorParams) -> CData:
     return ffi.new("struct motor_params *", _motor(m))
 
 
-def plan_struct(p: RestToRest) -> CData:
-    """A ``struct plan`` holding ``p``."""
-    return ffi.new("struct plan *", p.as_dict())
+def plan_struct(p: Plan) -> CData:
+    """A ``struct plan`` holding ``p`` (its table, if any, kept alive by ``p``)."""
+    return ffi.new("struct plan *", p.c_plan())
 
 
 def _smc_params(controller: FlatnessSMC, v_limit: float, rho_min: float) -> dict[str, Any]:
@@ -123,17 +122,14 @@ def controller_struct(controller: Controller) -> BoundController:
     """The C twin of a Python controller, initialised and bound into the run loops' interface (controller.h).
 
     Any controller with ``c_name`` (its C module: ``struct <c_name>``, ``<c_name>_init``,
-    ``<c_name>_controller``) and ``c_params()`` (the fields of ``struct <c_name>_params``) runs on the C
-    engine; the binding knows no controller by name.
+    ``<c_name>_controller``) and ``c_params()`` (the fields of ``struct <c_name>_params``, its plan as
+    ``plan.c_plan()`` gives it) runs on the C engine, on any plan; the binding knows no controller by name.
     """
     name = getattr(controller, "c_name", None)
     if name is None or not hasattr(lib, f"{name}_init"):
         raise ValueError(f"{type(controller).__name__} has no C implementation (c_name={name!r}); "
                          "run it on engine='python'")
     params = controller.c_params()
-    if isinstance(controller.plan, PiecewisePlan) and "traj" not in params:
-        raise ValueError(f"{type(controller).__name__}'s C twin tracks the paper's move only, not a segment table "
-                         f"({controller.plan.n} segments): run it on engine='python', or use FlatnessSMC")
     state = ffi.new(f"struct {name} *")
     err = getattr(lib, f"{name}_init")(state, ffi.new(f"struct {name}_params *", params))
     if err != 0:

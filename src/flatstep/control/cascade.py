@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
-from ..plan.rest_to_rest import RestToRest
+from ..plan.protocol import Plan
 from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, pi_integrate, pi_output
 
@@ -84,7 +84,7 @@ class CascadeFOC(BaselineController[CascadeGains]):
     ----------
     motor : MotorParams
         The controller's nominal model.
-    plan : RestToRest
+    plan : Plan
         The move.
     gains : CascadeGains
         The bandwidths of the loops.
@@ -106,7 +106,7 @@ class CascadeFOC(BaselineController[CascadeGains]):
     #: Ts [s]: the cascade is a sampled law, never continuous (the base class allows ``None``).
     control_period: float
 
-    def __init__(self, motor: MotorParams, plan: RestToRest, gains: CascadeGains, *, control_period: float,
+    def __init__(self, motor: MotorParams, plan: Plan, gains: CascadeGains, *, control_period: float,
                  measurement: str = "observer", v_limit: float = math.inf, torques: TorqueModel = NO_TORQUES,
                  model_observer: bool = False) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
@@ -155,7 +155,7 @@ class CascadeFOC(BaselineController[CascadeGains]):
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct cascade_params`` (csrc/cascade.h)."""
         g = self.gains
-        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+        return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(current_bandwidth=g.current_bandwidth, position_bandwidth=g.position_bandwidth,
                                decoupling=g.decoupling), torques=self.torques.as_dict(),
                     Ts=self.control_period, v_limit=self.v_limit)

@@ -55,7 +55,7 @@ from ..model.flat_dq import dq_voltages, inverse_park, park
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
-from ..plan.rest_to_rest import RestToRest
+from ..plan.protocol import Plan
 from ..validate import check_positive
 from .smc import MEASUREMENTS, SMCGains
 
@@ -142,7 +142,7 @@ class DQKmAdaptation:
         _check_period_and_hold("DQKmAdaptation", self.control_period, self.v_hold)
 
     @classmethod
-    def designed(cls, motor: MotorParams, plan: RestToRest, gains: SMCGains, control_period: float,
+    def designed(cls, motor: MotorParams, plan: Plan, gains: SMCGains, control_period: float,
                  v_hold: float) -> "DQKmAdaptation":
         r"""The estimate at the error dynamics' rate :math:`\omega_n`, excited above a tenth of the peak back EMF.
 
@@ -163,7 +163,7 @@ class DQFlatnessSMC:
     ----------
     motor : MotorParams
         The controller's model of the motor.
-    plan : RestToRest
+    plan : Plan
         The planned angle (its ``rho`` is not used).
     gains : SMCGains
         The design constants, as for the paper's law; ``hold_damping`` must be ``None``.
@@ -185,7 +185,7 @@ class DQFlatnessSMC:
     #: The C step's bound on hypot(va, vb) [V].
     c_v_limit = 1e3
 
-    def __init__(self, motor: MotorParams, plan: RestToRest, gains: SMCGains = PAPER_GAINS,
+    def __init__(self, motor: MotorParams, plan: Plan, gains: SMCGains = PAPER_GAINS,
                  measurement: str = "ideal", *, d_current: DCurrentPlan = ZERO_D_CURRENT,
                  torques: TorqueModel = NO_TORQUES, integral: Optional[DQIntegral] = None,
                  adaptation: Optional[DQKmAdaptation] = None) -> None:
@@ -315,7 +315,7 @@ class DQFlatnessSMC:
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct dq_smc_params`` (csrc/dq_smc.h) for this controller."""
         g = self.gains
-        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(), current=self.d_current.as_dict(),
+        return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(), current=self.d_current.as_dict(),
                     gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn, hold_damping=0.0),
                     torques=self.torques.as_dict(), measurement=1 if self.measurement == "model" else 0,
                     v_limit=self.c_v_limit,

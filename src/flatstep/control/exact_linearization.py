@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
-from ..plan.rest_to_rest import RestToRest
+from ..plan.protocol import Plan
 from ..validate import check_finite, check_positive
 from .loops import BaselineController, inverse_park, park
 
@@ -77,7 +77,7 @@ class ExactLinearization(BaselineController[LinearizationGains]):
     ----------
     motor : MotorParams
         The controller's nominal model.
-    plan : RestToRest
+    plan : Plan
         The move (its theta*, theta*', theta*'', theta*''').
     gains : LinearizationGains
         The poles of the linearized loops.
@@ -92,7 +92,7 @@ class ExactLinearization(BaselineController[LinearizationGains]):
     #: The C twin: csrc/exact_linearization.h.
     c_name = "exact_linearization"
 
-    def __init__(self, motor: MotorParams, plan: RestToRest, gains: LinearizationGains, *,
+    def __init__(self, motor: MotorParams, plan: Plan, gains: LinearizationGains, *,
                  measurement: str = "observer", control_period: Optional[float] = None,
                  v_limit: float = math.inf) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
@@ -119,6 +119,6 @@ class ExactLinearization(BaselineController[LinearizationGains]):
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct exact_linearization_params`` (csrc/exact_linearization.h)."""
         g = self.gains
-        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+        return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(wn=g.wn, xi=g.xi, p3=g.p3, pd=g.pd),
                     measurement=1 if self.measurement == "model" else 0, v_limit=self.v_limit)

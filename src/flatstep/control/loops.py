@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
-from ..plan.rest_to_rest import RestToRest
+from ..plan.protocol import Plan
 from ..validate import check_finite, check_positive
 from .smc import MEASUREMENTS
 
@@ -119,7 +119,7 @@ class BaselineController(Generic[GainsT]):
     its control period (``None``: continuous) and the bus its anti-windup knows.
     """
 
-    def __init__(self, motor: MotorParams, plan: RestToRest, gains: GainsT, *, measurement: str,
+    def __init__(self, motor: MotorParams, plan: Plan, gains: GainsT, *, measurement: str,
                  control_period: float | None, v_limit: float) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")

@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
-from ..plan.rest_to_rest import RestToRest
+from ..plan.protocol import Plan
 from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, pi_integrate, pi_output
 
@@ -59,13 +59,13 @@ class MicrostepGains:
 
 
 class Microstepping(BaselineController[MicrostepGains]):
-    r"""Open-loop microstepping driver following a :class:`~flatstep.plan.rest_to_rest.RestToRest` plan.
+    r"""Open-loop microstepping driver following any plan (:class:`~flatstep.plan.protocol.Plan`).
 
     Parameters
     ----------
     motor : MotorParams
         The driver's nominal model (only ``R``, ``L`` and ``Nr`` are used).
-    plan : RestToRest
+    plan : Plan
         The move; its :math:`\theta^*(t)` is the commanded angle, its :math:`\rho^*(t)` the run current.
     gains : MicrostepGains
         The current-loop bandwidth and the feedforward switch.
@@ -83,7 +83,7 @@ class Microstepping(BaselineController[MicrostepGains]):
     #: Ts [s] of the current loops: the driver is a sampled law, never continuous (the base class allows ``None``).
     control_period: float
 
-    def __init__(self, motor: MotorParams, plan: RestToRest, gains: MicrostepGains, *, control_period: float,
+    def __init__(self, motor: MotorParams, plan: Plan, gains: MicrostepGains, *, control_period: float,
                  measurement: str = "model", v_limit: float = math.inf) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
                          v_limit=v_limit)
@@ -127,6 +127,6 @@ class Microstepping(BaselineController[MicrostepGains]):
 
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct microstep_params`` (csrc/microstep.h)."""
-        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(),
+        return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(current_bandwidth=self.gains.current_bandwidth, feedforward=self.gains.feedforward),
                     Ts=self.control_period, v_limit=self.v_limit)

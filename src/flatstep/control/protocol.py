@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
-from ..plan.piecewise import Plan, check_plan
+from ..plan.protocol import Plan, check_plan
 
 
 @runtime_checkable

@@ -53,7 +53,7 @@ from ..model.motor import MotorParams
 from ..model.motor import acceleration as motor_acceleration
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.loss_aware import LossAwareRho
-from ..plan.piecewise import PiecewisePlan, Plan
+from ..plan.protocol import Plan
 from ..validate import InputError, check_finite, check_quantity
 from .protocol import check_parts
 
@@ -101,15 +101,15 @@ class SMCGains:
 
 
 class FlatnessSMC:
-    """Flatness-based sliding-mode controller tracking a plan: the paper's move or a segment table.
+    """Flatness-based sliding-mode controller tracking any plan (:class:`~flatstep.plan.protocol.Plan`).
 
     Parameters
     ----------
     motor : MotorParams
         The controller's model of the motor (may differ from the plant's).
-    plan : RestToRest or PiecewisePlan
-        The planned flat-output trajectory (:class:`~flatstep.plan.rest_to_rest.RestToRest` or
-        :class:`~flatstep.plan.piecewise.PiecewisePlan`; the hold targets its end points).
+    plan : Plan
+        The planned flat-output trajectory, any :class:`~flatstep.plan.protocol.Plan` (the hold targets its
+        end points).
     gains : SMCGains
         The design constants (default: the paper's).
     measurement : str
@@ -238,9 +238,7 @@ class FlatnessSMC:
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct smc_params`` (csrc/smc.h) for this controller."""
         g = self.gains
-        # a table is passed by pointer (csrc/trajectory.h), the plan then holding its end points
-        table = dict(traj=self.plan.c_struct()) if isinstance(self.plan, PiecewisePlan) else {}
-        return dict(motor=self.motor.as_dict(), plan=self.plan.as_dict(), **table,
+        return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(W1=g.W1, W2=g.W2, eps1=g.eps1, eps2=g.eps2, xi=g.xi, wn=g.wn,
                                hold_damping=g.hold_damping or 0.0),
                     # "ideal" and "observer" both read theta'' from y[4]; only "model" computes it from the state

@@ -22,7 +22,7 @@ from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.loss_aware import LossAwareRho
-from ..plan.rest_to_rest import RestToRest
+from ..plan.protocol import Plan
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
 from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
@@ -72,7 +72,7 @@ def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[floa
     return lam, WN_OVER_LAMBDA * lam
 
 
-def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_period: float | None,
+def make_controller(kind: str, motor: MotorParams, plan: Plan, *, control_period: float | None,
                     measurement: str, smc_gains: SMCGains = _PAPER_SMC_GAINS, v_limit: float = math.inf,
                     bandwidth_scale: float = 1.0, compute_delay: bool = False,
                     torques: Optional[TorqueModel] = None,

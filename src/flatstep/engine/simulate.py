@@ -28,7 +28,7 @@ from ..loop.reference import DriveLoop, run_reference
 from ..model.flat import flat_to_state, polar
 from ..model.motor import MotorParams, rhs
 from ..model.plant import Plant
-from ..plan.piecewise import Plan, check_plan
+from ..plan.protocol import Plan, check_plan
 from ..validate import check_quantity
 from ..validate.limits import check_resources, check_timing, estimate
 from .result import SimResult
@@ -64,7 +64,7 @@ def simulate(plant: Union[Plant, MotorParams], plan: Plan, controller: Optional[
     plant : Plant or MotorParams
         The simulated plant (:class:`~flatstep.model.plant.Plant`: motor, effects, load); a bare
         :class:`~flatstep.model.motor.MotorParams` is a plant with no effects and no load.
-    plan : RestToRest or PiecewisePlan
+    plan : Plan
         The planned move (the paper's, or a segment table such as a waypoint sequence); the run starts from
         ``x0``, by default the plan's start equilibrium.
     controller : Controller, optional

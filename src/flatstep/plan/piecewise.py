@@ -311,12 +311,20 @@ class PiecewisePlan:
         return np.array([*equilibrium_currents(self.theta2, self.rho2, Nr), 0.0, self.theta2])
 
     def as_dict(self) -> dict[str, float]:
-        """The end points as the C ``struct plan`` takes them (the hold's target, a result's ``meta['plan']``)."""
+        """The end points by name (the hold's target, a result's ``meta['plan']``); :meth:`c_plan` adds the table."""
         return dict(theta1=self.theta1, theta2=self.theta2, rho1=self.rho1, rho2=self.rho2, t0=self.t0, tf=self.tf)
 
     def segments(self) -> dict[str, list[Any]]:
         """The table for JSON: breaks and both coefficient tables."""
         return dict(breaks=self.breaks.tolist(), theta=self.theta.tolist(), rho=self.rho.tolist())
+
+    def to_table(self) -> "PiecewisePlan":
+        """The plan itself: it is a table."""
+        return self
+
+    def c_plan(self) -> dict[str, Any]:
+        """The fields of the C ``struct plan``: the end points and the table (``traj``, :meth:`c_struct`)."""
+        return {**self.as_dict(), "traj": self.c_struct()}
 
     def c_struct(self) -> Any:
         """A C ``struct traj *`` (csrc/trajectory.h) over this table, built once and kept alive with the plan."""
@@ -329,13 +337,3 @@ class PiecewisePlan:
             self._c["traj"] = ffi.new("struct traj *", dict(n=self.n, breaks=ptrs[0], theta=ptrs[1], rho=ptrs[2]))
         return self._c["traj"]
 
-
-#: A plan the controllers track: the paper's rest-to-rest move or a segment table.
-Plan = Union[RestToRest, PiecewisePlan]
-
-
-def check_plan(plan: object) -> None:
-    """Raise a ValueError unless ``plan`` is a move a controller can track (it has ``flag``, ``x0``, ``t0``, ``tf``)."""
-    if not all(hasattr(plan, a) for a in ("flag", "x0", "t0", "tf")):
-        raise ValueError(f"plan={plan!r} is not a flatstep plan (a RestToRest from point_to_point, or a trajectory "
-                         "with flag(t), x0(Nr), t0 and tf)")

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.polynomial import Polynomial
@@ -22,6 +23,9 @@ from ..model.equilibria import equilibrium_currents, stable_angle
 from ..model.flat import FlatFlag
 from ..model.motor import MotorParams
 from ..validate import check_finite, check_quantity
+
+if TYPE_CHECKING:  # piecewise imports this module
+    from .piecewise import PiecewisePlan
 
 #: Coefficients r1..r6 of eq. (17).
 PAPER_R = (252.0, 1050.0, 1800.0, 1575.0, 700.0, 126.0)
@@ -116,6 +120,16 @@ class RestToRest:
     def as_dict(self) -> dict[str, float]:
         """The plan's fields by name, as the C ``struct plan`` and a result's metadata take them."""
         return dict(theta1=self.theta1, theta2=self.theta2, rho1=self.rho1, rho2=self.rho2, t0=self.t0, tf=self.tf)
+
+    def to_table(self) -> PiecewisePlan:
+        """The move as a segment table: psi's degree-10 segment on [t0, tf] between the two holds."""
+        from .piecewise import PiecewisePlan
+
+        return PiecewisePlan.from_rest_to_rest(self)
+
+    def c_plan(self) -> dict[str, Any]:
+        """The fields of the C ``struct plan``: the end points, no table (the C core evaluates psi, as :meth:`flag`)."""
+        return self.as_dict()
 
 
 #: The paper's move (Section 3): 0 -> 0.02 rad at constant rho = 0.4 A, t0 = 0.02 s, tf = 0.04 s.
