@@ -107,7 +107,7 @@ def test_exact_linearization_error_obeys_the_placed_poles(motor):
 
 
 @pytest.mark.parametrize("build, match", [
-    (lambda m: make_controller("pid", m, SLOW, control_period=TS, measurement="ideal"), "controller type 'pid'"),
+    (lambda m: make_controller("pid", m, SLOW, control_period=TS, measurement="ideal"), "controller type='pid' is unknown"),
     (lambda m: make_controller("cascade", m, SLOW, control_period=None, measurement="ideal"), "tuned from the control period"),
     (lambda m: CascadeGains(6000.0, -1.0), "position_bandwidth=-1.0"),
     (lambda m: MicrostepGains(0.0), "current_bandwidth=0.0"),

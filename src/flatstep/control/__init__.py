@@ -5,9 +5,10 @@ from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .protocol import Controller, SlidingController, StaticController, is_static
 from .smc import MEASUREMENTS, FlatnessSMC, SMCGains
+from .spec import LAWS, ControllerSpec
 from .tuning import CONTROLLER_TYPES, LABELS, make_controller
 
 __all__ = ["Controller", "StaticController", "SlidingController", "is_static", "FlatnessSMC", "SMCGains",
            "MEASUREMENTS", "DQFlatnessSMC", "DQIntegral", "DQKmAdaptation", "Microstepping", "MicrostepGains",
            "CascadeFOC", "CascadeGains", "ExactLinearization", "LinearizationGains", "CONTROLLER_TYPES", "LABELS",
-           "make_controller"]
+           "make_controller", "ControllerSpec", "LAWS"]

@@ -30,14 +30,14 @@ from .dq_smc import DQFlatnessSMC, DQIntegral, DQKmAdaptation
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
 from .smc import FlatnessSMC, SMCGains
+from .spec import ALIASES, ControllerSpec
 
-#: The controllers a scenario can name (``[controller] type``), the paper's first. The ``_ff`` types are the
-#: flatness laws and the cascade with the scenario's torque model (``[feedforward]``, a
-#: :class:`~flatstep.model.torque_model.TorqueModel`): the flatness laws' feedforward, the cascade's anti-cogging.
-CONTROLLER_TYPES = ("smc", "microstep", "cascade", "exact_linearization", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff",
-                    "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold",
-                    "dq_smc_i_ff_km")
-#: Short labels for tables and figures.
+#: The controllers a scenario can name by their historical type names (``[controller] type``), the paper's first;
+#: each is a :class:`~flatstep.control.spec.ControllerSpec` (:data:`~flatstep.control.spec.ALIASES`), and any other
+#: valid combination of a law and its options is named ``law+option+...``. The ``_ff`` types know the scenario's
+#: torque model (``[feedforward]``): the flatness laws' feedforward, the cascade's anti-cogging.
+CONTROLLER_TYPES = tuple(ALIASES)
+#: Short labels for tables and figures (:func:`label` for any name).
 LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
           "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q SMC + ff",
@@ -46,13 +46,11 @@ LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade"
           "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff",
           "smc_ff_hold": "flatness SMC+ff, hold", "dq_smc_i_ff_km": "flatness d-q I+ff+Km"}
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
-SMC_TYPES = ("smc", "dq_smc", "smc_la", "smc_ff", "dq_smc_ff", "smc_la_ff", "dq_smc_i", "dq_smc_i_ff", "smc_ff_hold",
-             "dq_smc_i_ff_km")
+SMC_TYPES = tuple(k for k, s in ALIASES.items() if s.sliding)
 #: The flatness types that can run in continuous time (no integral or estimate advancing by the control period).
-CONTINUOUS_TYPES = tuple(k for k in SMC_TYPES if k not in ("dq_smc_i", "dq_smc_i_ff", "dq_smc_i_ff_km"))
+CONTINUOUS_TYPES = tuple(k for k, s in ALIASES.items() if s.continuous)
 #: The types that need a torque model.
-FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_model", "dq_smc_i_ff", "smc_ff_hold",
-                     "dq_smc_i_ff_km")
+FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
 #: The damping ratio of the ``smc_ff_hold`` type's detent hold when the scenario's gains give none: critical
 #: damping of the magnetic spring (docs/comparison.md, "At rest on the paper's move").
 REST_HOLD_DAMPING = 1.0
@@ -60,6 +58,11 @@ REST_HOLD_DAMPING = 1.0
 _PAPER_SMC_GAINS = SMCGains()
 #: What :func:`make_controller` returns.
 AnyController = Union[FlatnessSMC, DQFlatnessSMC, Microstepping, CascadeFOC, ExactLinearization]
+
+
+def label(kind: str) -> str:
+    """The label of a controller name (:data:`LABELS`, or the spec's own for a ``law+option+...`` name)."""
+    return LABELS.get(kind) or ControllerSpec.parse(kind).label()
 
 
 def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
@@ -95,38 +98,37 @@ def make_controller(kind: str, motor: MotorParams, plan: Plan, *, control_period
     ``dq_smc_i_ff`` with the online estimate of ``Km`` (:meth:`~flatstep.control.dq_smc.DQKmAdaptation.designed`:
     at the integral's rate, held as the integral is).
     """
-    if kind not in CONTROLLER_TYPES:
-        raise ValueError(f"controller type {kind!r} is unknown; valid: {CONTROLLER_TYPES}")
-    if kind in FEEDFORWARD_TYPES and torques is None:
+    spec = ControllerSpec.parse(kind, "controller type")
+    if spec.needs_torques and torques is None:
         raise ValueError(f"controller type {kind!r} needs the torques it knows beyond eq. (1): give a TorqueModel "
-                         "(a [feedforward] table in a scenario file), or use the type without '_ff'")
-    known = torques if kind in FEEDFORWARD_TYPES and torques is not None else NO_TORQUES
-    if kind == "smc_ff_hold":
-        hold = smc_gains if smc_gains.hold_damping is not None else replace(smc_gains, hold_damping=REST_HOLD_DAMPING)
-        return FlatnessSMC(motor, plan, hold, measurement, torques=known)
-    if kind in ("smc", "smc_ff", "smc_la", "smc_la_ff"):
-        return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known,
-                           loss_aware=(loss_aware or LossAwareRho.for_plan(plan)) if kind in ("smc_la", "smc_la_ff")
+                         "(a [feedforward] table in a scenario file), or use the type without feedforward")
+    known = torques if spec.needs_torques and torques is not None else NO_TORQUES
+    if spec.law == "smc":
+        gains = smc_gains
+        if spec.hold and smc_gains.hold_damping is None:
+            gains = replace(smc_gains, hold_damping=REST_HOLD_DAMPING)
+        return FlatnessSMC(motor, plan, gains, measurement, torques=known,
+                           loss_aware=(loss_aware or LossAwareRho.for_plan(plan)) if spec.rho_plan == "loss_aware"
                            else None)
-    if kind in ("dq_smc", "dq_smc_ff"):
+    if spec.law == "dq_smc" and not spec.integral:
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:
         raise ValueError(f"controller type {kind!r} is tuned from the control period (lambda = 0.3/Ts): give one "
                          f"([drive] control_rate); only the flatness types {CONTINUOUS_TYPES} have gains of their own "
                          "for continuous time")
-    if kind in ("dq_smc_i", "dq_smc_i_ff", "dq_smc_i_ff_km"):
+    if spec.law == "dq_smc":
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current,
                              integral=DQIntegral.designed(smc_gains, control_period, v_limit),
                              adaptation=DQKmAdaptation.designed(motor, plan, smc_gains, control_period, v_limit)
-                             if kind == "dq_smc_i_ff_km" else None)
+                             if spec.km_estimate else None)
     scale = check_positive("bandwidth_scale", bandwidth_scale)
     lam, wn = (scale * w for w in bandwidths(control_period, compute_delay))
-    if kind == "microstep":
+    if spec.law == "microstep":
         return Microstepping(motor, plan, MicrostepGains(lam), control_period=control_period,
                              measurement=measurement, v_limit=v_limit)
-    if kind in ("cascade", "cascade_ff", "cascade_model"):
+    if spec.law == "cascade":
         return CascadeFOC(motor, plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn),
                           control_period=control_period, measurement=measurement, v_limit=v_limit, torques=known,
-                          model_observer=kind == "cascade_model")
+                          model_observer=spec.observer_torques)
     return ExactLinearization(motor, plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam),
                               control_period=control_period, measurement=measurement, v_limit=v_limit)
