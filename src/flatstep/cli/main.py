@@ -33,6 +33,7 @@ from .compare import add_compare_command
 from .design import add_design_command
 from .flags import count, out_dir, quantity
 from .identify import add_identify_command
+from .motor import add_motor_command
 from .plan import add_plan_command, run_plan_file
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
@@ -152,8 +153,8 @@ DESCRIPTION = """Plan and control stepping motors by differential flatness and s
 Commands: reproduce (the paper's figures), simulate (one move), design (gains for a drive), robustness (a
 scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
 from a recording), calibrate (detent, friction and load from the drive's own sensors), plan (the fastest
-moves through waypoints under the motor's limits), bench (benchmarks). 'flatstep COMMAND --help' lists a
-command's flags.
+moves through waypoints under the motor's limits), motor (a motor from its datasheet, with what was assumed),
+bench (benchmarks). 'flatstep COMMAND --help' lists a command's flags.
 
 Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
 move; 4 a controller faulted; 5 a run stopped before its end (non-finite state, or the continuous law
@@ -227,6 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_identify_command(sub)
     add_plan_command(sub)
     add_calibrate_command(sub)
+    add_motor_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)",
                          description="Benchmarks side by side in one run: medians and their ratios against each "

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Callable, Union
+from typing import Any, Callable, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -60,6 +60,17 @@ class MotorParams:
         except (KeyError, TypeError):
             raise ValueError(f"unknown motor preset {name!r}; valid presets: {sorted(PRESETS)}") from None
 
+    @classmethod
+    def from_datasheet(cls, **datasheet: Any) -> "MotorParams":
+        """The parameters from a datasheet's figures.
+
+        :func:`flatstep.model.datasheet.from_datasheet` takes the same keywords and also returns what it assumed
+        and how sure that is.
+        """
+        from .datasheet import from_datasheet
+
+        return from_datasheet(**datasheet).params
+
     def replace(self, **changes: float) -> "MotorParams":
         """Return a copy with some parameters changed (validated again)."""
         unknown = set(changes) - set(asdict(self))
@@ -77,7 +88,8 @@ class MotorParams:
 #: rotor inertia 0.056 kg cm^2; standstill torque 0.38 N m; cogging torque 0.014-0.016 N m), technical
 #: data at https://infosys.beckhoff.com/content/1033/as1000_ba/1426750347.html . Km is the standstill
 #: torque over the current-vector norm with both phases at rated current, 0.38 / (sqrt(2) * 1.0 A); B is
-#: not in the datasheet and is taken as 1e-4 N m s/rad, the paper's value.
+#: not in the datasheet and is taken as 1e-4 N m s/rad, the paper's value: what
+#: ``MotorParams.from_datasheet`` derives from examples/motors/beckhoff-as1010-0000.toml (docs/motors.md).
 PRESETS: dict[str, MotorParams] = {
     "paper": MotorParams(R=8.4, L=0.010, Km=0.05, J=3.6e-6, B=1e-4, Nr=50),
     "nema17": MotorParams(R=4.10, L=9.50e-3, Km=0.38 / math.sqrt(2.0), J=5.6e-6, B=1e-4, Nr=50),

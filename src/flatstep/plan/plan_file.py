@@ -4,7 +4,7 @@
 
     name = "ten waypoints"
     [motor]
-    preset = "nema17"          # or R, L, Km, J, B, Nr
+    preset = "nema17"          # or R, L, Km, J, B, Nr, or datasheet keys (docs/motors.md)
     [limits]                   # flatstep.plan.limits.MotorLimits
     v_bus = 24.0
     i_max = 1.0
@@ -36,6 +36,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
+from ..model.datasheet import motor_from_table, uses_datasheet
 from ..model.motor import MotorParams
 from ..validate import InputError, check_quantity
 from ..validate.limits import MAX_OPTIMAL_MOVES
@@ -81,6 +82,8 @@ def _check(where: str, table: dict[str, Any], section: str) -> dict[str, Any]:
 
 def _motor(where: str, table: dict[str, Any]) -> MotorParams:
     """The [motor] section: a preset, parameters, or a preset with some parameters changed."""
+    if uses_datasheet(table):
+        return motor_from_table(table, where).params
     table = dict(table)
     base = MotorParams.preset(str(table.pop("preset", "nema17")))
     try:

@@ -22,6 +22,7 @@ from ..loop.drive import Drive
 from ..loop.observers import Observer
 from ..loop.reference import DriveLoop
 from ..loop.sensors import Sensors
+from ..model.datasheet import DATASHEET_KEYS, motor_from_table, uses_datasheet
 from ..model.motor import PRESETS, MotorParams
 from ..model.plant import Plant, PlantEffects
 from ..model.torque_model import TorqueModel
@@ -37,7 +38,7 @@ T = TypeVar("T")
 SECTIONS: dict[str, tuple[str, ...]] = {
     "": ("name", "description", "t_end", "motor", "plant", "plan", "controller", "drive", "sensors", "observer",
          "load", "feedforward", "robustness"),
-    "motor": MOTOR_KEYS,
+    "motor": MOTOR_KEYS + tuple(DATASHEET_KEYS),
     "plant": MOTOR_KEYS + ("scale",) + EFFECT_KEYS,
     "plan": ("theta1", "theta2", "rho1", "rho2", "t0", "tf"),
     "controller": ("type", "bandwidth_scale", "measurement", "W1", "W2", "eps1", "eps2", "xi", "wn", "hold_damping",
@@ -178,7 +179,8 @@ def load_scenario(path: str | Path) -> tuple[Scenario, Optional[Robustness]]:
         if key in doc and not isinstance(doc[key], str):
             raise InputError(key, doc[key], f"{where}:{key}: {key}={doc[key]!r} must be a string")
     sec = {name: _check_keys(where, doc.get(name, {}), name) for name in SECTIONS if name}
-    motor = _motor(where, sec["motor"], "motor", MotorParams.preset("paper"))
+    motor = (motor_from_table(sec["motor"], where).params if uses_datasheet(sec["motor"])
+             else _motor(where, sec["motor"], "motor", MotorParams.preset("paper")))
     plant_t = {k: v for k, v in sec["plant"].items() if k not in EFFECT_KEYS}
     plant = _motor(where, plant_t, "plant", motor) if plant_t else None
     effects_t = {k: v for k, v in sec["plant"].items() if k in EFFECT_KEYS}
