@@ -45,13 +45,15 @@ def builtin_motors() -> list[tuple[str, MotorParams, float]]:
 
 
 def file_motors(paths: list[str]) -> list[tuple[str, MotorParams, float]]:
-    """(name, motor, i_max) from datasheet files (flatstep.model.datasheet), i_max their rated current."""
-    from flatstep.model.datasheet import load_datasheet  # type: ignore[attr-defined]
+    """(name, motor, i_max) from datasheet files (flatstep.model.datasheet), i_max their rated current norm."""
+    import tomllib
+
+    from flatstep.model.datasheet import motor_from_table
 
     out = []
     for p in paths:
-        sheet = load_datasheet(p)
-        out.append((Path(p).stem, sheet.motor, sheet.rated_current))
+        model = motor_from_table(tomllib.loads(Path(p).read_text())["motor"], p)
+        out.append((Path(p).stem, model.params, model.rated_rho))
     return out
 
 

@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from itertools import product
+from pathlib import Path
 from typing import Any, Callable, Optional
 
 import numpy as np
@@ -39,6 +41,11 @@ from ..model.motor import MotorParams
 from ..plan.limits import COMMUTATION_ANGLE, MotorLimits
 from ..plan.piecewise import PiecewisePlan
 from ..validate import check_finite
+
+if sys.version_info >= (3, 11):
+    import tomllib as _toml
+else:  # pragma: no cover
+    import tomli as _toml
 
 #: The parameters the uncertainty scales, as :mod:`flatstep.studies.robustness` names them.
 PARAMETERS = ("R", "L", "Km", "J")
@@ -212,25 +219,25 @@ def binding(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, limits: Op
             cases: list[Case]) -> str:
     r"""The limit that binds where the first case went wrong (one of :data:`ADVICE`'s keys).
 
-    The plan is looked at over the 5 ms before that instant: a speed near the commutation cap
-    (:data:`~flatstep.plan.limits.COMMUTATION_ANGLE` electrical radians per period) binds the commutation rate; a
-    torque demand near :math:`K_m\\rho^*\\sin\\alpha_{max}` the torque angle; a feedforward near the bus the
-    voltage; a current near ``i_max`` the current; none of these, tracking on the drive.
+    The plan is looked at over the 2 ms before that instant: a torque demand near
+    :math:`K_m\rho^*\sin\alpha_{max}` binds the torque angle; a speed near the commutation cap
+    (:data:`~flatstep.plan.limits.COMMUTATION_ANGLE` electrical radians per period) the commutation rate; a
+    feedforward near the bus the voltage; a current near ``i_max`` the current; none of these, tracking on the drive.
     """
     bad = [c for c in cases if c.status != "ok"]
     times = [c.t_wrong for c in bad if c.t_wrong is not None]
     tb = min(times) if times else plan.tf
-    t = np.linspace(max(plan.t0, tb - 5e-3), min(max(tb, plan.t0 + 1e-6), plan.tf), 200)
+    t = np.linspace(max(plan.t0, tb - 2e-3), min(max(tb, plan.t0 + 1e-6), plan.tf), 200)
     f = plan.flag(t)
+    torque_ratio = float(np.max(np.abs(motor.J * f.ddtheta + motor.B * f.dtheta) / (motor.Km * f.rho)))
+    alpha = limits.torque_angle_max if limits is not None else 1.2
+    if torque_ratio >= 0.9 * math.sin(alpha):
+        return "torque angle"
     speed = float(np.max(np.abs(f.dtheta)))
     angle = motor.Nr * speed * loop.control_period
     cap = limits.speed_max if limits is not None and limits.speed_max else math.inf
     if angle >= 0.9 * COMMUTATION_ANGLE or speed >= 0.95 * cap:
         return "commutation rate"
-    torque_ratio = float(np.max(np.abs(motor.J * f.ddtheta + motor.B * f.dtheta) / (motor.Km * f.rho)))
-    alpha = limits.torque_angle_max if limits is not None else 1.2
-    if torque_ratio >= 0.9 * math.sin(alpha):
-        return "torque angle"
     v_bus = limits.v_bus if limits is not None else (loop.drive.v_bus if loop.drive is not None else math.inf)
     emf = motor.Km * speed + motor.Nr * speed * motor.L * float(np.max(f.rho)) + motor.R * float(np.max(f.rho))
     if emf >= 0.75 * v_bus:
@@ -301,3 +308,99 @@ def plan_for_drive(replan: Callable[[MotorLimits], PiecewisePlan], motor: MotorP
             assert verdict.binds is not None  # an unverified verdict names what binds
             limits = back_off(limits, verdict.binds, plan)
     return None, limits, replace(verdict, rounds=history)
+
+
+def replan_steps(plan: PiecewisePlan, steps: list[tuple[str, float, float]], motor: MotorParams,
+                 ) -> Callable[[MotorLimits], tuple[PiecewisePlan, list[tuple[str, float, float]]]]:
+    """A planner that makes a time-optimal sequence's moves and dwells again under other limits.
+
+    ``steps`` are a plan file's (label, start, duration): a ``dwell`` holds its angle as long; any other step is a
+    move from the plan's angle at its start to its angle at its end (a move through via points included: the
+    time-optimal planner makes it one move).
+    """
+    from ..plan.time_optimal import time_optimal
+
+    ends = plan.theta_deriv(np.array([[s, s + d] for _, s, d in steps]).ravel(), 0).reshape(-1, 2)
+
+    def make(limits: MotorLimits) -> tuple[PiecewisePlan, list[tuple[str, float, float]]]:
+        parts, out, t = [], [], plan.t0
+        for (label, _, duration), (a, b) in zip(steps, ends, strict=True):
+            if label.startswith("dwell"):
+                part = PiecewisePlan.hold(float(a), limits.i_hold, t, t + duration)
+            else:
+                part = time_optimal(float(b - a), motor, limits, theta1=float(a), t0=t)
+            parts.append(part)
+            out.append((label, t, part.tf - part.t0))
+            t = part.tf
+        return PiecewisePlan.concatenate(parts), out
+
+    return make
+
+
+def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[Any, dict[str, Any]]:
+    """A plan file's plan checked on its drive, and backed off when it is a time-optimal sequence.
+
+    The drive is the file's (``pf.loop`` if the file has one, else its [simulate] control rate, its [limits] bus
+    and :class:`~flatstep.loop.sensors.Sensors`' defaults). Returns the plan file with the verified plan (or
+    the file's own, unverified) and plan.json's ``verify`` entry.
+    """
+    assert pf.limits is not None, "the check runs a plan on the drive of its [limits] bus"
+    loop = getattr(pf, "loop", None) or DriveLoop.at(pf.simulate["control_rate"], substeps=4,
+                                                      drive=Drive(v_bus=pf.limits.v_bus), sensors=Sensors())
+    if planner != "time_optimal":
+        verdict = verify_plan(pf.plan, pf.motor, loop, uncertainty=uncertainty, limits=pf.limits)
+        return pf, dict(verdict.as_dict(), backed_off=False)
+    made: dict[str, Any] = {}
+    make = replan_steps(pf.plan, pf.steps, pf.motor)
+
+    def replan(limits: MotorLimits) -> PiecewisePlan:
+        made["plan"], made["steps"] = make(limits) if limits is not pf.limits else (pf.plan, pf.steps)
+        return made["plan"]
+
+    plan, limits, verdict = plan_for_drive(replan, pf.motor, pf.limits, loop, uncertainty)
+    info = dict(verdict.as_dict(), backed_off=len(verdict.rounds) > 1)
+    if plan is None:
+        counts = loop.sensors.encoder_counts if loop.sensors is not None else None
+        info["suggested_limits"] = MotorLimits.for_drive(pf.motor, v_bus=pf.limits.v_bus, i_max=pf.limits.i_max,
+                                                         control_rate=1.0 / loop.control_period,
+                                                         encoder_counts=counts, uncertainty=uncertainty).as_dict()
+        return pf, info
+    info["limits"] = limits.as_dict()
+    return replace(pf, plan=plan, limits=limits, steps=made["steps"]), info
+
+
+def verify_on_drive(path: str, pf: Any, report: dict[str, Any], skip: bool = False) -> Any:
+    """``flatstep plan``'s check: fill plan.json's ``duration`` and ``verify``, print one line, return the plan file.
+
+    A plan within its limits that the drive does not keep on every case is refused (``report["feasible"]`` set
+    to false) with what binds and what to change; a time-optimal sequence is backed off first
+    (:func:`check_plan_file`). ``skip`` (``--no-verify``) says so and leaves the plan unverified.
+    """
+    if skip:
+        report.update(duration=pf.plan.tf - pf.plan.t0, verify=dict(skipped=True))
+        print("  not verified on the drive (--no-verify)")
+        return pf
+    planner = _toml.loads(Path(path).read_text()).get("plan", {}).get("planner", "time_optimal")
+    before = pf.plan.tf - pf.plan.t0
+    pf, info = check_plan_file(pf, str(planner))
+    report.update(duration=pf.plan.tf - pf.plan.t0, verify=info, feasible=bool(info["verified"]),
+                  total_duration=pf.plan.tf - pf.plan.t0, tf=pf.plan.tf, segments=pf.plan.n,
+                  steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps])
+    cases = info["cases"]
+    bad = [c for c in cases if c["status"] != "ok"]
+    where = f"{len(cases)} plants (nominal and +-10 % on R, L, Km, J), {info['seconds']:.2f} s"
+    if info["verified"]:
+        slower = (f"; backed off from {before:.6g} s to {pf.plan.tf - pf.plan.t0:.6g} s"
+                  if info["backed_off"] else "")
+        print(f"  verified on the drive: {where}, every run ok, worst |theta - theta*| "
+              f"{info['worst_error']:.3g} rad{slower}")
+    else:
+        print(f"  not verified on the drive: {where}; {len(bad)} ended {', '.join(sorted({c['status'] for c in bad}))} "
+              f"(worst |theta - theta*| {info['worst_error']:.3g} rad) after {len(info['rounds'])} round(s); "
+              f"{info['binds']} binds: {info['advice']}")
+        if "suggested_limits" in info:
+            lim = info["suggested_limits"]
+            print("  limits derived for this drive (MotorLimits.for_drive): " +
+                  ", ".join(f"{k} = {lim[k]:.4g}" for k in ("i_hold", "speed_corner", "torque_angle_max", "v_use",
+                                                           "speed_max")))
+    return pf
