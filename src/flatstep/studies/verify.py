@@ -395,8 +395,9 @@ def verify_on_drive(path: str, pf: Any, report: dict[str, Any], skip: bool = Fal
         print(f"  verified on the drive: {where}, every run ok, worst |theta - theta*| "
               f"{info['worst_error']:.3g} rad{slower}")
     else:
+        tried = f" after {len(info['rounds'])} plans" if info["rounds"] else ""
         print(f"  not verified on the drive: {where}; {len(bad)} ended {', '.join(sorted({c['status'] for c in bad}))} "
-              f"(worst |theta - theta*| {info['worst_error']:.3g} rad) after {len(info['rounds'])} round(s); "
+              f"(worst |theta - theta*| {info['worst_error']:.3g} rad){tried}; "
               f"{info['binds']} binds: {info['advice']}")
         if "suggested_limits" in info:
             lim = info["suggested_limits"]
