@@ -260,9 +260,17 @@ def back_off(limits: MotorLimits, binds: str, plan: PiecewisePlan) -> MotorLimit
     return replace(limits, **{name: value * factor})
 
 
+def tighter(limits: MotorLimits, other: MotorLimits) -> MotorLimits:
+    """``limits`` with the torque angle, bus fraction and speed cap of ``other`` where those are tighter."""
+    caps = [c for c in (limits.speed_max, other.speed_max) if c is not None]
+    return replace(limits, torque_angle_max=min(limits.torque_angle_max, other.torque_angle_max),
+                   v_use=min(limits.v_use, other.v_use), speed_max=min(caps) if caps else None)
+
+
 def plan_for_drive(replan: Callable[[MotorLimits], PiecewisePlan], motor: MotorParams, limits: MotorLimits,
                    loop: DriveLoop, uncertainty: float = 0.1, rounds: int = ROUNDS,
                    controller: Optional[Callable[[PiecewisePlan], Controller]] = None,
+                   derived: Optional[MotorLimits] = None,
                    ) -> tuple[Optional[PiecewisePlan], MotorLimits, Verdict]:
     """Plan with ``limits``, verify on the drive, back off the binding limit and re-plan, ``rounds`` times at most.
 
@@ -283,6 +291,9 @@ def plan_for_drive(replan: Callable[[MotorLimits], PiecewisePlan], motor: MotorP
         Back-off rounds after the first plan.
     controller : callable, optional
         ``controller(plan) -> Controller`` (the scenario's law); default :func:`drive_controller`.
+    derived : MotorLimits, optional
+        The limits derived for this drive (:meth:`MotorLimits.for_drive`): when the first plan fails, the second
+        is made within the :func:`tighter` of both, before the binding limit is backed off.
 
     Returns
     -------
@@ -306,7 +317,8 @@ def plan_for_drive(replan: Callable[[MotorLimits], PiecewisePlan], motor: MotorP
             return plan, limits, replace(verdict, rounds=history)
         if k < rounds:
             assert verdict.binds is not None  # an unverified verdict names what binds
-            limits = back_off(limits, verdict.binds, plan)
+            both = tighter(limits, derived) if derived is not None else limits
+            limits = both if k == 0 and both != limits else back_off(limits, verdict.binds, plan)
     return None, limits, replace(verdict, rounds=history)
 
 
@@ -340,6 +352,9 @@ def replan_steps(plan: PiecewisePlan, steps: list[tuple[str, float, float]], mot
 def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[Any, dict[str, Any]]:
     """A plan file's plan checked on its drive, and backed off when it is a time-optimal sequence.
 
+    The first plan is the file's; the second is made within the file's limits tightened to those derived for the drive
+    (:meth:`MotorLimits.for_drive`, ``derived`` of :func:`plan_for_drive`), then the binding limit is backed off.
+
     The drive is the file's (``pf.loop`` if the file has one, else its [simulate] control rate, its [limits] bus
     and :class:`~flatstep.loop.sensors.Sensors`' defaults). Returns the plan file with the verified plan (or
     the file's own, unverified) and plan.json's ``verify`` entry.
@@ -357,13 +372,14 @@ def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[An
         made["plan"], made["steps"] = make(limits) if limits is not pf.limits else (pf.plan, pf.steps)
         return made["plan"]
 
-    plan, limits, verdict = plan_for_drive(replan, pf.motor, pf.limits, loop, uncertainty)
+    counts = loop.sensors.encoder_counts if loop.sensors is not None else None
+    derived = MotorLimits.for_drive(pf.motor, v_bus=pf.limits.v_bus, i_max=pf.limits.i_max,
+                                    control_rate=1.0 / loop.control_period, encoder_counts=counts,
+                                    uncertainty=uncertainty)
+    plan, limits, verdict = plan_for_drive(replan, pf.motor, pf.limits, loop, uncertainty, derived=derived)
     info = dict(verdict.as_dict(), backed_off=len(verdict.rounds) > 1)
     if plan is None:
-        counts = loop.sensors.encoder_counts if loop.sensors is not None else None
-        info["suggested_limits"] = MotorLimits.for_drive(pf.motor, v_bus=pf.limits.v_bus, i_max=pf.limits.i_max,
-                                                         control_rate=1.0 / loop.control_period,
-                                                         encoder_counts=counts, uncertainty=uncertainty).as_dict()
+        info["suggested_limits"] = derived.as_dict()
         return pf, info
     info["limits"] = limits.as_dict()
     return replace(pf, plan=plan, limits=limits, steps=made["steps"]), info
