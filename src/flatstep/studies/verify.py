@@ -235,8 +235,7 @@ def binding(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, limits: Op
         return "torque angle"
     speed = float(np.max(np.abs(f.dtheta)))
     angle = motor.Nr * speed * loop.control_period
-    cap = limits.speed_max if limits is not None and limits.speed_max else math.inf
-    if angle >= 0.9 * COMMUTATION_ANGLE or speed >= 0.95 * cap:
+    if angle >= 0.9 * COMMUTATION_ANGLE:
         return "commutation rate"
     v_bus = limits.v_bus if limits is not None else (loop.drive.v_bus if loop.drive is not None else math.inf)
     emf = motor.Km * speed + motor.Nr * speed * motor.L * float(np.max(f.rho)) + motor.R * float(np.max(f.rho))
@@ -250,13 +249,14 @@ def binding(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, limits: Op
 def back_off(limits: MotorLimits, binds: str, plan: PiecewisePlan) -> MotorLimits:
     """The limits with the binding one tightened by its :data:`BACK_OFF` factor.
 
-    A speed cap not yet set is taken from the plan's peak speed.
+    A speed cap is taken from the plan's peak speed where that is lower (a cap above it would change nothing).
     """
     name, factor = BACK_OFF[binds]
     value = getattr(limits, name)
-    if value is None:  # a speed cap: from the plan's own peak
+    if name == "speed_max":
         t = np.linspace(plan.t0, plan.tf, 4001)
-        value = float(np.max(np.abs(plan.flag(t).dtheta)))
+        peak = float(np.max(np.abs(plan.flag(t).dtheta)))
+        value = peak if value is None else min(value, peak)
     return replace(limits, **{name: value * factor})
 
 
