@@ -32,15 +32,16 @@ MODEL_KEYS = ("preset", "R", "L", "Km", "J", "B", "Nr")
 #: B = 1e-4 N m s/rad beside Km = 0.05 N m/A and J = 3.6e-6 kg m^2, a small hybrid stepper), as flatstep's
 #: ``nema17`` preset takes it.
 B_DEFAULT = 1e-4
-#: Relative uncertainty of a datasheet's typical holding torque (makers quote +-10 %, e.g. Oriental Motor and
-#: StepperOnline; Sanyo Denki gives a minimum instead).
+#: Relative uncertainty taken for a typical holding torque: an assumption, the tolerance Beckhoff states for its
+#: motor data (+-10 %); Sanyo Denki quotes a minimum instead (``holding_torque_rating = "minimum"``).
 HOLDING_TORQUE_TOLERANCE = 0.10
-#: Relative tolerance of the winding resistance (datasheets print +-10 %) and inductance (+-20 %).
+#: Relative tolerances of the winding resistance (+-10 %) and inductance (+-20 %), as stepper datasheets print
+#: them (e.g. AKT Motor's 42HS general specification, Changzhou Songyang's SY28STH45 sheet).
 RESISTANCE_TOLERANCE = 0.10
 INDUCTANCE_TOLERANCE = 0.20
 #: Temperature coefficient of copper's resistance [1/K] (0.393 %/K at 20 degC).
 COPPER_TEMPCO = 0.00393
-#: The winding temperature rise a datasheet allows at rated current [K] (80 K, class B, e.g. Sanyo Denki).
+#: The winding temperature rise allowed at rated current [K] (80 K max., Sanyo Denki's general specifications).
 RATED_TEMPERATURE_RISE = 80.0
 
 
