@@ -6,6 +6,7 @@ plant and the 16 corners of +-10 % on R, L, Km, J (:func:`flatstep.studies.verif
 where a case is lost or faults. Prints one row per motor: the plan's duration, its status and what binds.
 
     .venv/bin/python benchmarks/drive_verified_plans.py [--json] [examples/motors/*.toml]
+    .venv/bin/python benchmarks/drive_verified_plans.py --table study.json   # the table of a --json run
 
 Without motor files: the two presets and a NEMA 17 of 1.68 A, 1.65 ohm, 2.8 mH, 0.44 N m, 68 g cm^2.
 """
@@ -77,25 +78,32 @@ def study(motors: list[tuple[str, MotorParams, float]]) -> list[dict[str, Any]]:
     return rows
 
 
-def main(argv: list[str]) -> int:
-    """Run the study and print the table (or JSON)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("motors", nargs="*", help="motor datasheet files (default: the built-in three)")
-    ap.add_argument("--json", action="store_true")
-    args = ap.parse_args(argv)
-    rows = study(file_motors(args.motors) if args.motors else builtin_motors())
-    if args.json:
-        print(json.dumps(rows, indent=2))
-        return 0
-    print(f"{'motor':<28} {'duration [s]':>12} {'status':>9} {'rounds':>6} "
-          f"{'worst err [rad]':>15} {'time [s]':>8}  binds")
+def table(rows: list[dict[str, Any]]) -> str:
+    """The study as a Markdown table: motor, duration, status, plans made, worst error, time, what binds."""
+    lines = ["| motor | duration [s] | status | plans | worst error [rad] | time [s] | binds |",
+             "|---|---|---|---|---|---|---|"]
     for r in rows:
         dur = f"{r['duration']:.4f}" if r["duration"] is not None else "-"
         err = f"{r['worst_error']:.3g}" if r["worst_error"] is not None else "-"
         first = r["history"][0]
-        note = r["binds"] or (f"backed off from {first['duration']:.4f} s: {first['binds']}" if r["rounds"] > 1
+        note = r["binds"] or (f"backed off from {first['duration']:.4f} s ({first['binds']})" if r["rounds"] > 1
                               else "")
-        print(f"{r['motor']:<28} {dur:>12} {r['status']:>9} {r['rounds']:>6} {err:>15} {r['seconds']:>8.2f}  {note}")
+        lines.append(f"| {r['motor']} | {dur} | {r['status']} | {r['rounds']} | {err} | {r['seconds']:.1f} | {note} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str]) -> int:
+    """Run the study and print the table (or JSON); ``--table FILE`` prints the table of a ``--json`` run."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("motors", nargs="*", help="motor datasheet files (default: the built-in three)")
+    ap.add_argument("--json", action="store_true", help="print the rows as JSON")
+    ap.add_argument("--table", metavar="FILE", help="print the table of a --json run's output instead of running")
+    args = ap.parse_args(argv)
+    if args.table:
+        print(table(json.loads(Path(args.table).read_text())))
+        return 0
+    rows = study(file_motors(args.motors) if args.motors else builtin_motors())
+    print(json.dumps(rows, indent=2) if args.json else table(rows))
     return 0
 
 

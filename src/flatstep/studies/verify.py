@@ -410,6 +410,13 @@ def verify_on_drive(path: str, pf: Any, report: dict[str, Any], skip: bool = Fal
                   if info["backed_off"] else "")
         print(f"  verified on the drive: {where}, every run ok, worst |theta - theta*| "
               f"{info['worst_error']:.3g} rad{slower}")
+        if info["backed_off"]:
+            lim = info["limits"]
+            print("  the verified plan, within " + ", ".join(f"{k} = {lim[k]:.4g}" for k in
+                                                            ("torque_angle_max", "v_use", "speed_max") if lim[k]))
+            width = max([14] + [len(label) for label, _, _ in pf.steps])
+            for label, start, duration in pf.steps:
+                print(f"  {label:<{width}} start {start:10.6f} s  duration {duration:10.6f} s")
     else:
         tried = f" after {len(info['rounds'])} plans" if info["rounds"] else ""
         print(f"  not verified on the drive: {where}; {len(bad)} ended {', '.join(sorted({c['status'] for c in bad}))} "
