@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Optional, Sequence, cast
 
@@ -203,8 +205,19 @@ def _cmd_plan_scenario(args: argparse.Namespace) -> int:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
+    """``flatstep plan FILE.toml``; with ``--json`` the text goes to stderr and plan.json to stdout."""
+    if not getattr(args, "json", False):
+        return _cmd_plan(args)
+    with contextlib.redirect_stdout(sys.stderr):
+        code = _cmd_plan(args)
+    print((out_dir(args.out) / "plan.json").read_text(), end="")
+    return code
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
     """``flatstep plan FILE.toml``: plan the waypoints, print the steps and margins, write plan.png, plan.json."""
     from ..plan.plan_file import is_plan_file, load_plan_file
+    from ..studies.verify import verify_on_drive
 
     if not is_plan_file(args.file) and Path(args.file).is_file():
         return _cmd_plan_scenario(args)
@@ -224,6 +237,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         report["feasible"] = not over
         if over:
             print(f"  infeasible: the plan exceeds {', '.join(over)} (not simulated)")
+        else:
+            pf = verify_on_drive(args.file, pf, report, skip=args.no_verify)
     if args.simulate and report.get("feasible", True):
         report["tracking"] = tr = _tracking(pf, _run_on_drive(pf))
         print(f"  on the {tr['control_rate']:g} Hz drive: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
@@ -245,10 +260,14 @@ def add_plan_command(sub: Any) -> None:
                        "segment family): print each move's and dwell's start and duration and the worst use of each "
                        "limit, write plan.png and plan.json; with --simulate, also run the plan on the 20 kHz drive "
                        "('flatstep simulate FILE.toml' runs it alone and prints the run's summary and status). Exit "
-                       "2 when the plan exceeds a limit, 3 when the drive loses the move.")
+                       "2 when the plan exceeds a limit or the drive does not keep it on the nominal and +-10 % "
+                       "plants (the check; --no-verify skips it), 3 when the --simulate run loses the move.")
     p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml), or a scenario file: its move, "
                    "checked against the law's singularity and the drive's bus")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
                    help="also run the plan on the 20 kHz drive (bus, sensors, observer, designed gains)")
+    p.add_argument("--no-verify", action="store_true",
+                   help="skip the check on the drive (the plan on the nominal and +-10 %% plants; docs/planning.md)")
+    p.add_argument("--json", action="store_true", help="print plan.json to stdout (the text goes to stderr)")
     p.set_defaults(func=cmd_plan)

@@ -1,0 +1,430 @@
+r"""A plan the drive can follow: run it on the drive, on the nominal plant and on the corners of its uncertainty.
+
+A plan within its limits (:func:`~flatstep.plan.limits.plan_margins`) can still be lost on a sampled drive: the
+limits are a model, the drive samples, the encoder quantizes and the plant is not the model. :func:`verify_plan`
+runs the plan on the drive (the C engine, :func:`~flatstep.engine.simulate.simulate` with a
+:class:`~flatstep.loop.reference.DriveLoop`) on the nominal plant and on the :math:`2^4` corners of
+:math:`\pm\delta` on R, L, Km and J (the plant scaled as :func:`flatstep.studies.robustness.perturbed` scales it,
+the controller's model nominal). The plan is verified when every case ends ``ok``; otherwise the first case lost
+or faulted names the limit that binds where it went wrong (:func:`binding`).
+
+:func:`plan_for_drive` plans, verifies and backs off: the binding limit is tightened (:data:`BACK_OFF`) and the
+plan re-planned, at most :data:`ROUNDS` times; then it refuses, naming the limit and what to change.
+
+The controller, when none is given, is :func:`drive_controller`: the flatness + sliding-mode law with the gains and
+the observer of :func:`~flatstep.control.design.design_gains` for the drive. It is the law measured here to track
+a segment table on the C engine; the other laws refuse a :class:`~flatstep.plan.piecewise.PiecewisePlan` there.
+"""
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field, replace
+from itertools import product
+from pathlib import Path
+from typing import Any, Callable, Optional
+
+import numpy as np
+
+from ..control.design import design_gains
+from ..control.protocol import Controller
+from ..control.smc import FlatnessSMC
+from ..engine.simulate import simulate
+from ..errors import RunError
+from ..loop.drive import Drive
+from ..loop.reference import DriveLoop
+from ..loop.sensors import Sensors
+from ..model.motor import MotorParams
+from ..plan.limits import COMMUTATION_ANGLE, MotorLimits
+from ..plan.piecewise import PiecewisePlan
+from ..validate import check_finite
+
+if sys.version_info >= (3, 11):
+    import tomllib as _toml
+else:  # pragma: no cover
+    import tomli as _toml
+
+#: The parameters the uncertainty scales, as :mod:`flatstep.studies.robustness` names them.
+PARAMETERS = ("R", "L", "Km", "J")
+#: The time run after the plan's end [s], for the rotor to settle (a lost arrival shows there).
+T_AFTER = 0.02
+#: Back-off rounds of :func:`plan_for_drive` before it refuses.
+ROUNDS = 3
+#: How each binding limit is tightened in a round: (the :class:`MotorLimits` field, its factor).
+BACK_OFF = {"commutation rate": ("speed_max", 0.8), "voltage at speed": ("v_use", 0.85),
+            "torque angle": ("torque_angle_max", 0.85), "current": ("torque_angle_max", 0.85),
+            "tracking on the drive": ("speed_max", 0.8)}
+#: What to change when a limit binds.
+ADVICE = {"commutation rate": "raise the drive's control rate, or lower speed_max",
+          "voltage at speed": "raise v_bus, or lower v_use or speed_max",
+          "torque angle": "lower torque_angle_max or accel_max, or raise i_max",
+          "current": "raise i_max (a motor and drive rated for more current), or lower accel_max",
+          "tracking on the drive": "raise the control rate, use a finer encoder, or lower speed_max"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One run of the check: the plant's relative errors, its status and its worst angle error."""
+
+    errors: dict[str, float]
+    status: str
+    max_abs_theta_error: float
+    lost_at: Optional[float] = None
+    controller_faults: int = 0
+    #: when it went wrong: lost_at, the first fault, or when the run stopped [s]
+    t_wrong: Optional[float] = None
+
+    @property
+    def label(self) -> str:
+        """``nominal`` or the errors, e.g. ``R+0.1,L-0.1,Km+0.1,J+0.1``."""
+        return ",".join(f"{k}{e:+.3g}" for k, e in self.errors.items()) or "nominal"
+
+    def as_dict(self) -> dict[str, Any]:
+        """The case for JSON."""
+        return dict(plant=self.label, status=self.status, max_abs_theta_error=self.max_abs_theta_error,
+                    lost_at=self.lost_at, controller_faults=self.controller_faults)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The check's result: every case, whether all ended ``ok``, and when not, what binds and what to change."""
+
+    verified: bool
+    cases: list[Case]
+    seconds: float
+    binds: Optional[str] = None
+    advice: Optional[str] = None
+    rounds: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def worst_error(self) -> float:
+        """The largest |theta - theta*| of any case [rad]."""
+        return max(c.max_abs_theta_error for c in self.cases)
+
+    @property
+    def status(self) -> str:
+        """``ok`` when verified, else the worst status of the cases (``failed`` > ``lost`` > ``fault``)."""
+        for s in ("failed", "lost", "fault"):
+            if any(c.status == s for c in self.cases):
+                return s
+        return "ok"
+
+    def as_dict(self) -> dict[str, Any]:
+        """The verdict for JSON (plan.json's ``verify``)."""
+        return dict(verified=self.verified, status=self.status, worst_error=self.worst_error, binds=self.binds,
+                    advice=self.advice, seconds=self.seconds, cases=[c.as_dict() for c in self.cases],
+                    rounds=self.rounds)
+
+
+def plant_corners(motor: MotorParams, uncertainty: float = 0.1) -> list[tuple[dict[str, float], MotorParams]]:
+    """The nominal plant, then the :math:`2^4` corners of +-``uncertainty`` on R, L, Km and J."""
+    delta = check_finite("uncertainty", uncertainty)
+    if not 0 <= delta < 0.5:
+        raise ValueError(f"uncertainty={delta!r} must be in [0, 0.5): the relative error of R, L, Km and J")
+    out: list[tuple[dict[str, float], MotorParams]] = [({}, motor)]
+    if delta == 0:
+        return out
+    for signs in product((1.0, -1.0), repeat=len(PARAMETERS)):
+        err = {k: s * delta for k, s in zip(PARAMETERS, signs, strict=True)}
+        out.append((err, motor.replace(**{k: getattr(motor, k) * (1 + e) for k, e in err.items()})))
+    return out
+
+
+def drive_loop(v_bus: float, control_rate: float, encoder_counts: Optional[int] = 4000,
+               sensors: Optional[Sensors] = None) -> DriveLoop:
+    """A sampled drive: the bus, the control rate, 4 RK4 substeps, an encoder (and a 12-bit current ADC)."""
+    parts = sensors if sensors is not None else Sensors(encoder_counts=encoder_counts)
+    return DriveLoop.at(control_rate, substeps=4, drive=Drive(v_bus=v_bus), sensors=parts)
+
+
+def drive_controller(motor: MotorParams, plan: PiecewisePlan, loop: DriveLoop,
+                     uncertainty: float = 0.1) -> tuple[Controller, DriveLoop]:
+    """The flatness + sliding-mode law with gains and observer designed for this drive, and the loop with it.
+
+    :func:`~flatstep.control.design.design_gains` for the loop's control period, bus, encoder and ADC step and
+    the uncertainty; the controller measures through the designed observer (the loop's own observer, if it has
+    one, is kept).
+    """
+    v_bus = loop.drive.v_bus if loop.drive is not None else 24.0
+    sensors = loop.sensors
+    d = design_gains(motor, plan, control_period=loop.control_period, v_bus=v_bus,  # type: ignore[arg-type]
+                     encoder_counts=sensors.encoder_counts if sensors is not None else None,
+                     current_step=sensors.current_step if sensors is not None and sensors.current_step else 4 / 4096,
+                     uncertainty=uncertainty)
+    loop = loop if loop.observer is not None else replace(loop, observer=d.observer)
+    return FlatnessSMC(motor, plan, d.gains, "observer"), loop
+
+
+def _run(plant: MotorParams, plan: PiecewisePlan, controller: Controller, loop: DriveLoop,
+         errors: dict[str, float]) -> Case:
+    """One case on the C engine; a run that stops (non-finite state) is ``failed``."""
+    try:
+        r = simulate(plant, plan, controller, loop=loop, t_end=plan.tf + T_AFTER)
+    except RunError as exc:
+        return Case(errors, "failed", math.inf, t_wrong=exc.t_fail)
+    faults = int(r.meta.get("controller_faults", 0))
+    first_fault = r.meta.get("first_fault_time")
+    t_wrong = r.lost_at if r.lost_at is not None else first_fault
+    return Case(errors, r.status, float(np.max(np.abs(r.theta_error))), r.lost_at, faults,
+                None if t_wrong is None else float(t_wrong))
+
+
+def verify_plan(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, controller: Optional[Controller] = None,
+                uncertainty: float = 0.1, limits: Optional[MotorLimits] = None,
+                workers: Optional[int] = None) -> Verdict:
+    """Run ``plan`` on the drive ``loop`` on the nominal plant and the corners of ``uncertainty``.
+
+    Parameters
+    ----------
+    plan : PiecewisePlan
+        The plan to check.
+    motor : MotorParams
+        The nominal motor: the controller's model, and the plant the corners are taken around.
+    loop : DriveLoop
+        The drive: control period, bus, sensors (and observer).
+    controller : Controller, optional
+        The law; default :func:`drive_controller` (which also adds its observer to the loop).
+    uncertainty : float
+        The relative error of R, L, Km and J (0.1: +-10 %; 0: the nominal plant only).
+    limits : MotorLimits, optional
+        The limits the plan was made with, to name the one that binds (without them: the bus of the loop).
+    workers : int, optional
+        Threads running the cases (the C runs release the GIL); default: the CPUs, at most 2.
+
+    Returns
+    -------
+    Verdict
+        Verified when every case ends ``ok``; otherwise what binds and what to change.
+    """
+    start = time.perf_counter()
+    if controller is None:
+        controller, loop = drive_controller(motor, plan, loop, uncertainty)
+    ctrl = controller
+    corners = plant_corners(motor, uncertainty)
+    n = workers or min(2, os.cpu_count() or 1)
+    with ThreadPoolExecutor(max_workers=n) as pool:
+        cases = list(pool.map(lambda c: _run(c[1], plan, ctrl, loop, c[0]), corners))
+    verified = all(c.status == "ok" for c in cases)
+    binds = advice = None
+    if not verified:
+        binds = binding(plan, motor, loop, limits, cases)
+        advice = ADVICE[binds]
+    return Verdict(verified, cases, time.perf_counter() - start, binds, advice)
+
+
+def binding(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, limits: Optional[MotorLimits],
+            cases: list[Case]) -> str:
+    r"""The limit that binds where the first case went wrong (one of :data:`ADVICE`'s keys).
+
+    The plan is looked at over the 2 ms before that instant: a torque demand near
+    :math:`K_m\rho^*\sin\alpha_{max}` binds the torque angle; a speed near the commutation cap
+    (:data:`~flatstep.plan.limits.COMMUTATION_ANGLE` electrical radians per period) the commutation rate; a
+    feedforward near the bus the voltage; a current near ``i_max`` the current; none of these, tracking on the drive.
+    """
+    bad = [c for c in cases if c.status != "ok"]
+    times = [c.t_wrong for c in bad if c.t_wrong is not None]
+    tb = min(times) if times else plan.tf
+    t = np.linspace(max(plan.t0, tb - 2e-3), min(max(tb, plan.t0 + 1e-6), plan.tf), 200)
+    f = plan.flag(t)
+    torque_ratio = float(np.max(np.abs(motor.J * f.ddtheta + motor.B * f.dtheta) / (motor.Km * f.rho)))
+    alpha = limits.torque_angle_max if limits is not None else 1.2
+    if torque_ratio >= 0.9 * math.sin(alpha):
+        return "torque angle"
+    speed = float(np.max(np.abs(f.dtheta)))
+    angle = motor.Nr * speed * loop.control_period
+    if angle >= 0.9 * COMMUTATION_ANGLE:
+        return "commutation rate"
+    v_bus = limits.v_bus if limits is not None else (loop.drive.v_bus if loop.drive is not None else math.inf)
+    emf = motor.Km * speed + motor.Nr * speed * motor.L * float(np.max(f.rho)) + motor.R * float(np.max(f.rho))
+    if emf >= 0.75 * v_bus:
+        return "voltage at speed"
+    if limits is not None and float(np.max(f.rho)) >= 0.95 * limits.i_max:
+        return "current"
+    return "tracking on the drive"
+
+
+def back_off(limits: MotorLimits, binds: str, plan: PiecewisePlan) -> MotorLimits:
+    """The limits with the binding one tightened by its :data:`BACK_OFF` factor.
+
+    A speed cap is taken from the plan's peak speed where that is lower (a cap above it would change nothing).
+    """
+    name, factor = BACK_OFF[binds]
+    value = getattr(limits, name)
+    if name == "speed_max":
+        t = np.linspace(plan.t0, plan.tf, 4001)
+        peak = float(np.max(np.abs(plan.flag(t).dtheta)))
+        value = peak if value is None else min(value, peak)
+    return replace(limits, **{name: value * factor})
+
+
+def tighter(limits: MotorLimits, other: MotorLimits) -> MotorLimits:
+    """``limits`` with the torque angle, bus fraction and speed cap of ``other`` where those are tighter."""
+    caps = [c for c in (limits.speed_max, other.speed_max) if c is not None]
+    return replace(limits, torque_angle_max=min(limits.torque_angle_max, other.torque_angle_max),
+                   v_use=min(limits.v_use, other.v_use), speed_max=min(caps) if caps else None)
+
+
+def plan_for_drive(replan: Callable[[MotorLimits], PiecewisePlan], motor: MotorParams, limits: MotorLimits,
+                   loop: DriveLoop, uncertainty: float = 0.1, rounds: int = ROUNDS,
+                   controller: Optional[Callable[[PiecewisePlan], Controller]] = None,
+                   derived: Optional[MotorLimits] = None,
+                   ) -> tuple[Optional[PiecewisePlan], MotorLimits, Verdict]:
+    """Plan with ``limits``, verify on the drive, back off the binding limit and re-plan, ``rounds`` times at most.
+
+    Parameters
+    ----------
+    replan : callable
+        ``replan(limits) -> PiecewisePlan``: the planner (e.g. ``lambda lim: time_optimal(d, motor, lim)``); a
+        ValueError means no plan within those limits.
+    motor : MotorParams
+        The nominal motor.
+    limits : MotorLimits
+        The first limits (e.g. :meth:`MotorLimits.for_drive`).
+    loop : DriveLoop
+        The drive.
+    uncertainty : float
+        The relative error of R, L, Km and J.
+    rounds : int
+        Back-off rounds after the first plan.
+    controller : callable, optional
+        ``controller(plan) -> Controller`` (the scenario's law); default :func:`drive_controller`.
+    derived : MotorLimits, optional
+        The limits derived for this drive (:meth:`MotorLimits.for_drive`): when the first plan fails, the second
+        is made within the :func:`tighter` of both, before the binding limit is backed off.
+
+    Returns
+    -------
+    plan, limits, verdict
+        The verified plan and its limits, or ``None``, the last limits and the last verdict (what binds).
+    """
+    history: list[dict[str, Any]] = []
+    plan: Optional[PiecewisePlan] = None
+    verdict = Verdict(False, [], 0.0)
+    for k in range(rounds + 1):
+        try:
+            plan = replan(limits)
+        except ValueError as exc:
+            history.append(dict(round=k, refused=str(exc)))
+            return None, limits, replace(verdict, rounds=history)
+        verdict = verify_plan(plan, motor, loop, None if controller is None else controller(plan), uncertainty,
+                              limits)
+        history.append(dict(round=k, duration=plan.tf - plan.t0, status=verdict.status, binds=verdict.binds,
+                            worst_error=verdict.worst_error, seconds=verdict.seconds))
+        if verdict.verified:
+            return plan, limits, replace(verdict, rounds=history)
+        if k < rounds:
+            assert verdict.binds is not None  # an unverified verdict names what binds
+            both = tighter(limits, derived) if derived is not None else limits
+            limits = both if k == 0 and both != limits else back_off(limits, verdict.binds, plan)
+    return None, limits, replace(verdict, rounds=history)
+
+
+def replan_steps(plan: PiecewisePlan, steps: list[tuple[str, float, float]], motor: MotorParams,
+                 ) -> Callable[[MotorLimits], tuple[PiecewisePlan, list[tuple[str, float, float]]]]:
+    """A planner that makes a time-optimal sequence's moves and dwells again under other limits.
+
+    ``steps`` are a plan file's (label, start, duration): a ``dwell`` holds its angle as long; any other step is a
+    move from the plan's angle at its start to its angle at its end (a move through via points included: the
+    time-optimal planner makes it one move).
+    """
+    from ..plan.time_optimal import time_optimal
+
+    ends = plan.theta_deriv(np.array([[s, s + d] for _, s, d in steps]).ravel(), 0).reshape(-1, 2)
+
+    def make(limits: MotorLimits) -> tuple[PiecewisePlan, list[tuple[str, float, float]]]:
+        parts, out, t = [], [], plan.t0
+        for (label, _, duration), (a, b) in zip(steps, ends, strict=True):
+            if label.startswith("dwell"):
+                part = PiecewisePlan.hold(float(a), limits.i_hold, t, t + duration)
+            else:
+                part = time_optimal(float(b - a), motor, limits, theta1=float(a), t0=t)
+            parts.append(part)
+            out.append((label, t, part.tf - part.t0))
+            t = part.tf
+        return PiecewisePlan.concatenate(parts), out
+
+    return make
+
+
+def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[Any, dict[str, Any]]:
+    """A plan file's plan checked on its drive, and backed off when it is a time-optimal sequence.
+
+    The first plan is the file's; the second is made within the file's limits tightened to those derived for the drive
+    (:meth:`MotorLimits.for_drive`, ``derived`` of :func:`plan_for_drive`), then the binding limit is backed off.
+
+    The drive is the file's (``pf.loop`` if the file has one, else its [simulate] control rate, its [limits] bus
+    and :class:`~flatstep.loop.sensors.Sensors`' defaults). Returns the plan file with the verified plan (or
+    the file's own, unverified) and plan.json's ``verify`` entry.
+    """
+    assert pf.limits is not None, "the check runs a plan on the drive of its [limits] bus"
+    loop = getattr(pf, "loop", None) or DriveLoop.at(pf.simulate["control_rate"], substeps=4,
+                                                      drive=Drive(v_bus=pf.limits.v_bus), sensors=Sensors())
+    if planner != "time_optimal":
+        verdict = verify_plan(pf.plan, pf.motor, loop, uncertainty=uncertainty, limits=pf.limits)
+        return pf, dict(verdict.as_dict(), backed_off=False)
+    made: dict[str, Any] = {}
+    make = replan_steps(pf.plan, pf.steps, pf.motor)
+
+    def replan(limits: MotorLimits) -> PiecewisePlan:
+        made["plan"], made["steps"] = make(limits) if limits is not pf.limits else (pf.plan, pf.steps)
+        return made["plan"]
+
+    counts = loop.sensors.encoder_counts if loop.sensors is not None else None
+    derived = MotorLimits.for_drive(pf.motor, v_bus=pf.limits.v_bus, i_max=pf.limits.i_max,
+                                    control_rate=1.0 / loop.control_period, encoder_counts=counts,
+                                    uncertainty=uncertainty)
+    plan, limits, verdict = plan_for_drive(replan, pf.motor, pf.limits, loop, uncertainty, derived=derived)
+    info = dict(verdict.as_dict(), backed_off=len(verdict.rounds) > 1)
+    if plan is None:
+        info["suggested_limits"] = derived.as_dict()
+        return pf, info
+    info["limits"] = limits.as_dict()
+    return replace(pf, plan=plan, limits=limits, steps=made["steps"]), info
+
+
+def verify_on_drive(path: str, pf: Any, report: dict[str, Any], skip: bool = False) -> Any:
+    """``flatstep plan``'s check: fill plan.json's ``duration`` and ``verify``, print one line, return the plan file.
+
+    A plan within its limits that the drive does not keep on every case is refused (``report["feasible"]`` set
+    to false) with what binds and what to change; a time-optimal sequence is backed off first
+    (:func:`check_plan_file`). ``skip`` (``--no-verify``) says so and leaves the plan unverified.
+    """
+    if skip:
+        report.update(duration=pf.plan.tf - pf.plan.t0, verify=dict(skipped=True))
+        print("  not verified on the drive (--no-verify)")
+        return pf
+    planner = _toml.loads(Path(path).read_text()).get("plan", {}).get("planner", "time_optimal")
+    before = pf.plan.tf - pf.plan.t0
+    pf, info = check_plan_file(pf, str(planner))
+    report.update(duration=pf.plan.tf - pf.plan.t0, verify=info, feasible=bool(info["verified"]),
+                  total_duration=pf.plan.tf - pf.plan.t0, tf=pf.plan.tf, segments=pf.plan.n,
+                  steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps])
+    cases = info["cases"]
+    bad = [c for c in cases if c["status"] != "ok"]
+    where = f"{len(cases)} plants (nominal and +-10 % on R, L, Km, J), {info['seconds']:.2f} s"
+    if info["verified"]:
+        slower = (f"; backed off from {before:.6g} s to {pf.plan.tf - pf.plan.t0:.6g} s"
+                  if info["backed_off"] else "")
+        print(f"  verified on the drive: {where}, every run ok, worst |theta - theta*| "
+              f"{info['worst_error']:.3g} rad{slower}")
+        if info["backed_off"]:
+            lim = info["limits"]
+            print("  the verified plan, within " + ", ".join(f"{k} = {lim[k]:.4g}" for k in
+                                                            ("torque_angle_max", "v_use", "speed_max") if lim[k]))
+            width = max([14] + [len(label) for label, _, _ in pf.steps])
+            for label, start, duration in pf.steps:
+                print(f"  {label:<{width}} start {start:10.6f} s  duration {duration:10.6f} s")
+    else:
+        tried = f" after {len(info['rounds'])} plans" if info["rounds"] else ""
+        print(f"  not verified on the drive: {where}; {len(bad)} ended {', '.join(sorted({c['status'] for c in bad}))} "
+              f"(worst |theta - theta*| {info['worst_error']:.3g} rad){tried}; "
+              f"{info['binds']} binds: {info['advice']}")
+        if "suggested_limits" in info:
+            lim = info["suggested_limits"]
+            print("  limits derived for this drive (MotorLimits.for_drive): " +
+                  ", ".join(f"{k} = {lim[k]:.4g}" for k in ("i_hold", "speed_corner", "torque_angle_max", "v_use",
+                                                           "speed_max")))
+    return pf
