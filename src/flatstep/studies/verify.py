@@ -150,7 +150,7 @@ def drive_controller(motor: MotorParams, plan: PiecewisePlan, loop: DriveLoop,
     """
     v_bus = loop.drive.v_bus if loop.drive is not None else 24.0
     sensors = loop.sensors
-    d = design_gains(motor, plan, control_period=loop.control_period, v_bus=v_bus,  # type: ignore[arg-type]
+    d = design_gains(motor, plan, control_period=loop.control_period, v_bus=v_bus,
                      encoder_counts=sensors.encoder_counts if sensors is not None else None,
                      current_step=sensors.current_step if sensors is not None and sensors.current_step else 4 / 4096,
                      uncertainty=uncertainty)
