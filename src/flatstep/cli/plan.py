@@ -11,7 +11,7 @@ from ..json_out import strict_json
 from ..model.flat import flat_to_state
 from ..plan.limits import plan_margins
 from .flags import out_dir
-from .status import EXIT_LOST, EXIT_OK, EXIT_REFUSED
+from .status import EXIT_OK, EXIT_REFUSED, exit_code, warn
 
 if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
     from ..engine.result import SimResult
@@ -99,7 +99,7 @@ def _tracking(pf: "PlanFile", r: "SimResult") -> dict[str, Any]:
     return dict(control_rate=pf.simulate["control_rate"], max_abs_theta_error=float(err.max()), full_step=full_step,
                 lost_step=bool(err.max() >= full_step), final_error=float(r.theta[-1] - pf.plan.theta2),
                 peak_phase_voltage=float(np.max(np.abs([r.va, r.vb]))), v_bus=pf.limits.v_bus,
-                controller_faults=int(r.meta.get("controller_faults", 0)), status=r.status)
+                controller_faults=int(r.meta.get("controller_faults", 0)), status=r.status, lost_at=r.lost_at)
 
 
 def _margins_line(pf: "PlanFile") -> tuple[dict[str, float], list[str]]:
@@ -228,14 +228,17 @@ def cmd_plan(args: argparse.Namespace) -> int:
         report["tracking"] = tr = _tracking(pf, _run_on_drive(pf))
         print(f"  on the {tr['control_rate']:g} Hz drive: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
               f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
-              f"final error {tr['final_error']:.3g} rad")
+              f"final error {tr['final_error']:.3g} rad, status {tr['status']}")
     out = out_dir(args.out)
     plot_plan(pf, out / "plan.png")
     (out / "plan.json").write_text(strict_json(report, indent=2) + "\n")
     print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
     if not report.get("feasible", True):
         return EXIT_REFUSED
-    return EXIT_LOST if report.get("tracking", {}).get("lost_step", False) else EXIT_OK
+    if "tracking" not in report:
+        return EXIT_OK
+    warn(pf.name, report["tracking"])  # the run's status and exit code, as 'flatstep simulate FILE.toml' gives them
+    return exit_code([report["tracking"]["status"]])
 
 
 def add_plan_command(sub: Any) -> None:
