@@ -10,7 +10,8 @@ import numpy as np
 from ..json_out import strict_json
 from ..model.flat import flat_to_state
 from ..plan.limits import plan_margins
-from .flags import out_dir
+from ..validate.paths import PNG_MARK, check_output_dir, json_marks
+from .flags import add_force, out_dir
 from .status import EXIT_OK, EXIT_REFUSED, exit_code, warn
 
 if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
@@ -19,6 +20,8 @@ if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not
 
 #: The controller types that follow a scenario plan's rho* (the others plan their own currents or ignore it).
 PLAN_RHO_TYPES = ("smc", "smc_ff", "smc_ff_hold")
+#: The files ``flatstep plan --out`` writes, and the first bytes that make an existing one flatstep's.
+PLAN_FILES = {"plan.png": PNG_MARK, "plan.json": json_marks("name")}
 MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
 
 
@@ -206,6 +209,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     """``flatstep plan FILE.toml``: plan the waypoints, print the steps and margins, write plan.png, plan.json."""
     from ..plan.plan_file import is_plan_file, load_plan_file
 
+    check_output_dir(args.out, "--out", PLAN_FILES, inputs=[args.file], force=args.force)  # before any work
     if not is_plan_file(args.file) and Path(args.file).is_file():
         return _cmd_plan_scenario(args)
     pf = load_plan_file(args.file)
@@ -254,4 +258,5 @@ def add_plan_command(sub: Any) -> None:
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
                    help="also run the plan on the 20 kHz drive (bus, sensors, observer, designed gains)")
+    add_force(p)
     p.set_defaults(func=cmd_plan)
