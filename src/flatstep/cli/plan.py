@@ -252,7 +252,8 @@ def add_plan_command(sub: Any) -> None:
                        "segment family): print each move's and dwell's start and duration and the worst use of each "
                        "limit, write plan.png and plan.json; with --simulate, also run the plan on the 20 kHz drive "
                        "('flatstep simulate FILE.toml' runs it alone and prints the run's summary and status). Exit "
-                       "2 when the plan exceeds a limit, 3 when the drive loses the move.")
+                       "2 when the plan exceeds a limit or a path is refused, 3 when the drive loses the move, 4 "
+                       "when its controller faulted (as 'flatstep simulate FILE.toml').")
     p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml), or a scenario file: its move, "
                    "checked against the law's singularity and the drive's bus")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
