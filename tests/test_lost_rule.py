@@ -108,7 +108,6 @@ def test_a_result_judges_a_round_trip_by_its_last_move(motor, plan):
     assert r.meta["plan"]["rests"] == [0.0, 0.02]
 
 
-@pytest.mark.slow
 def test_batch_c_rows_match_per_run_rows_on_a_short_move():
     """C batch_sampled and Scenario.run give the same status on a move of half a step (the rule of its last move)."""
     base = fs.Scenario(loop=fs.DriveLoop(5e-5, drive=fs.Drive(v_bus=24.0)), measurement="model",
