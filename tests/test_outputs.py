@@ -230,3 +230,16 @@ def test_output_dir_checks_without_creating(tmp_path):
     with pytest.raises(ValueError, match="--record .*is also written by --out"):
         check_distinct({"--out (run.csv)": tmp_path / "d" / "run.csv", "--record": tmp_path / "d" / "." / "run.csv"})
     check_distinct({"--out (run.csv)": tmp_path / "d" / "run.csv", "--record": None, "--x": tmp_path / "x.csv"})
+
+
+def test_a_png_is_flatsteps_only_when_matplotlib_drew_it(tmp_path):
+    from flatstep.validate.paths import PNG_MARK, check_output
+
+    photo, figure = tmp_path / "photo.png", tmp_path / "figure.png"
+    photo.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 64)
+    figure.write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0\0\0:tEXtSoftware\x00Matplotlib version3.11.2")
+    with pytest.raises(ValueError, match="photo.png: exists and is not a file flatstep wrote"):
+        check_output(photo, "--out", marks=PNG_MARK)
+    assert check_output(figure, "--out", marks=PNG_MARK) == figure
+    with pytest.raises(ValueError, match="not a file flatstep wrote"):
+        check_output(figure, "--record", marks=(b"t,",))  # a figure is no recording

@@ -20,8 +20,8 @@ from .checks import InputError
 PathLike = Union[str, "os.PathLike[str]"]
 
 #: First bytes of the files flatstep writes: a recording or a run's series (CSV, header ``t,...``), a batch file
-#: or a JSON document whose first key starts with ``flatstep``, a figure (PNG). A file that starts otherwise is not
-#: flatstep's.
+#: or a JSON document whose first key starts with ``flatstep``, a figure (a PNG signed by Matplotlib, which draws
+#: flatstep's figures: its ``Software`` text in the first 256 bytes). A file that starts otherwise is not flatstep's.
 OWN_MARKS = (b"t,", b'{"flatstep', b"\x89PNG")
 #: The first bytes of a CSV file of series or a recording (header ``t,...``).
 CSV_MARK = (b"t,",)
@@ -80,6 +80,8 @@ def is_own_file(path: Path, marks: Iterable[bytes] = OWN_MARKS) -> bool:
             head = f.read(256)
     except OSError:
         return False
+    if head.startswith(PNG_MARK[0]):  # a figure: flatstep's are drawn by Matplotlib, which signs the file
+        return PNG_MARK[0] in tuple(marks) and b"Software\x00Matplotlib" in head
     return head.strip() == b"" or head.startswith(tuple(marks))
 
 
