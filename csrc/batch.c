@@ -8,13 +8,32 @@ static fs_real max_abs(fs_real a, fs_real b)
     return b > a ? b : a;
 }
 
+// Returns full_step, or half the last move through rest[0..n-1] if smaller (the rule in batch.h).
+fs_real batch_arrival_error(fs_real full_step, const fs_real *rest, size_t n)
+{
+    fs_real big = 1, tol, half = 0;
+    size_t k;
+    for (k = 0; k < n; k++)
+        big = max_abs(big, rest[k]);
+    tol = (fs_real)BATCH_REST_TOLERANCE * big;
+    for (k = n; k-- > 1;) {  // back from rest[n - 2] to the latest rest away from the end
+        if (fs_fabs(rest[n - 1] - rest[k - 1]) > tol) {
+            half = (fs_real)0.5 * fs_fabs(rest[n - 1] - rest[k - 1]);
+            break;
+        }
+    }
+    return half > 0 && half < full_step ? half : full_step;
+}
+
 // Returns nothing; writes the summary of a successful run from its states x and applied voltages v at the
 // n + 1 instants k Ts against the plan, and whether and when the move was lost: |theta - theta*| first beyond
-// the run's lost_error, or else beyond its arrival_error from some t_k to the end (lost at that t_k).
+// the run's lost_error, or else beyond batch_arrival_error from some t_k to the end (lost at that t_k).
 static void summarize(const struct plan_coef *plan, fs_real Ts, size_t n, const fs_real *x, const fs_real *v,
                       const struct batch_run *run, struct batch_summary *o)
 {
     fs_real flag[PLAN_FLAG_LEN], t, err, away = -1;  // away: start of the excursion beyond arrival_error, or -1
+    const fs_real rest[2] = {plan->p.theta1, plan->p.theta2};
+    const fs_real arrival_error = batch_arrival_error(run->lost_error, rest, 2);
     size_t k;
     o->max_abs_theta_error = o->max_abs_rho_error = o->max_abs_va = o->max_abs_vb = 0;
     o->max_abs_theta_error_move = o->max_abs_theta_error_after = 0;
@@ -30,7 +49,7 @@ static void summarize(const struct plan_coef *plan, fs_real Ts, size_t n, const 
             o->lost = true;
             o->lost_at = t;
         }
-        if (!(fs_fabs(err) > run->arrival_error))
+        if (!(fs_fabs(err) > arrival_error))
             away = -1;
         else if (away < 0)
             away = t;
@@ -71,8 +90,7 @@ size_t batch_sampled(const struct batch_run *runs, size_t n, fs_real *scratch, s
         m = runs[i].n_periods + 1;
         out[i].controller_status = 0;
         if (scratch_len < 6 || runs[i].n_periods > scratch_len / 6 - 1 || !plan_init(&plan, &runs[i].reference)
-            || !(runs[i].lost_error > 0) || !(runs[i].arrival_error > 0)
-            || sampled_init(&loop, &runs[i].loop) != SIM_OK)
+            || !(runs[i].lost_error > 0) || sampled_init(&loop, &runs[i].loop) != SIM_OK)
             out[i].status = SIM_EARGS;  // the scratch cannot hold this run, or its plan or loop is invalid
         else {
             out[i].status = sampled_run(&loop, &runs[i].ctrl, &runs[i].plant, runs[i].x0, runs[i].n_periods,

@@ -12,6 +12,10 @@
 #include "sampled.h"
 #include "sim.h"
 
+// Two rest angles closer than this, relative to the largest |angle| (at least 1 rad), are one rest: a dwell's two
+// ends differ by rounding (flatstep.engine.result.REST_TOLERANCE).
+#define BATCH_REST_TOLERANCE 1e-12
+
 // cffi:begin
 // One sampled scenario: a bound controller (its state is the caller's), the plant, the loop, the plan the
 // summary measures against, the horizon and the start.
@@ -24,8 +28,7 @@ struct batch_run {
     fs_real x0[4];          // start state (ia, ib, omega, theta)
     const fs_real *noise;   // (n_periods + 1) x 2 current-noise samples, or NULL for none
     fs_real lost_error;     // |theta - theta*| [rad] beyond which the move is lost at any time (one full step), > 0
-    fs_real arrival_error;  // the same at the end of the run (SimResult's arrival_error: at most lost_error), > 0
-};
+};  // at the end of the run the move is lost beyond batch_arrival_error(lost_error, {theta1, theta2}, 2)
 
 // Summary of one run over the control instants t_k = k Ts, the values of SimResult.summary.
 struct batch_summary {
@@ -41,6 +44,12 @@ struct batch_summary {
     uint32_t fault_periods;  // periods whose controller step faulted (sim_stats)
     fs_real t_first_fault;   // the first of them (0 when none)
 };
+
+// Returns the error [rad] at the end of a run beyond which its move is lost: full_step, or half the plan's last
+// move if that is smaller (full_step for a plan that never moves). rest[0..n-1] are the angles at which the plan
+// rests, in order; the last move starts at the latest rest farther than BATCH_REST_TOLERANCE x max(1, max |rest|)
+// from rest[n-1] (flatstep.engine.result.arrival_error, last_move).
+fs_real batch_arrival_error(fs_real full_step, const fs_real *rest, size_t n);
 
 // Returns the number of runs whose status is not SIM_OK; runs the n scenarios one after another on sampled_run,
 // using scratch (at least 6 (n_periods + 1) values for the longest run) for each run's states and voltages,

@@ -36,7 +36,7 @@ from ._core_structs import (
 )
 from .control.protocol import Controller
 from .control.smc import FlatnessSMC
-from .engine.result import arrival_error, full_step
+from .engine.result import full_step
 from .loop.drive import Drive
 from .loop.observers import Observer
 from .loop.sensors import Sensors
@@ -330,7 +330,6 @@ def run_sampled_summaries(runs: Sequence[dict[str, Any]]) -> list[Optional[dict[
         c.x0 = [float(v) for v in r["x0"]]
         c.noise = _in(noise)
         c.lost_error = full_step(r["motor"].Nr)
-        c.arrival_error = arrival_error(r["motor"].Nr, ctrl.plan.theta1, ctrl.plan.theta2)
     scratch = np.empty(6 * (max((r["n_periods"] for r in runs), default=0) + 1))
 
     def run(cancel: CData) -> int:

@@ -62,3 +62,9 @@ def out_dir(path: str, flag: str = "--out") -> Path:
     except OSError as exc:
         raise ValueError(f"{flag} {path}: cannot create the directory: {exc.strerror or exc}") from None
     return out
+
+
+def add_force(parser: argparse.ArgumentParser) -> None:
+    """Add ``--force``: replace output files that flatstep did not write (an input is never replaced)."""
+    parser.add_argument("--force", action="store_true", help="replace output files that flatstep did not write "
+                        "(an input of the run is never replaced; docs/errors.md, 'Files flatstep writes')")

@@ -28,10 +28,12 @@ from ..plan.plan_file import is_plan_file
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..studies.scenario import PAPER_SCENARIOS, Scenario
 from ..studies.scenario_file import load_scenario
+from ..validate import InputError
+from ..validate.paths import CSV_MARK, PNG_MARK, check_distinct, check_output, check_output_dir, json_marks
 from .calibrate import add_calibrate_command
 from .compare import add_compare_command
 from .design import add_design_command
-from .flags import count, out_dir, quantity
+from .flags import add_force, count, out_dir, quantity
 from .identify import add_identify_command
 from .motor import add_motor_command
 from .plan import add_plan_command, run_plan_file
@@ -94,8 +96,26 @@ def _scenario_from_flags(args: argparse.Namespace) -> Scenario:
                     plant=Plant(motor, load=val["load_torque"]), t_end=val["t_end"])
 
 
+#: The files ``flatstep simulate --out`` writes, and the first bytes that make an existing one flatstep's.
+SIMULATE_FILES = {"run.png": PNG_MARK, "run.csv": CSV_MARK, "summary.json": json_marks("status")}
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse, before any work, an output of ``flatstep simulate`` that it may not write.
+
+    Not over its scenario, not over a user's file without ``--force``, not twice over one file (docs/errors.md,
+    "Files flatstep writes").
+    """
+    files = check_output_dir(args.out, "--out", SIMULATE_FILES, inputs=[args.scenario], force=args.force) \
+        if args.out else []
+    if args.record:
+        check_distinct({**{f"--out {args.out} ({f.name})": f for f in files}, "--record": args.record})
+        check_output(args.record, "--record", inputs=[args.scenario], force=args.force, marks=CSV_MARK)
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     """``flatstep simulate``: one closed-loop move from a scenario file or the flags; prints its summary."""
+    _check_outputs(args)
     if args.scenario:
         given = [f"--{k.replace('_', '-')}" for k in SIM_FLAGS if getattr(args, k) is not None]
         if given:
@@ -105,6 +125,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         scenario, _ = load_scenario(args.scenario)
     else:
         scenario = _scenario_from_flags(args)
+    if args.record and scenario.loop is None:
+        raise InputError("--record", args.record, f"--record {args.record}: a recording needs a sampled drive (a "
+                         "scenario file with [drive] control_rate): a continuous-time run has no drive that measures")
     if args.x0 is None:
         result = scenario.run()
     else:
@@ -220,6 +243,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     sim.add_argument("--record", metavar="DATA.csv", default=None, help="write what the drive measured (t, va, vb, ia, "
                      "ib, theta) for 'flatstep identify' (docs/identification.md); needs a sampled drive")
+    add_force(sim)
     sim.set_defaults(func=cmd_simulate)
 
     add_design_command(sub)

@@ -12,8 +12,9 @@ import numpy as np
 from ..json_out import strict_json
 from ..model.flat import flat_to_state
 from ..plan.limits import plan_margins
-from .flags import out_dir
-from .status import EXIT_LOST, EXIT_OK, EXIT_REFUSED
+from ..validate.paths import PNG_MARK, check_output_dir, json_marks
+from .flags import add_force, out_dir
+from .status import EXIT_OK, EXIT_REFUSED, exit_code, warn
 
 if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
     from ..engine.result import SimResult
@@ -21,6 +22,8 @@ if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not
 
 #: The controller types that follow a scenario plan's rho* (the others plan their own currents or ignore it).
 PLAN_RHO_TYPES = ("smc", "smc_ff", "smc_ff_hold")
+#: The files ``flatstep plan --out`` writes, and the first bytes that make an existing one flatstep's.
+PLAN_FILES = {"plan.png": PNG_MARK, "plan.json": json_marks("name")}
 MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
 
 
@@ -101,7 +104,7 @@ def _tracking(pf: "PlanFile", r: "SimResult") -> dict[str, Any]:
     return dict(control_rate=pf.simulate["control_rate"], max_abs_theta_error=float(err.max()), full_step=full_step,
                 lost_step=bool(err.max() >= full_step), final_error=float(r.theta[-1] - pf.plan.theta2),
                 peak_phase_voltage=float(np.max(np.abs([r.va, r.vb]))), v_bus=pf.limits.v_bus,
-                controller_faults=int(r.meta.get("controller_faults", 0)), status=r.status)
+                controller_faults=int(r.meta.get("controller_faults", 0)), status=r.status, lost_at=r.lost_at)
 
 
 def _margins_line(pf: "PlanFile") -> tuple[dict[str, float], list[str]]:
@@ -219,6 +222,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from ..plan.plan_file import is_plan_file, load_plan_file
     from ..studies.verify import verify_on_drive
 
+    check_output_dir(args.out, "--out", PLAN_FILES, inputs=[args.file], force=args.force)  # before any work
     if not is_plan_file(args.file) and Path(args.file).is_file():
         return _cmd_plan_scenario(args)
     pf = load_plan_file(args.file)
@@ -243,14 +247,17 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         report["tracking"] = tr = _tracking(pf, _run_on_drive(pf))
         print(f"  on the {tr['control_rate']:g} Hz drive: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
               f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
-              f"final error {tr['final_error']:.3g} rad")
+              f"final error {tr['final_error']:.3g} rad, status {tr['status']}")
     out = out_dir(args.out)
     plot_plan(pf, out / "plan.png")
     (out / "plan.json").write_text(strict_json(report, indent=2) + "\n")
     print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
     if not report.get("feasible", True):
         return EXIT_REFUSED
-    return EXIT_LOST if report.get("tracking", {}).get("lost_step", False) else EXIT_OK
+    if "tracking" not in report:
+        return EXIT_OK
+    warn(pf.name, report["tracking"])  # the run's status and exit code, as 'flatstep simulate FILE.toml' gives them
+    return exit_code([report["tracking"]["status"]])
 
 
 def add_plan_command(sub: Any) -> None:
@@ -260,8 +267,9 @@ def add_plan_command(sub: Any) -> None:
                        "segment family): print each move's and dwell's start and duration and the worst use of each "
                        "limit, write plan.png and plan.json; with --simulate, also run the plan on the 20 kHz drive "
                        "('flatstep simulate FILE.toml' runs it alone and prints the run's summary and status). Exit "
-                       "2 when the plan exceeds a limit or the drive does not keep it on the nominal and +-10 % "
-                       "plants (the check; --no-verify skips it), 3 when the --simulate run loses the move.")
+                       "2 when the plan exceeds a limit, a path is refused, or the drive does not keep it on the "
+                       "nominal and +-10 % plants (the check; --no-verify skips it), 3 when the --simulate run loses "
+                       "the move, 4 when its controller faulted (as 'flatstep simulate FILE.toml').")
     p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml), or a scenario file: its move, "
                    "checked against the law's singularity and the drive's bus")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
@@ -270,4 +278,5 @@ def add_plan_command(sub: Any) -> None:
     p.add_argument("--no-verify", action="store_true",
                    help="skip the check on the drive (the plan on the nominal and +-10 %% plants; docs/planning.md)")
     p.add_argument("--json", action="store_true", help="print plan.json to stdout (the text goes to stderr)")
+    add_force(p)
     p.set_defaults(func=cmd_plan)

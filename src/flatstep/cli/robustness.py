@@ -10,12 +10,18 @@ from ..json_out import strict_json
 from ..studies.robustness import REST_AFTER, encoder_count, plant_errors, run_study
 from ..studies.scenario_file import Robustness, load_scenario
 from ..validate.limits import check_study, estimate
-from .flags import count, out_dir
+from ..validate.paths import PNG_MARK, check_output_dir, json_marks
+from .flags import add_force, count, out_dir
 from .status import exit_code
+
+#: The files ``flatstep robustness --out`` writes, and the first bytes that make an existing one flatstep's.
+ROBUSTNESS_FILES = {"robustness.png": PNG_MARK, "robustness.json": json_marks("scenario")}
 
 
 def cmd_robustness(args: argparse.Namespace) -> int:
     """``flatstep robustness``: the scenario on every plant of its study, worst errors per gain set."""
+    if args.out:  # before any work
+        check_output_dir(args.out, "--out", ROBUSTNESS_FILES, inputs=[args.scenario], force=args.force)
     scenario, study = load_scenario(args.scenario)
     study = study or Robustness()
     if args.samples is not None:
@@ -73,4 +79,5 @@ def add_robustness_command(sub: argparse._SubParsersAction[argparse.ArgumentPars
     rob.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
     rob.add_argument("--out", default=None, help="write robustness.png and robustness.json here")
     rob.add_argument("--json", action="store_true", help="print the report as JSON")
+    add_force(rob)
     rob.set_defaults(func=cmd_robustness)

@@ -27,7 +27,7 @@ def describe(summary: Mapping[str, Any]) -> str:
     parts = []
     if summary.get("status") == "lost":
         parts.append(f"lost its move at t = {summary['lost_at']:.6g} s (|theta - theta*| beyond one full step, or "
-                     "half the move if smaller)")
+                     "half the last move if smaller)")
     if summary.get("controller_faults"):
         parts.append(f"the controller faulted in {summary['controller_faults']} periods (0 V applied)")
     return "; ".join(parts)

@@ -6,10 +6,12 @@ and robustness reports):
 * ``"lost"``: the move was lost, first at the time ``lost_at``: :math:`|\theta - \theta^*|` exceeded one
   full step, :math:`\pi/(2N_r)` (the angle between two detent positions of a two-phase motor: beyond it the
   rotor settles in another detent, the step an open-loop drive would skip), or the run ends with
-  :math:`|\theta - \theta^*|` beyond :func:`arrival_error`, half the move :math:`|\theta_2 - \theta_1|/2` if
-  that is smaller than a step (the rotor then rests nearer its start than its target: a move shorter than a
-  step, as the paper's 0.02 rad, is lost long before it is a full step off); ``lost_at`` is then the start of
-  that last excursion;
+  :math:`|\theta - \theta^*|` beyond :func:`arrival_error`, half the plan's *last move* if that is smaller
+  than a step (the rotor then rests nearer that move's start than its target: a move shorter than a step, as
+  the paper's 0.02 rad, is lost long before it is a full step off); ``lost_at`` is then the start of that last
+  excursion. The last move runs from the last rest of the plan at another angle than its end to its end
+  (:func:`last_move`, :func:`rest_angles`): :math:`|\theta_2 - \theta_1|` for a rest-to-rest move, 1 rad for a
+  waypoint plan 0 -> 1 -> 0 (a round trip returns to its start, but its last move is not of zero length);
 * ``"fault"``: the move was kept, but the controller faulted in ``controller_faults`` periods (outside its
   law's domain: it applied 0 V there), the first at ``first_fault_time``;
 * ``"ok"``: neither.
@@ -22,7 +24,7 @@ import csv
 import math
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any, Optional, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,14 +39,55 @@ def full_step(Nr: int) -> float:
     return math.pi / (2 * Nr)
 
 
-def arrival_error(Nr: int, theta1: float, theta2: float) -> float:
-    """The error at rest (from ``tf`` on) beyond which a move from ``theta1`` to ``theta2`` is lost [rad].
+#: Two rest angles closer than this, relative to the largest angle (at least 1 rad), are the same rest: the ends of
+#: a dwell evaluated on two segments differ by rounding. The C twin is ``BATCH_REST_TOLERANCE`` (csrc/batch.h).
+REST_TOLERANCE = 1e-12
 
-    One full step, or half the move if that is smaller (a move of zero length: one full step); see the module
+
+def last_move(rests: Sequence[float]) -> float:
+    """The length of the last move through the rest angles ``rests`` (in order) [rad]; 0 if it never moves.
+
+    The last move starts at the latest rest whose angle differs from the final one by more than
+    :data:`REST_TOLERANCE` (relative to the largest angle, at least 1 rad), so a dwell (two rests at one angle)
+    is no move, and a round trip 0 -> 1 -> 0 ends with a move of 1 rad. ``batch_arrival_error`` (csrc/batch.c)
+    computes the same.
+    """
+    if len(rests) < 2:
+        return 0.0
+    end = float(rests[-1])
+    tol = REST_TOLERANCE * max(1.0, max(abs(float(r)) for r in rests))
+    for r in reversed(rests[:-1]):
+        if abs(end - float(r)) > tol:
+            return abs(end - float(r))
+    return 0.0
+
+
+def arrival_error(Nr: int, *rests: float) -> float:
+    """The error at the end of a run beyond which its move is lost [rad]: the plan rests at ``rests`` in order.
+
+    One full step, or half the plan's last move (:func:`last_move`) if that is smaller; one full step for a plan
+    that never moves. ``arrival_error(Nr, theta1, theta2)`` is the rule of one rest-to-rest move; see the module
     docstring.
     """
-    half = 0.5 * abs(theta2 - theta1)
+    half = 0.5 * last_move(rests)
     return min(full_step(Nr), half) if half > 0 else full_step(Nr)
+
+
+def rest_angles(plan: Any) -> list[float]:
+    """The angles at which ``plan`` rests, in order: its start, each break where theta* stands still, its end.
+
+    A rest-to-rest move (no ``breaks``) rests at ``theta1`` and ``theta2``. A segment table
+    (:class:`~flatstep.plan.piecewise.PiecewisePlan`) rests at each break whose speed is at most 1e-9 of its
+    fastest break's (a waypoint passed at speed is no rest).
+    """
+    breaks = getattr(plan, "breaks", None)
+    if breaks is None:
+        return [float(plan.theta1), float(plan.theta2)]
+    f = plan.flag(np.asarray(breaks, dtype=float))
+    speed = np.abs(np.asarray(f.dtheta, dtype=float))
+    still = speed <= 1e-9 * float(speed.max()) if speed.size else speed == 0
+    rests = [float(plan.theta1), *np.asarray(f.theta, dtype=float)[still].tolist(), float(plan.theta2)]
+    return rests
 
 
 @dataclass
@@ -103,7 +146,8 @@ class SimResult:
         beyond = np.flatnonzero(err > full_step(int(Nr)))
         if beyond.size:
             return float(self.t[beyond[0]])
-        near = np.flatnonzero(err <= arrival_error(int(Nr), plan["theta1"], plan["theta2"]))
+        rests = plan.get("rests", (plan["theta1"], plan["theta2"]))  # results built before plans kept their rests
+        near = np.flatnonzero(err <= arrival_error(int(Nr), *rests))
         if near.size and near[-1] == err.size - 1:
             return None  # it ends within arrival_error of the target
         return float(self.t[near[-1] + 1]) if near.size else float(self.t[0])

@@ -31,7 +31,7 @@ from ..model.plant import Plant
 from ..plan.protocol import Plan, check_plan
 from ..validate import check_quantity
 from ..validate.limits import check_resources, check_timing, estimate
-from .result import SimResult
+from .result import SimResult, rest_angles
 from .settings import C_METHODS, SCIPY_METHODS, Continuous
 
 Array = NDArray[np.float64]
@@ -302,8 +302,8 @@ def assemble(run: Run, plant: Plant, plan: Plan, controller: Controller,
     """
     t, X = run.t, run.x
     meta = {**settings.as_dict(), **run.meta, "controller": type(controller).__name__,
-            "measurement": controller.measurement, "gains": controller.gains.as_dict(), "plan": plan.as_dict(),
-            "plant": plant.as_dict()}
+            "measurement": controller.measurement, "gains": controller.gains.as_dict(),
+            "plan": {**plan.as_dict(), "rests": rest_angles(plan)}, "plant": plant.as_dict()}
     if run.y is not None:
         meta["measured"] = {"theta": run.y[3], "omega": run.y[2], "ddtheta": run.y[4]}
     if run.faults is not None:

@@ -22,8 +22,9 @@ from typing import Any, Iterable, Optional, Sequence, TextIO
 
 from ..engine.result import SimResult
 from ..engine.simulate import RUNNERS
-from ..validate import check_bool, check_integer
-from .batch_file import BatchWriteError, open_batch_file
+from ..validate import InputError, check_bool, check_integer
+from ..validate.paths import check_output
+from .batch_file import BATCH_MARK, BatchWriteError, open_batch_file
 from .executors import as_executor, check_cancelled, default_chunk_size, executor_workers, run_chunks
 from .fingerprint import fingerprint
 from .scenario import Scenario
@@ -183,7 +184,8 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
         finish, each with its scenario's fingerprint. Run again with the same file, the batch reuses the rows
         already there, provided the file was written by this version of flatstep, for this engine and
         ``keep``, and each row's fingerprint is that of the scenario at its index (the list may have grown);
-        otherwise it is refused with a ValueError. A lock file ``<out>.lock`` keeps a second writer out.
+        otherwise it is refused with a ValueError. A lock file ``<out>.lock`` keeps a second writer out. A file
+        that is not a batch file (nor empty) is refused before any run, unless ``fresh`` (it is then moved aside).
     keep : sequence of str
         Names of time series (see :meth:`~flatstep.engine.result.SimResult.series`) to return in each row as
         ``series_<name>`` lists, for figures.
@@ -199,8 +201,10 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     Raises
     ------
     ValueError
-        For a bad argument, a file ``out`` that holds another batch (naming what differs), or a file another
-        live process is writing (naming the lock and its pid).
+        For a bad argument (an InputError naming it: also an executor that hands back no rows, or rows of another
+        task), a path ``out`` that cannot be written or is not a batch file (checked before any run), a file ``out``
+        that holds another batch (naming what differs), or a file another live process is writing (naming the
+        lock and its pid).
     BatchWriteError
         If writing ``out`` fails (an OSError, e.g. a full disk): the writing stops, the batch runs on to its
         end, and then this exception carries every row (``.rows``, input order) and the file (``.path``).
@@ -237,11 +241,17 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
         raise ValueError(f"engine={engine!r} is not an engine; valid: {engines}")
     if progress is not None:
         progress = check_bool("progress", progress)
-    if isinstance(keep, str):
-        raise ValueError(f"keep={keep!r} must be a sequence of series names, e.g. ('t', 'theta'), not a string")
+    if isinstance(keep, (str, bytes)) or not isinstance(keep, Iterable):
+        raise InputError("keep", keep, f"keep={keep!r} must be a sequence of series names, e.g. ('t', 'theta')")
+    keep = list(keep)
+    if not all(isinstance(k, str) for k in keep):
+        raise InputError("keep", keep, f"keep={keep!r} must hold series names (strings), e.g. ('t', 'theta')")
     valid = set(SimResult.__dataclass_fields__) - {"meta"} | {"theta_error", "rho_error"}
     if set(keep) - valid:
         raise ValueError(f"keep={list(keep)!r} names unknown series; valid: {sorted(valid)}")
+    if out is not None:  # before any work: not over a file that is not a batch file (fresh=True moves it aside)
+        out = check_output(out, "run_batch(out=)", force=fresh, marks=BATCH_MARK,
+                           force_hint="fresh=True to move it aside (to <out>.bak) and start afresh")
     in_c = engine == "c" and not keep and all(summarised_in_c(s) for s in scenarios)
     keep = tuple(keep)
     rows: dict[int, dict[str, Any]] = {}

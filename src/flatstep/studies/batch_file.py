@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import tempfile
 import time
 import warnings
 from contextlib import ExitStack
@@ -21,6 +22,9 @@ from ..json_out import strict_json
 
 #: The version of the file format, the value of the header's ``"flatstep_batch"`` key.
 FORMAT = 1
+#: The first bytes of a batch file (its header; a row, in the files of older versions, which had none): an existing
+#: file that starts otherwise is not flatstep's, and is not replaced.
+BATCH_MARK = (b'{"flatstep_batch"', b'{"index"')
 
 
 class BatchWriteError(OSError):
@@ -89,9 +93,12 @@ def acquire_lock(path: Path) -> Path:
         except FileExistsError:
             pid = _lock_pid(lock)
             try:
-                age = time.time() - lock.stat().st_mtime
+                age, size = time.time() - lock.stat().st_mtime, lock.stat().st_size
             except FileNotFoundError:
                 continue  # released in the meantime
+            if pid is None and size > 0 and _lock_pid(lock) is None:  # text that is no pid: not a lock of ours
+                raise ValueError(f"{path}: {lock} exists and is not a batch lock (it holds no process id); it is "
+                                 "not removed: rename it, or write the batch to another file") from None
             if (pid is not None and pid_alive(pid)) or (pid is None and age < 10.0):
                 holder = f"process {pid}" if pid is not None else "a process that has not written its pid yet"
                 raise ValueError(f"{path} is being written by {holder} (lock {lock}); wait for that batch to "
@@ -212,9 +219,11 @@ def read_rows(path: Path, head: dict[str, Any], fingerprints: Sequence[str],
 
 def _rewrite(path: Path, head: dict[str, Any], rest: bytes) -> None:
     """Replace ``path`` by ``head`` followed by ``rest``, atomically (a new file, synced, renamed over it)."""
-    tmp = path.with_name(path.name + ".tmp")
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".", suffix=".tmp")  # a new file, never a user's
+    tmp = Path(name)
     try:
-        with open(tmp, "wb") as f:
+        os.fchmod(fd, path.stat().st_mode & 0o7777 if path.exists() else 0o644)  # mkstemp's 0600 otherwise
+        with os.fdopen(fd, "wb") as f:
             f.write(strict_json(head).encode() + b"\n" + rest)
             f.flush()
             os.fsync(f.fileno())

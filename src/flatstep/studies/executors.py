@@ -9,7 +9,7 @@ within one control period: their C runs poll a cancel flag that the interrupted 
 from __future__ import annotations
 
 from concurrent.futures import Executor, Future, ThreadPoolExecutor, as_completed, wait
-from typing import Any, Callable, Optional, Sequence, TypeVar
+from typing import Any, Callable, Optional, Sequence, TypeVar, cast
 
 #: Tasks per worker when the chunk size is not given: enough to even out runs of different lengths.
 TASKS_PER_WORKER = 8
@@ -71,6 +71,30 @@ def check_cancelled() -> None:
         raise ChunkCancelled("the batch was interrupted")
 
 
+def check_rows(executor: Any, chunk: Sequence[tuple[int, Any]], rows: Any) -> Rows:
+    """``rows``, if they are a chunk's rows (a list of one dict per scenario, each with its ``index``).
+
+    Raises
+    ------
+    InputError
+        Naming the executor and the chunk's first row, when the executor handed back something else (``None``
+        from a ``submit`` that does not run the function, rows of another chunk).
+    """
+    from ..validate import InputError
+
+    want = sorted(i for i, _ in chunk)
+    got = sorted(r.get("index", -1) for r in rows if isinstance(r, dict)) if isinstance(rows, list) else None
+    if got != want or len(rows) != len(want):
+        first = f"row {want[0]}" + (f" to {want[-1]}" if len(want) > 1 else "")
+        name = getattr(chunk[0][1], "name", "?") if chunk else "?"
+        shown = repr(rows) if len(repr(rows)) <= 80 else repr(rows)[:77] + "..."
+        raise InputError("executor", executor, f"executor={executor!r} returned {shown} for the task of {first} "
+                         f"(scenario {name!r}); a task must return what the submitted function returned: a list of "
+                         f"{len(want)} summary row(s) with the indices {want[:5]}{'...' if len(want) > 5 else ''}; "
+                         "check that the executor's submit() runs the function and hands back its result")
+    return list(rows)
+
+
 def _in_scope(flag: Any, run_chunk: Callable[..., Rows], chunk: Any, *args: Any) -> Rows:
     """``run_chunk(chunk, *args)`` with this thread's C runs polling ``flag``; its rows unless it was set."""
     from .._core_structs import cancel_scope
@@ -97,9 +121,19 @@ def run_chunks(pool: Executor, run_chunk: Callable[..., Rows], chunks: Sequence[
     flag = cancel_flag() if isinstance(pool, ThreadPoolExecutor) else None
     futures: list[Future[Rows]] = [pool.submit(run_chunk, chunk, *args) if flag is None
                                    else pool.submit(_in_scope, flag, run_chunk, chunk, *args) for chunk in chunks]
+    bad = [k for k, fut in enumerate(futures) if not isinstance(fut, Future)]
+    if bad:
+        from ..validate import InputError
+
+        for fut in futures:
+            if isinstance(fut, Future):
+                fut.cancel()
+        raise InputError("executor", pool, f"executor={pool!r}: submit() returned {futures[bad[0]]!r} for the task of "
+                         f"chunk {bad[0]}; an executor's submit() must return a concurrent.futures.Future")
+    of = {id(fut): chunk for fut, chunk in zip(futures, chunks, strict=True)}
     try:
         for fut in as_completed(futures):
-            record(fut.result())
+            record(check_rows(pool, cast(Sequence[tuple[int, Any]], of[id(fut)]), fut.result()))
     except BaseException:
         for fut in futures:
             fut.cancel()
