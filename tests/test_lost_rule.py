@@ -135,9 +135,21 @@ def test_simulate_and_plan_simulate_agree_on_a_lost_round_trip(cli, tmp_path):
     """The same trip on a 2 kHz drive loses its move: status lost, exit 3 and a warning in both commands."""
     path = plan_file(tmp_path, rate=2000.0)
     sim = cli(["simulate", path, "--json"], cwd=tmp_path)
-    run = cli(["plan", path, "--simulate", "--out", "p"], cwd=tmp_path)
+    run = cli(["plan", path, "--simulate", "--no-verify", "--out", "p"], cwd=tmp_path)  # unchecked: as simulate runs it
     tracking = json.loads((tmp_path / "p" / "plan.json").read_text())["tracking"]
     summary = json.loads(sim.stdout[sim.stdout.index("{"):])
     assert (sim.returncode, run.returncode) == (3, 3)
     assert summary["status"] == tracking["status"] == "lost" and summary["lost_at"] == tracking["lost_at"]
     assert "lost its move" in sim.stderr and "lost its move" in run.stderr
+
+
+def test_the_plan_check_does_not_call_the_lost_trip_feasible(cli, tmp_path):
+    """The trip that the 2 kHz drive loses is not reported feasible as it stands: refused, or backed off and kept."""
+    path = plan_file(tmp_path, rate=2000.0)
+    run = cli(["plan", path, "--simulate", "--out", "p"], cwd=tmp_path)
+    report = json.loads((tmp_path / "p" / "plan.json").read_text())
+    assert run.returncode in (0, 2), run.stderr
+    if run.returncode == 0:
+        assert report["tracking"]["status"] == "ok" and report["verify"]["backed_off"], report["verify"]
+    else:
+        assert not report["verify"]["verified"] and "binds" in run.stdout + run.stderr and "tracking" not in report
