@@ -34,7 +34,7 @@ import numpy as np
 from ..loop.observers import Observer
 from ..model.motor import MotorParams
 from ..plan.feasibility import check_feasibility
-from ..plan.rest_to_rest import RestToRest
+from ..plan.piecewise import Plan
 from ..validate import check_bool, check_count, check_quantity
 from .smc import SMCGains
 
@@ -60,7 +60,7 @@ class Design:
                 "rationale": dict(self.rationale), "warnings": list(self.warnings)}
 
 
-def design_gains(motor: MotorParams, plan: RestToRest, *, control_period: float = 5e-5, v_bus: float = 24.0,
+def design_gains(motor: MotorParams, plan: Plan, *, control_period: float = 5e-5, v_bus: float = 24.0,
                  encoder_counts: Optional[int] = 16384, current_step: float = 4.0 / 4096,
                  load_torque: float = 1e-5, uncertainty: float = 0.1, compute_delay: bool = False) -> Design:
     """Pick W1, W2, eps1, eps2, xi, wn and the observer bandwidth for a sampled drive.

@@ -22,8 +22,9 @@ from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.loss_aware import LossAwareRho
+from ..plan.piecewise import Plan
 from ..plan.rest_to_rest import RestToRest
-from ..validate import check_positive
+from ..validate import InputError, check_positive
 from .cascade import CascadeFOC, CascadeGains
 from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
 from .dq_smc import DQFlatnessSMC, DQIntegral, DQKmAdaptation
@@ -72,7 +73,7 @@ def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[floa
     return lam, WN_OVER_LAMBDA * lam
 
 
-def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_period: float | None,
+def make_controller(kind: str, motor: MotorParams, plan: Plan, *, control_period: float | None,
                     measurement: str, smc_gains: SMCGains = _PAPER_SMC_GAINS, v_limit: float = math.inf,
                     bandwidth_scale: float = 1.0, compute_delay: bool = False,
                     torques: Optional[TorqueModel] = None,
@@ -108,6 +109,10 @@ def make_controller(kind: str, motor: MotorParams, plan: RestToRest, *, control_
         return FlatnessSMC(motor, plan, smc_gains, measurement, torques=known,
                            loss_aware=(loss_aware or LossAwareRho.for_plan(plan)) if kind in ("smc_la", "smc_la_ff")
                            else None)
+    if not isinstance(plan, RestToRest):  # a waypoint plan's segment table: only FlatnessSMC follows one
+        raise InputError("controller_type", kind, f"controller type {kind!r} tracks the paper's rest_to_rest move "
+                         "only, not a segment table; the types that follow one: smc, smc_ff, smc_la, smc_la_ff, "
+                         "smc_ff_hold")
     if kind in ("dq_smc", "dq_smc_ff"):
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:

@@ -11,8 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
 from ..validate import check_integer, check_quantity
-from .piecewise import check_plan
-from .rest_to_rest import RestToRest
+from .piecewise import Plan, check_plan
 
 
 class InfeasiblePlanError(ValueError):
@@ -67,13 +66,13 @@ class FeasibilityReport:
         return d
 
 
-def _torque_margin(plan: RestToRest, motor: MotorParams, load_torque: float, t: ArrayLike) -> NDArray[np.float64]:
+def _torque_margin(plan: Plan, motor: MotorParams, load_torque: float, t: ArrayLike) -> NDArray[np.float64]:
     """``Km rho* - |J theta*'' + B theta*' + tau|`` [N m] at times ``t``: > 0 where the flat maps are regular."""
     f = plan.flag(t)
     return motor.Km * f.rho - np.abs(motor.J * f.ddtheta + motor.B * f.dtheta + load_torque)
 
 
-def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: float = 0.0,
+def check_feasibility(plan: Plan, motor: MotorParams, *, load_torque: float = 0.0,
                       v_max: Optional[float] = None, i_max: Optional[float] = None,
                       n: int = 2001) -> FeasibilityReport:
     r"""Check the whole plan before anything is simulated.

@@ -26,7 +26,7 @@ from ..model.flat import FlatFlag
 from ..model.motor import MotorParams
 from ..model.torque_model import TorqueModel
 from ..validate import check_finite, check_positive
-from .rest_to_rest import RestToRest
+from .piecewise import Plan
 
 
 @dataclass(frozen=True)
@@ -60,6 +60,6 @@ class LossAwareRho:
         return asdict(self)
 
     @classmethod
-    def for_plan(cls, plan: RestToRest, margin: float = math.pi / 4) -> "LossAwareRho":
+    def for_plan(cls, plan: Plan, margin: float = math.pi / 4) -> "LossAwareRho":
         """Half the plan's smaller end current held (the default of :func:`flatstep.control.make_controller`)."""
         return cls(rho_hold=0.5 * min(plan.rho1, plan.rho2), margin=margin)

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SMC_TYPES
 from ..engine.result import STATUSES, SimResult
-from ..plan.rest_to_rest import RestToRest
+from ..plan.piecewise import Plan
 from .batch import run_batch
 from .calibrate import Calibration, check_drive
 from .calibrate import calibrate as calibrate_unit
@@ -51,7 +51,7 @@ def _trapezoid(f: NDArray[np.float64], t: NDArray[np.float64]) -> float:
 
 
 def metrics(t: ArrayLike, theta_error: ArrayLike, ia: ArrayLike, ib: ArrayLike, va: ArrayLike, vb: ArrayLike,
-            plan: RestToRest, *, band: float, R: float) -> dict[str, Optional[float]]:
+            plan: Plan, *, band: float, R: float) -> dict[str, Optional[float]]:
     """The comparison metrics (module docstring) of one run's time series (arrays over the control instants)."""
     ts, e = np.asarray(t, dtype=float), np.abs(np.asarray(theta_error, dtype=float))
     i_a, i_b, v_a, v_b = (np.asarray(a, dtype=float) for a in (ia, ib, va, vb))
@@ -86,7 +86,7 @@ def metrics(t: ArrayLike, theta_error: ArrayLike, ia: ArrayLike, ib: ArrayLike, 
     }
 
 
-def result_metrics(result: SimResult, plan: RestToRest, *, band: float, R: float) -> dict[str, Optional[float]]:
+def result_metrics(result: SimResult, plan: Plan, *, band: float, R: float) -> dict[str, Optional[float]]:
     """:func:`metrics` of a :class:`~flatstep.engine.result.SimResult`."""
     return metrics(result.t, result.theta_error, result.ia, result.ib, result.va, result.vb, plan, band=band, R=R)
 
