@@ -8,8 +8,9 @@ import time
 from dataclasses import replace
 from typing import Any, Literal, Optional, Sequence
 
-from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, LABELS, SMC_TYPES
+from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, LABELS, SEGMENT_TYPES, SMC_TYPES
 from ..json_out import strict_json
+from ..plan.rest_to_rest import RestToRest
 from ..studies.calibrate import calibration_horizon
 from ..studies.compare import bandwidth_sweep, check_calibrate, compare, compare_worst, default_band, scenario_kinds
 from ..studies.robustness import encoder_count, plant_errors
@@ -127,6 +128,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if unknown or not kinds or len(set(kinds)) != len(kinds):
         raise ValueError(f"--controllers {args.controllers!r}: give distinct names among {list(CONTROLLER_TYPES)}, "
                          "separated by commas")
+    if not isinstance(scenario.plan, RestToRest) and any(k not in SEGMENT_TYPES for k in kinds):
+        raise ValueError(f"--controllers {args.controllers!r}: on {args.scenario}'s waypoint plan only "
+                         f"{list(SEGMENT_TYPES)} run (the others track the paper's rest_to_rest move only)")
     if args.band is not None and args.band <= 0:
         raise ValueError(f"--band {args.band!r}: the settling band must be > 0 rad")
     band = args.band if args.band is not None else default_band(scenario)

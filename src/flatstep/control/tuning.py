@@ -59,6 +59,8 @@ FEEDFORWARD_TYPES = ("smc_ff", "dq_smc_ff", "smc_la_ff", "cascade_ff", "cascade_
 REST_HOLD_DAMPING = 1.0
 #: The sliding controller's default gains, the paper's.
 _PAPER_SMC_GAINS = SMCGains()
+#: The controller types that follow a waypoint plan's segment table (the others track the paper's move only).
+SEGMENT_TYPES = ("smc", "smc_ff", "smc_la", "smc_la_ff", "smc_ff_hold")
 #: What :func:`make_controller` returns.
 AnyController = Union[FlatnessSMC, DQFlatnessSMC, Microstepping, CascadeFOC, ExactLinearization]
 
@@ -111,8 +113,7 @@ def make_controller(kind: str, motor: MotorParams, plan: Plan, *, control_period
                            else None)
     if not isinstance(plan, RestToRest):  # a waypoint plan's segment table: only FlatnessSMC follows one
         raise InputError("controller_type", kind, f"controller type {kind!r} tracks the paper's rest_to_rest move "
-                         "only, not a segment table; the types that follow one: smc, smc_ff, smc_la, smc_la_ff, "
-                         "smc_ff_hold")
+                         f"only, not a segment table; the types that follow one: {', '.join(SEGMENT_TYPES)}")
     if kind in ("dq_smc", "dq_smc_ff"):
         return DQFlatnessSMC(motor, plan, smc_gains, measurement, torques=known, d_current=d_current)
     if control_period is None:

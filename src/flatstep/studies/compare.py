@@ -25,9 +25,10 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SMC_TYPES
+from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SEGMENT_TYPES, SMC_TYPES
 from ..engine.result import STATUSES, SimResult
 from ..plan.piecewise import Plan
+from ..plan.rest_to_rest import RestToRest
 from .batch import run_batch
 from .calibrate import Calibration, check_drive
 from .calibrate import calibrate as calibrate_unit
@@ -109,8 +110,12 @@ def _check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
 
 
 def scenario_kinds(scenario: Scenario) -> tuple[str, ...]:
-    """Every controller type the scenario can run: all of them, less the ``_ff`` ones without a torque model."""
-    return tuple(k for k in CONTROLLER_TYPES if scenario.torques is not None or k not in FEEDFORWARD_TYPES)
+    """Every controller type the scenario can run: all, less the ``_ff`` ones without a torque model.
+
+    On a waypoint plan's segment table, only the types that follow one (:data:`SEGMENT_TYPES`).
+    """
+    return tuple(k for k in CONTROLLER_TYPES if (scenario.torques is not None or k not in FEEDFORWARD_TYPES)
+                 and (isinstance(scenario.plan, RestToRest) or k in SEGMENT_TYPES))
 
 
 def check_calibrate(calibrate: Optional[str], scenario: Scenario, kinds: Sequence[str]) -> Optional[str]:
