@@ -68,7 +68,8 @@ TO = '[plan]\nplanner = "time_optimal"\nwaypoints = [0.0, 1.0]\n'
     ('[motor]\npreset = "nema23"\n' + TO, "preset='nema23' is unknown"),
     (MOTOR + '[plan]\nplanner = "psi"\n', "the psi planner needs waypoints"),
     (MOTOR + DRIVE + "[limits]\ni_max = 1\n[plan]\nplanner = \"time_optimal\"\nwaypoints = ["
-     + ", ".join(str(i % 2) for i in range(1002)) + "]\n", "1002 waypoint\\(s\\) are 1001 moves; a sequence has 1 to 1000"),
+     + ", ".join(str(i % 2) for i in range(1002)) + "]\n",
+     "1002 waypoint\\(s\\) are 1001 moves; a sequence has 1 to 1000"),
 ])
 def test_bad_plan_files_are_refused(tmp_path, capsys, text, match):
     path = tmp_path / "bad.toml"

@@ -76,6 +76,9 @@ def wrap(where: str, section: str, build: Callable[..., T], **kwargs: Any) -> T:
     except InputError as exc:
         raise exc.at(source(where, section, exc.name, kwargs)) from None
     except (TypeError, ValueError) as exc:
+        named = [k for k in kwargs if str(exc).startswith(f"{k}=")]
+        if named:  # a consistency check that names its key first ("i_hold=2.0 A must be below i_max ...")
+            raise InputError(named[0], kwargs[named[0]], f"{source(where, section, named[0], kwargs)}: {exc}") from None
         raise ValueError(f"{where}: [{section}] {exc}") from None
 
 

@@ -15,7 +15,7 @@ from ..plan.piecewise import PiecewisePlan
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..plan.sequence import PLANNERS, Step, family_steps, optimal_sequence
 from ..plan.waypoints import Caps, Waypoint, plan_waypoints
-from ..validate import InputError, check_bool, check_choice, check_finite, check_quantity
+from ..validate import InputError, check_bool, check_choice, check_finite, check_positive, check_quantity
 from ..validate.checks import is_real
 from ..validate.limits import MAX_OPTIMAL_MOVES
 from .file_values import wrap
@@ -108,23 +108,36 @@ def _caps(where: str, raw: Any) -> Caps:
                                             f"caps.{OLD_CAPS[key]}")
     if set(raw) != set(CAPS):
         raise InputError("caps", raw, f"{where}:plan.caps: caps={raw!r} must give exactly {list(CAPS)}")
-    v = {k: _number(where, f"plan.caps.{k}", raw[k]) for k in CAPS}
-    return wrap(where, "plan.caps", lambda **kw: Caps(**kw), v_max=v["speed_max"], a_max=v["accel_max"],
-                j_max=v["jerk_max"])
+    v = {}
+    for key in CAPS:
+        try:
+            v[key] = check_positive(key, raw[key])
+        except InputError as exc:
+            raise exc.at(f"{where}:plan.caps.{key}") from None
+    return Caps(v_max=v["speed_max"], a_max=v["accel_max"], j_max=v["jerk_max"])
 
 
-def _durations(where: str, raw: Any) -> list[float]:
-    """``[plan] durations``: a list of numbers."""
-    if not isinstance(raw, list):
-        raise InputError("durations", raw, f"{where}:plan.durations: durations={raw!r} must be a list of durations "
-                                           "[s], one per move")
-    return [_number(where, f"plan.durations[{i}]", d) for i, d in enumerate(raw)]
+def _durations(where: str, raw: Any, moves: int) -> list[float]:
+    """``[plan] durations``: one duration > 0 [s] per move."""
+    if not isinstance(raw, list) or len(raw) != moves:
+        raise InputError("durations", raw, f"{where}:plan.durations: durations={raw!r} must be a list of {moves} "
+                                           f"durations [s], one per move between the {moves + 1} waypoints")
+    out = []
+    for i, d in enumerate(raw):
+        try:
+            out.append(check_positive(f"durations[{i}]", d, unit=" s"))
+        except InputError as exc:
+            raise exc.at(f"{where}:plan.durations[{i}]") from None
+    return out
 
 
 def read_limits(where: str, table: dict[str, Any], v_bus: Optional[float]) -> Optional[MotorLimits]:
     """``[limits]`` as :class:`MotorLimits` on the bus ``v_bus`` (``[drive] v_bus``); ``None`` without it."""
     if not table:
         return None
+    if "i_max" not in table:
+        raise InputError("i_max", None, f"{where}:limits.i_max: [limits] needs i_max, the largest current-vector "
+                                        "magnitude [A] a plan may ask")
     if v_bus is None:
         raise InputError("v_bus", None, f"{where}:drive.v_bus: [limits] plans against the bus: give [drive] v_bus "
                                         "(and [drive] control_rate)")
@@ -162,7 +175,7 @@ def read_plan(where: str, table: dict[str, Any], motor: MotorParams, limits: Opt
         else:
             rho = _number(where, "plan.rho", given.get("rho", 0.5), "current")
             caps = _caps(where, given["caps"]) if "caps" in given else None
-            durations = _durations(where, given["durations"]) if "durations" in given else None
+            durations = _durations(where, given["durations"], len(points) - 1) if "durations" in given else None
             segments = plan_waypoints(points, family=planner, rho=rho, t0=t0, durations=durations, caps=caps)
             steps = family_steps(segments, points, planner)
     except InputError as exc:
