@@ -7,7 +7,7 @@ from :data:`PLANNER_KEYS` and the old names it refuses with their new ones from 
 """
 from __future__ import annotations
 
-from dataclasses import MISSING, dataclass, fields
+from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
 from ..control.smc import MEASUREMENTS, SMCGains
@@ -97,13 +97,13 @@ KEYS: dict[str, dict[str, Key]] = {
     "": {
         "name": Key("", "string", "the file's stem", "a label for tables, rows and figures"),
         "description": Key("", "string", '""', "free text"),
-        "t_end": _q("t_end", None, "the run's horizon, from t = 0 (default: 0.06 s for rest_to_rest, the plan's "
-                                   "end + 0.02 s for the waypoint planners); at least [plan] tf"),
+        "t_end": replace(_q("t_end", None, "the run's horizon from t = 0, at least the plan's end"),
+                         default="0.06 (rest_to_rest); the plan's end + 0.02 (waypoints)"),
         **{t: Key("", "table", "-", f"the [{t}] table") for t in (
             "motor", "plant", "plan", "limits", "controller", "drive", "sensors", "observer", "load", "feedforward",
             "robustness")},
     },
-    "motor": {"preset": Key("", " | ".join(f'"{p}"' for p in sorted(PRESETS)), f'"{DEFAULT_MOTOR}"',
+    "motor": {"preset": Key("", ", ".join(f'"{p}"' for p in sorted(PRESETS)), f'"{DEFAULT_MOTOR}"',
                             "the motor the other keys start from (a waypoint plan must give [motor])"),
               **_MOTOR},
     "plant": {"preset": Key("", "as [motor] preset", "[motor]", "the simulated motor, when it is not the model"),
@@ -111,7 +111,7 @@ KEYS: dict[str, dict[str, Key]] = {
                                      "the simulated motor's parameters as factors on [motor]'s"),
               **_EFFECTS},
     "plan": {
-        "planner": Key("", " | ".join(f'"{p}"' for p in PLANNERS), '"rest_to_rest"',
+        "planner": Key("", ", ".join(f'"{p}"' for p in PLANNERS), '"rest_to_rest"',
                        "how the move is planned (required with waypoints)"),
         **{k: _q(kind, getattr(PAPER_PLAN, k), doc) for k, kind, doc in (
             ("theta1", "angle", "rest_to_rest: start angle"), ("theta2", "angle", "rest_to_rest: end angle"),
@@ -122,7 +122,7 @@ KEYS: dict[str, dict[str, Key]] = {
         "waypoints": Key("rad", f"list of 2 to {MAX_OPTIMAL_MOVES + 1} angles or tables {{theta, velocity, dwell}}",
                          "-", "the angles to pass, in order; velocity [rad/s] (hermite, spline: at a via point; "
                               "none: the planner's choice), dwell [s] (a rest there)"),
-        "through": Key("", "true | false", "false", "time_optimal: pass a waypoint at speed where the motion keeps "
+        "through": Key("", "true, false", "false", "time_optimal: pass a waypoint at speed where the motion keeps "
                                                      "its direction"),
         "rho": Key("A", "> 0", "0.5", "psi, hermite, spline, scurve: the constant current magnitude"),
         "durations": Key("s", "list of one duration > 0 per move", "-",
@@ -133,15 +133,15 @@ KEYS: dict[str, dict[str, Key]] = {
     "limits": {k: Key(*_LIMIT_DOCS[k][:2], _fmt(_default(MotorLimits, k)), _LIMIT_DOCS[k][2])
                for k in _LIMIT_DOCS},
     "controller": {
-        "type": Key("", " | ".join(f'"{c}"' for c in CONTROLLER_TYPES), '"smc"', "the control law"),
+        "type": Key("", ", ".join(f'"{c}"' for c in CONTROLLER_TYPES), '"smc"', "the control law"),
         "bandwidth_scale": _q("scale", 1.0, "multiplies every bandwidth of a baseline"),
-        "measurement": Key("", " | ".join(f'"{m}"' for m in MEASUREMENTS), "what the drive gives",
+        "measurement": Key("", ", ".join(f'"{m}"' for m in MEASUREMENTS), "what the drive gives",
                            "where the law's speed and acceleration come from (observer with an observer, model with "
                            "sensors, else ideal)"),
         **{k: _q("gain", _default(SMCGains, k), f"the sliding law's {k}") for k in ("W1", "W2", "eps1", "eps2", "wn")},
         "xi": _q("damping", _default(SMCGains, "xi"), "damping of the theta error dynamics"),
         "hold_damping": _q("damping", None, "from tf on, hold the target's detent with this damping (none: track)"),
-        "design": Key("", "true | false", "false", "design the gains for the drive (needs [drive] control_rate)"),
+        "design": Key("", "true, false", "false", "design the gains for the drive (needs [drive] control_rate)"),
         "uncertainty": _q("relative", 0.1, "the relative parameter error the design allows"),
         "weakening": Key("A s/rad", ">= 0", "0", "d-q types: field weakening slope"),
         "weakening_speed": Key("rad/s", ">= 0", "0", "d-q types: speed above which the d current weakens"),
@@ -152,10 +152,10 @@ KEYS: dict[str, dict[str, Key]] = {
         "control_rate": _q("rate", None, "the sampled controller's rate (none: continuous-time control, as in the "
                                          "paper; needed by every other [drive] key, [sensors] and [observer])"),
         "substeps": _i("substeps", 4, "plant integration steps per control period"),
-        "compute_delay": Key("", "true | false", "false", "apply each period's voltages one period late"),
+        "compute_delay": Key("", "true, false", "false", "apply each period's voltages one period late"),
         "v_bus": _q("v_bus", _default(Drive, "v_bus"), "the bus voltage: the drive saturates each phase at it, the "
                                                        "design and the planners read it (required with [limits])"),
-        "pwm": Key("", " | ".join(f'"{m}"' for m in PWM_MODES), _fmt(_default(Drive, "pwm")), "the drive's PWM model"),
+        "pwm": Key("", ", ".join(f'"{m}"' for m in PWM_MODES), _fmt(_default(Drive, "pwm")), "the drive's PWM model"),
         "f_pwm": _q("rate", _default(Drive, "f_pwm"), "switched PWM: the PWM frequency"),
         "dead_time": Key("s", "[0, half a PWM period)", _fmt(_default(Drive, "dead_time")), "switched PWM: dead time"),
     },
@@ -241,7 +241,8 @@ def markdown_reference() -> str:
         lines += [f"| `{k}` | {key.unit} | {key.valid} | {key.default} | {key.doc} |" for k, key in keys.items()]
     lines += ["", "## Old names", "", "A file that uses an old name is refused with its new one:", "",
               "| old | new |", "|---|---|"]
-    lines += [f"| `{('[' + t + '] ') if t not in ('', '*') else ''}{k}` | {why} |" for (t, k), why in RENAMED.items()]
+    names = {"": "[{k}]", "*": "{k} (in any table)"}
+    lines += [f"| `{names.get(t, '[' + t + '] {k}').format(k=k)}` | {why} |" for (t, k), why in RENAMED.items()]
     lines += [f"| `[plan] caps.{old}` | `caps.{new}` |" for old, new in OLD_CAPS.items()]
     lines += ["| `[plan] waypoints` without `planner` | give `planner` (plan files planned `\"time_optimal\"`) |",
               "| `[plan] waypoints` without `[motor]` | give `[motor]` (plan files ran on `\"nema17\"`) |"]
