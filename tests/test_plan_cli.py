@@ -184,3 +184,27 @@ def test_plan_simulates_the_papers_move_and_reports_an_infeasible_one(tmp_path, 
     out = capsys.readouterr().out
     assert "infeasible: torque demand exceeds Km rho*" in out and "no plan.png" in out
     assert not json.loads((tmp_path / "plan.json").read_text())["feasible"]
+
+
+def test_the_papers_move_under_limits_shows_its_margins(cli, tmp_path):
+    """rest_to_rest with [limits]: the margins of a waypoint plan, on the [drive] bus."""
+    path = tmp_path / "r2r.toml"
+    path.write_text("t_end = 0.1\n" + MOTOR + DRIVE + "[limits]\ni_max = 1.5\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\n"
+                    "rho2 = 1.0\nt0 = 0.01\ntf = 0.07\n")
+    run = cli(["plan", path, "--out", tmp_path / "o"])
+    assert run.returncode == 0, run.stderr
+    report = json.loads((tmp_path / "o" / "plan.json").read_text())
+    assert report["limits"]["v_bus"] == 24.0 and report["limits"]["i_max"] == 1.5
+    assert report["margins"]["current"] == pytest.approx(1.0 / 1.5) and report["feasible"]
+    path.write_text(path.read_text().replace("i_max = 1.5", "i_max = 0.9\ni_hold = 0.2"))
+    run = cli(["simulate", path])
+    assert run.returncode == 2 and "r2r.toml: the plan exceeds its limits (current)" in run.stderr
+
+
+def test_compare_on_a_waypoint_plan_runs_only_the_types_that_follow_it(cli, tmp_path):
+    path = next(p for p in EXAMPLES if p.stem == "spline")
+    run = cli(["compare", path, "--controllers", "cascade,smc"], cwd=tmp_path)
+    assert run.returncode == 2 and "only ['smc', 'smc_ff'" in run.stderr
+    from flatstep.studies.compare import scenario_kinds
+
+    assert set(scenario_kinds(read_scenario_file(path).scenario)) == {"smc", "smc_la"}
