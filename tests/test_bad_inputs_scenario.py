@@ -174,7 +174,7 @@ def test_a_bad_file_is_refused_naming_the_key(tmp_path, table, text, needle):
     with pytest.raises(ValueError) as err:
         read_scenario_file(path)
     message = str(err.value)
-    assert time.perf_counter() - start < 2.0, "refused before any work"
+    assert time.perf_counter() - start < 10.0, "refused before any work (planning 1e5 waypoints takes minutes)"
     assert message.startswith(str(path)), message
     for part in needle.split("|"):
         assert part in message, (part, message)

@@ -165,23 +165,27 @@ def read_plan(where: str, table: dict[str, Any], motor: MotorParams, limits: Opt
         raise InputError("waypoints", None, f"{where}:plan.waypoints: the {planner} planner needs waypoints")
     points = _waypoints(where, given["waypoints"])
     t0 = _number(where, "plan.t0", given.get("t0", 0.0), "time")
-    try:
-        if planner == "time_optimal":
+    if planner == "time_optimal":
+        try:
             through = check_bool("through", given.get("through", False))
-            if limits is None:
-                raise InputError("limits", None, f"{where}:limits: the time_optimal planner plans against the "
-                                                 "motor's limits: give [limits] i_max (and [drive] v_bus)")
+        except InputError as exc:
+            raise exc.at(f"{where}:plan.through") from None
+        if limits is None:
+            raise InputError("limits", None, f"{where}:limits: the time_optimal planner plans against the motor's "
+                                             "limits: give [limits] i_max (and [drive] v_bus)")
+    else:
+        rho = _number(where, "plan.rho", given.get("rho", 0.5), "current")
+        caps = _caps(where, given["caps"]) if "caps" in given else None
+        durations = _durations(where, given["durations"], len(points) - 1) if "durations" in given else None
+    try:  # the planners' own refusals: waypoints too close, a speed where a rest is due, neither durations nor caps
+        if planner == "time_optimal":
+            assert limits is not None
             segments, steps = optimal_sequence(points, motor, limits, t0, through)
         else:
-            rho = _number(where, "plan.rho", given.get("rho", 0.5), "current")
-            caps = _caps(where, given["caps"]) if "caps" in given else None
-            durations = _durations(where, given["durations"], len(points) - 1) if "durations" in given else None
             segments = plan_waypoints(points, family=planner, rho=rho, t0=t0, durations=durations, caps=caps)
             steps = family_steps(segments, points, planner)
     except InputError as exc:
-        if exc.args and str(exc).startswith(where):
-            raise
-        raise exc.at(f"{where}:plan.{exc.name if exc.name in given else 'waypoints'}") from None
+        raise exc.at(f"{where}:plan.waypoints") from None
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}:plan: {exc}") from None
     return PlannedMove(planner, segments, steps, limits)
