@@ -176,7 +176,7 @@ def test_plan_simulates_the_papers_move_and_reports_an_infeasible_one(tmp_path, 
     assert main(["plan", str(path), "--out", str(tmp_path), "--simulate"]) == 0
     tracking = json.loads((tmp_path / "plan.json").read_text())["tracking"]
     assert tracking["control_rate"] is None and tracking["status"] == "ok" and not tracking["lost_step"]
-    assert "on the continuous-time control" in capsys.readouterr().out
+    assert "in continuous time: max" in capsys.readouterr().out
     fast = tmp_path / "fast.toml"  # the paper's move in 0.1 ms: its torque demand passes Km rho*
     assert "tf = 0.04\n" in path.read_text()
     fast.write_text(path.read_text().replace("tf = 0.04\n", "tf = 0.0201\n"))

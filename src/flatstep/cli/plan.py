@@ -167,8 +167,8 @@ def _cmd_plan_scenario(args: argparse.Namespace, pf: "ScenarioFile") -> int:
 def _simulated(pf: "ScenarioFile") -> dict[str, Any]:
     """Run the file's scenario (its drive, sensors, observer, controller) and print and return its tracking."""
     tr = _tracking(pf, pf.scenario.run())
-    drive = f"{tr['control_rate']:g} Hz drive" if tr["control_rate"] else "continuous-time control"
-    print(f"  on the {drive}: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
+    drive = f"on the {tr['control_rate']:g} Hz drive" if tr["control_rate"] else "in continuous time"
+    print(f"  {drive}: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
           f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
           f"final error {tr['final_error']:.3g} rad")
     return tr
