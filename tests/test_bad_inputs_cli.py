@@ -39,7 +39,9 @@ PLAN_CASES = [("waypoints", "[0.0, nan]", "nan"), ("waypoints", "[0.0]", "1 wayp
               ("waypoints", "[0.0, {theta = 1.0, dwell = 1e9}]", "dwell=1000000000.0"),
               ("waypoints", "5.0", "waypoints"), ("planner", '"bogus"', "'bogus'"), ("t0", "-1", "t0=-1.0"),
               ("t0", "nan", "t0=nan"), ("t0", "true", "t0=True"),
-              ("waypoints", "[" + ", ".join(str(float(i % 2)) for i in range(1010)) + "]", "1009 time-optimal moves"),
+              ("waypoints", "[" + ", ".join(str(float(i % 2)) for i in range(1010)) + "]", "1009 moves"),
+              ("waypoints", '[0.0, "1.0"]', "'1.0'"), ("waypoints", "[0.0, true]", "True"),
+              ("caps", "{speed_max = 1.0, accel_max = 1.0, jerk_max = 1.0}", "does not take caps"),
               ("through", '"yes"', "through='yes'")]
 
 
@@ -60,11 +62,12 @@ SIM_FILES = [(f"[{t}]\n{k} = {v}\n", f"{t}.{k}") for t, k, v in [
 
 
 def _plan_file(key: str, value: str) -> str:
-    """A plan file on the NEMA 17 preset with ``key = value`` in its [plan] table."""
-    plan = {"waypoints": "[0.0, 2.0]"}
+    """A time-optimal waypoint plan on the NEMA 17 preset with ``key = value`` in its [plan] table."""
+    plan = {"planner": '"time_optimal"', "waypoints": "[0.0, 2.0]"}
     plan[key] = value
     body = "".join(f"{k} = {v}\n" for k, v in plan.items())
-    return f"[motor]\npreset = \"nema17\"\n[limits]\nv_bus = 24.0\ni_max = 1.0\n[plan]\n{body}"
+    return (f"[motor]\npreset = \"nema17\"\n[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n[limits]\ni_max = 1.0\n"
+            f"[plan]\n{body}")
 
 
 def _named(flag: str) -> tuple[str, str]:
@@ -193,7 +196,7 @@ FILES = {
     "study.toml": "[drive]\ncontrol_rate = 20000.0\n[controller]\nmeasurement = \"model\"\n[robustness]\n",
     "afile": "not a directory\n",
     "nema.toml": "[motor]\npreset = \"nema17\"\n[drive]\ncontrol_rate = 20000.0\n[sensors]\nencoder_counts = 16384\n",
-    "plan_ok.toml": "[motor]\npreset = \"nema17\"\n[limits]\nv_bus = 24.0\ni_max = 1.0\n[plan]\nwaypoints = [0.0, 2.0]\n",
+    "plan_ok.toml": _plan_file("t0", "0.0"),
 }
 
 

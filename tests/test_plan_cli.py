@@ -1,4 +1,4 @@
-"""``flatstep plan FILE.toml`` (flatstep.cli.plan, flatstep.plan.plan_file) on every example plan file."""
+"""``flatstep plan FILE.toml`` (flatstep.cli.plan, flatstep.studies.scenario_plan) on every example file."""
 import json
 import sys
 from pathlib import Path
@@ -8,7 +8,9 @@ import pytest
 
 from flatstep.cli.main import main
 from flatstep.model.motor import MotorParams
-from flatstep.plan.plan_file import _waypoint, is_plan_file, load_plan_file, runs
+from flatstep.plan.sequence import runs
+from flatstep.studies.scenario_file import read_scenario_file
+from flatstep.studies.scenario_plan import _waypoint
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -52,30 +54,37 @@ def test_ten_waypoints_run_on_the_drive(tmp_path):
     assert tr["peak_phase_voltage"] <= tr["v_bus"] and tr["controller_faults"] == 0
 
 
+MOTOR = '[motor]\npreset = "nema17"\n'
+DRIVE = "[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n"
+TO = '[plan]\nplanner = "time_optimal"\nwaypoints = [0.0, 1.0]\n'
+
+
 @pytest.mark.parametrize("text, match", [
-    ('[plan]\nwaypoints = [0.0, 1.0]\n', "needs a \\[limits\\] section"),
-    ('[plan]\nplanner = "bezier"\nwaypoints = [0.0, 1.0]\n', "planner='bezier'"),
+    (MOTOR + TO, "the time_optimal planner plans against the motor's limits: give \\[limits\\]"),
+    (MOTOR + '[plan]\nplanner = "bezier"\nwaypoints = [0.0, 1.0]\n', "planner='bezier'"),
     ('[plan]\nspeed = 3\n', "unknown key"),
-    ('[limits]\nv_bus = -1\ni_max = 1\n[plan]\nwaypoints = [0.0, 1.0]\n', "v_bus"),
-    ('[plan]\nplanner = "psi"\nwaypoints = [0.0, 1.0]\n', "neither durations nor caps"),
-    ('[motor]\npreset = "nema23"\n[plan]\nwaypoints = [0.0, 1.0]\n', "unknown motor preset"),
-    ('[plan]\nplanner = "psi"\n', "waypoints must be a list"),
-    ('[limits]\nv_bus = 24\ni_max = 1\n[plan]\nwaypoints = [' + ", ".join(str(i % 2) for i in range(1002)) + "]\n",
-     "1001 time-optimal moves, above the limit of 1000"),
+    (MOTOR + DRIVE.replace("24.0", "-1") + "[limits]\ni_max = 1\n" + TO, "v_bus"),
+    (MOTOR + '[plan]\nplanner = "psi"\nwaypoints = [0.0, 1.0]\n', "neither durations nor caps"),
+    ('[motor]\npreset = "nema23"\n' + TO, "preset='nema23' is unknown"),
+    (MOTOR + '[plan]\nplanner = "psi"\n', "the psi planner needs waypoints"),
+    (MOTOR + DRIVE + "[limits]\ni_max = 1\n[plan]\nplanner = \"time_optimal\"\nwaypoints = ["
+     + ", ".join(str(i % 2) for i in range(1002)) + "]\n",
+     "1002 waypoint\\(s\\) are 1001 moves; a sequence has 1 to 1000"),
 ])
 def test_bad_plan_files_are_refused(tmp_path, capsys, text, match):
     path = tmp_path / "bad.toml"
     path.write_text(text)
     assert main(["plan", str(path), "--out", str(tmp_path)]) == 2
-    err = capsys.readouterr().err
-    assert "bad.toml" in err or "preset" in err
+    assert "bad.toml" in capsys.readouterr().err
     with pytest.raises(ValueError, match=match):
-        load_plan_file(path)
+        read_scenario_file(path)
 
 
-# ``flatstep simulate PLAN.toml``: the waypoint plan on the drive, through the same path as ``plan --simulate``
+# ``flatstep simulate FILE.toml`` on a waypoint plan: its scenario on its drive, as ``plan --simulate`` runs it
 
-SHORT = "[limits]\nv_bus = 24.0\ni_max = 1.0\ni_run = 0.1\nv_use = 0.87\n[plan]\nt0 = 0.005\nwaypoints = [0.0, 1.0]\n"
+SHORT = (MOTOR + DRIVE + "[sensors]\nencoder_counts = 16384\n[controller]\ndesign = true\n"
+         "[limits]\ni_max = 1.0\ni_run = 0.1\nv_use = 0.87\n"
+         '[plan]\nplanner = "time_optimal"\nt0 = 0.005\nwaypoints = [0.0, 1.0]\n')
 
 
 def test_simulate_runs_the_ten_waypoints_end_to_end(tmp_path, capsys):
@@ -102,7 +111,7 @@ def test_simulate_a_plan_reports_a_lost_move(tmp_path, capsys):
 
 def test_simulate_json_matches_the_plan_command(tmp_path, capsys):
     path = tmp_path / "short.toml"
-    path.write_text(SHORT + "[simulate]\ncontrol_rate = 20000\nt_after = 0.01\n")
+    path.write_text("t_end = 0.3\n" + SHORT)
     assert main(["simulate", str(path), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)  # JSON alone
     assert main(["plan", str(path), "--out", str(tmp_path), "--simulate", "--no-verify"]) == 0
@@ -113,14 +122,15 @@ def test_simulate_json_matches_the_plan_command(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("text, where", [
-    ('[limits]\nv_bus = -1\ni_max = 1\n[plan]\nwaypoints = [0.0, 1.0]\n', "bad.toml:limits.v_bus"),
-    ('[limits]\nv_bus = 24\ni_max = "1"\n[plan]\nwaypoints = [0.0, 1.0]\n', "bad.toml:limits.i_max"),
-    (SHORT + '[simulate]\ncontrol_rate = -5\n', "bad.toml:simulate.control_rate"),
-    (SHORT + '[simulate]\nt_after = nan\n', "bad.toml:simulate.t_after"),
-    (SHORT + '[simulate]\nrate = 5\n', "unknown key(s) ['rate'] in [simulate]"),
-    (SHORT + '[motor]\nR = -2.0\n', "bad.toml:motor.R"),
-    ('[plan]\nplanner = "psi"\ndurations = [0.05]\nwaypoints = [0.0, 1.0]\n', "bad.toml:limits: a plan runs"),
-    ('[limits]\nv_bus = 24\ni_max = 1\n[plan]\nplanner = "psi"\nrho = 0.5\ndurations = [0.005]\n'
+    (MOTOR + '[limits]\nv_bus = -1\ni_max = 1\n' + TO, "bad.toml:limits.v_bus: v_bus is an old name"),
+    (MOTOR + DRIVE + '[limits]\ni_max = "1"\n' + TO, "bad.toml:limits.i_max"),
+    (SHORT.replace("control_rate = 20000.0", "control_rate = -5"), "bad.toml:drive.control_rate"),
+    (SHORT + '[simulate]\nt_after = 0.01\n', "bad.toml:simulate: simulate is an old name"),
+    ("t_end = nan\n" + SHORT, "bad.toml:t_end"),
+    (SHORT.replace('preset = "nema17"', 'preset = "nema17"\nR = -2.0'), "bad.toml:motor.R"),
+    (MOTOR + '[plan]\nplanner = "psi"\ndurations = [0.05]\nwaypoints = [0.0, 1.0]\n[controller]\ntype = "cascade"\n',
+     "bad.toml:controller.type"),
+    (MOTOR + DRIVE + '[limits]\ni_max = 1\n[plan]\nplanner = "psi"\nrho = 0.5\ndurations = [0.005]\n'
      'waypoints = [0.0, 5.0]\n', "bad.toml: the plan exceeds its limits (voltage"),
 ])
 def test_simulate_refuses_a_bad_plan_file(tmp_path, capsys, text, where):
@@ -131,11 +141,11 @@ def test_simulate_refuses_a_bad_plan_file(tmp_path, capsys, text, where):
     assert where in err and "Traceback" not in err
 
 
-def test_plan_files_and_scenario_files_are_told_apart():
+def test_every_example_is_one_format():
+    """Scenario and waypoint examples load through the one loader; the planner is what tells them apart."""
     scenarios = sorted((Path(__file__).parents[1] / "examples").glob("*.toml"))
-    assert scenarios and not any(is_plan_file(p) for p in scenarios)
-    assert all(is_plan_file(p) for p in EXAMPLES)
-    assert not is_plan_file(Path(__file__).parents[1] / "no-such-file.toml")
+    assert scenarios and all(read_scenario_file(p).planner == "rest_to_rest" for p in scenarios)
+    assert {read_scenario_file(p).planner for p in EXAMPLES} == {"time_optimal", "hermite", "scurve", "spline"}
 
 
 SCENARIOS = sorted((Path(__file__).parents[1] / "examples").glob("*.toml"))
@@ -161,10 +171,12 @@ def test_plan_shows_every_scenario_example(path, tmp_path, capsys):
     assert f"{check.torque_ratio:.3f} of Km rho*" in out and "plan.json" in out
 
 
-def test_plan_on_a_scenario_refuses_simulate_and_reports_an_infeasible_move(tmp_path, capsys):
+def test_plan_simulates_the_papers_move_and_reports_an_infeasible_one(tmp_path, capsys):
     path = next(p for p in SCENARIOS if p.stem == "paper-fig1")
-    assert main(["plan", str(path), "--out", str(tmp_path), "--simulate"]) == 2
-    assert "flatstep simulate" in capsys.readouterr().err
+    assert main(["plan", str(path), "--out", str(tmp_path), "--simulate"]) == 0
+    tracking = json.loads((tmp_path / "plan.json").read_text())["tracking"]
+    assert tracking["control_rate"] is None and tracking["status"] == "ok" and not tracking["lost_step"]
+    assert "in continuous time: max" in capsys.readouterr().out
     fast = tmp_path / "fast.toml"  # the paper's move in 0.1 ms: its torque demand passes Km rho*
     assert "tf = 0.04\n" in path.read_text()
     fast.write_text(path.read_text().replace("tf = 0.04\n", "tf = 0.0201\n"))
@@ -172,3 +184,27 @@ def test_plan_on_a_scenario_refuses_simulate_and_reports_an_infeasible_move(tmp_
     out = capsys.readouterr().out
     assert "infeasible: torque demand exceeds Km rho*" in out and "no plan.png" in out
     assert not json.loads((tmp_path / "plan.json").read_text())["feasible"]
+
+
+def test_the_papers_move_under_limits_shows_its_margins(cli, tmp_path):
+    """rest_to_rest with [limits]: the margins of a waypoint plan, on the [drive] bus."""
+    path = tmp_path / "r2r.toml"
+    path.write_text("t_end = 0.1\n" + MOTOR + DRIVE + "[limits]\ni_max = 1.5\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\n"
+                    "rho2 = 1.0\nt0 = 0.01\ntf = 0.07\n")
+    run = cli(["plan", path, "--out", tmp_path / "o"])
+    assert run.returncode == 0, run.stderr
+    report = json.loads((tmp_path / "o" / "plan.json").read_text())
+    assert report["limits"]["v_bus"] == 24.0 and report["limits"]["i_max"] == 1.5
+    assert report["margins"]["current"] == pytest.approx(1.0 / 1.5) and report["feasible"]
+    path.write_text(path.read_text().replace("i_max = 1.5", "i_max = 0.9\ni_hold = 0.2"))
+    run = cli(["simulate", path])
+    assert run.returncode == 2 and "r2r.toml: the plan exceeds its limits (current)" in run.stderr
+
+
+def test_compare_on_a_waypoint_plan_runs_only_the_types_that_follow_it(cli, tmp_path):
+    path = next(p for p in EXAMPLES if p.stem == "spline")
+    run = cli(["compare", path, "--controllers", "cascade,smc"], cwd=tmp_path)
+    assert run.returncode == 2 and "only ['smc', 'smc_ff'" in run.stderr
+    from flatstep.studies.compare import scenario_kinds
+
+    assert set(scenario_kinds(read_scenario_file(path).scenario)) == {"smc", "smc_la"}

@@ -1,4 +1,4 @@
-"""Time-optimal sequences through their via points (a plan file's ``through = true``)."""
+"""Time-optimal sequences through their via points (a scenario file's ``[plan] through = true``)."""
 from pathlib import Path
 
 import numpy as np
@@ -6,8 +6,9 @@ import pytest
 
 from flatstep.cli.main import main
 from flatstep.plan.limits import plan_margins
-from flatstep.plan.plan_file import load_plan_file, runs
+from flatstep.plan.sequence import runs
 from flatstep.plan.waypoints import Waypoint
+from flatstep.studies.scenario_file import read_scenario_file
 
 PLANS = Path(__file__).resolve().parents[1] / "examples" / "plans"
 TEN = [Waypoint(0.0), Waypoint(2.0), Waypoint(5.0, dwell=0.02), Waypoint(4.0), Waypoint(10.0),
@@ -21,8 +22,8 @@ def test_a_run_ends_where_the_motion_reverses_dwells_or_ends():
 
 
 def test_through_passes_the_via_points_at_speed_rests_elsewhere_and_is_faster():
-    rest = load_plan_file(PLANS / "ten-waypoints.toml")
-    through = load_plan_file(PLANS / "ten-waypoints-through.toml")
+    rest = read_scenario_file(PLANS / "ten-waypoints.toml")
+    through = read_scenario_file(PLANS / "ten-waypoints-through.toml")
     assert through.plan.tf < rest.plan.tf - 5e-3
     assert [label for label, _, _ in through.steps][0] == "move 0 -> 2 (through 1)"
     t = np.linspace(through.plan.t0, through.plan.tf, 200001)
@@ -44,16 +45,19 @@ def test_through_runs_on_the_drive(tmp_path, capsys):
     assert "move 7 -> 9 (through 8)" in capsys.readouterr().out
 
 
+HEAD = '[motor]\npreset = "nema17"\n[drive]\ncontrol_rate = 20000.0\nv_bus = 24\n[limits]\ni_max = 1\n'
+
+
 @pytest.mark.parametrize("text, match", [
-    ('[plan]\nplanner = "psi"\nthrough = true\ndurations = [0.1]\nwaypoints = [0.0, 1.0]\n',
-     "through = true is for the time_optimal planner"),
-    ('[limits]\nv_bus = 24\ni_max = 1\n[plan]\nthrough = "yes"\nwaypoints = [0.0, 1.0]\n',
+    (HEAD + '[plan]\nplanner = "psi"\nthrough = true\ndurations = [0.1]\nwaypoints = [0.0, 1.0]\n',
+     "plan.through: the psi planner does not take through"),
+    (HEAD + '[plan]\nplanner = "time_optimal"\nthrough = "yes"\nwaypoints = [0.0, 1.0]\n',
      "through='yes' must be true or false"),
-    ('[limits]\nv_bus = 24\ni_max = 1\n[plan]\nthrough = true\nwaypoints = [0.0, {theta = 1.0, velocity = 3.0}, 2.0]\n',
-     "chooses the speed at a waypoint"),
+    (HEAD + '[plan]\nplanner = "time_optimal"\nthrough = true\n'
+     'waypoints = [0.0, {theta = 1.0, velocity = 3.0}, 2.0]\n', "chooses the speed at a waypoint"),
 ])
 def test_bad_through_files_are_refused(tmp_path, text, match):
     path = tmp_path / "bad.toml"
     path.write_text(text)
     with pytest.raises(ValueError, match=match):
-        load_plan_file(path)
+        read_scenario_file(path)

@@ -24,10 +24,9 @@ from ..json_out import strict_json
 from ..model.motor import MotorParams
 from ..model.plant import Plant
 from ..plan.feasibility import InfeasiblePlanError
-from ..plan.plan_file import is_plan_file
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..studies.scenario import PAPER_SCENARIOS, Scenario
-from ..studies.scenario_file import load_scenario
+from ..studies.scenario_file import read_scenario_file
 from ..validate import InputError
 from ..validate.paths import CSV_MARK, PNG_MARK, check_distinct, check_output, check_output_dir, json_marks
 from .calibrate import add_calibrate_command
@@ -36,7 +35,7 @@ from .design import add_design_command
 from .flags import add_force, count, out_dir, quantity
 from .identify import add_identify_command
 from .motor import add_motor_command
-from .plan import add_plan_command, run_plan_file
+from .plan import add_plan_command, check_plan_file
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
 
@@ -120,9 +119,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         given = [f"--{k.replace('_', '-')}" for k in SIM_FLAGS if getattr(args, k) is not None]
         if given:
             raise ValueError(f"{given} cannot be combined with a scenario file: set them in {args.scenario}")
-        if is_plan_file(args.scenario):  # a waypoint plan ([limits], [plan] waypoints): flatstep plan's drive
-            return _simulate_plan(args)
-        scenario, _ = load_scenario(args.scenario)
+        scenario = check_plan_file(read_scenario_file(args.scenario), show_steps=not args.json).scenario
     else:
         scenario = _scenario_from_flags(args)
     if args.record and scenario.loop is None:
@@ -155,13 +152,6 @@ def _report(args: argparse.Namespace, name: str, result: SimResult, title: str) 
         print(f"status: {summary['status']}")
     warn(name, summary)
     return exit_code([summary["status"]])
-
-
-def _simulate_plan(args: argparse.Namespace) -> int:
-    """``flatstep simulate PLAN.toml``: the whole waypoint sequence on the drive (:func:`.plan.run_plan_file`)."""
-    pf, result = run_plan_file(args.scenario, args.x0, show_steps=not args.json)
-    return _report(args, pf.name, result,
-                   f"{pf.name}: {len(pf.steps)} steps on the {pf.simulate['control_rate']:g} Hz drive")
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
@@ -208,14 +198,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     sim = sub.add_parser("simulate", help="simulate one closed-loop move (defaults: the paper's Fig. 1)",
                          description="Simulate one closed-loop move: a scenario file (a whole drive: motor, plant, "
-                         "plan, controller, sensors, observer), a waypoint plan file (its whole sequence on the "
-                         "drive, as 'flatstep plan --simulate' runs it), or the paper's motor with the move and "
+                         "plan, controller, sensors, observer; the paper's move or a waypoint sequence, refused "
+                         "beyond its [limits]), or the paper's motor with the move and "
                          "gains given by the flags (continuous control). Prints the summary and the run's status; "
                          "the exit code says whether it kept its move (flatstep --help).")
     sim.add_argument("scenario", nargs="?", default=None,
-                     help="a scenario file (TOML, see examples/), or a waypoint plan file (examples/plans/*.toml, "
-                     "run on the drive of its [limits] bus and [simulate] rate, as 'flatstep plan --simulate'); "
-                     "or give the move and gains by flags")
+                     help="a scenario file (TOML, docs/scenario-reference.md; examples/*.toml, "
+                     "examples/plans/*.toml); or give the move and gains by flags")
     p, g = PAPER_PLAN, SMCGains()
     for flag, kind, default, help_ in (
         ("--theta1", "angle", p.theta1, "start angle [rad]"), ("--theta2", "angle", p.theta2, "end angle [rad]"),

@@ -5,7 +5,7 @@ import argparse
 import contextlib
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Optional, Sequence, cast
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 
@@ -18,13 +18,13 @@ from .status import EXIT_OK, EXIT_REFUSED, exit_code, warn
 
 if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
     from ..engine.result import SimResult
-    from ..plan.plan_file import PlanFile
+    from ..studies.scenario_file import ScenarioFile
 
 #: The controller types that follow a scenario plan's rho* (the others plan their own currents or ignore it).
 PLAN_RHO_TYPES = ("smc", "smc_ff", "smc_ff_hold")
+MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
 #: The files ``flatstep plan --out`` writes, and the first bytes that make an existing one flatstep's.
 PLAN_FILES = {"plan.png": PNG_MARK, "plan.json": json_marks("name")}
-MARGINS = ("voltage", "current", "torque_angle", "speed", "acceleration", "jerk")
 
 
 def _count(n: int, noun: str) -> str:
@@ -32,10 +32,10 @@ def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
-def plot_plan(pf: "PlanFile", path: Path, v_bus: Optional[float] = None) -> None:
+def plot_plan(pf: "ScenarioFile", path: Path, v_bus: Optional[float] = None) -> None:
     """plan.png: angle, speed, phase voltage demand against the bus, current magnitude against its limit.
 
-    ``v_bus``: the bus to draw when the file has no [limits] (a scenario's drive).
+    ``v_bus``: the bus to draw when the file has no [limits] (its drive's).
     """
     import matplotlib
 
@@ -73,48 +73,24 @@ def plot_plan(pf: "PlanFile", path: Path, v_bus: Optional[float] = None) -> None
     plt.close(fig)
 
 
-def _run_on_drive(pf: "PlanFile", x0: Optional[Sequence[float]] = None) -> "SimResult":
-    """The plan on the file's drive (its [simulate] control rate, 20 kHz by default): bus, sensors, observer, gains.
-
-    The gains are :func:`~flatstep.control.design.design_gains`' for this plan, motor, rate and bus; the run goes on
-    ``t_after`` past the move. ``x0``: the plant's initial state (default: the plan's start at rest).
-    """
-    from ..control.design import design_gains
-    from ..control.smc import FlatnessSMC
-    from ..engine.simulate import simulate
-    from ..loop.drive import Drive
-    from ..loop.reference import DriveLoop
-    from ..loop.sensors import Sensors
-
-    if pf.limits is None:
-        raise ValueError(f"{pf.name}: running a plan on the drive needs a [limits] section: the drive's bus is v_bus")
-    rate, plan, v_bus = pf.simulate["control_rate"], pf.plan, pf.limits.v_bus
-    d = design_gains(pf.motor, cast(Any, plan), control_period=1.0 / rate, v_bus=v_bus)
-    loop = DriveLoop(control_period=1.0 / rate, substeps=4, drive=Drive(v_bus=v_bus), sensors=Sensors(),
-                     observer=d.observer)
-    return simulate(pf.motor, plan, FlatnessSMC(pf.motor, plan, d.gains, "observer"), loop=loop,
-                    t_end=plan.tf + pf.simulate["t_after"], x0=None if x0 is None else list(x0))
-
-
-def _tracking(pf: "PlanFile", r: "SimResult") -> dict[str, Any]:
+def _tracking(pf: "ScenarioFile", r: "SimResult") -> dict[str, Any]:
     """The tracking figures of a run of the plan (plan.json's ``tracking``)."""
-    assert pf.limits is not None  # a run needs the bus (_run_on_drive)
     err = np.abs(r.theta - r.theta_ref)
     full_step = 2 * np.pi / (4 * pf.motor.Nr)
-    return dict(control_rate=pf.simulate["control_rate"], max_abs_theta_error=float(err.max()), full_step=full_step,
+    return dict(control_rate=pf.control_rate, max_abs_theta_error=float(err.max()), full_step=full_step,
                 lost_step=bool(err.max() >= full_step), final_error=float(r.theta[-1] - pf.plan.theta2),
-                peak_phase_voltage=float(np.max(np.abs([r.va, r.vb]))), v_bus=pf.limits.v_bus,
+                peak_phase_voltage=float(np.max(np.abs([r.va, r.vb]))), v_bus=pf.v_bus,
                 controller_faults=int(r.meta.get("controller_faults", 0)), status=r.status, lost_at=r.lost_at)
 
 
-def _margins_line(pf: "PlanFile") -> tuple[dict[str, float], list[str]]:
+def _margins_line(pf: "ScenarioFile") -> tuple[dict[str, float], list[str]]:
     """The plan's margins against its limits and the names of the limits it exceeds (none: feasible)."""
     assert pf.limits is not None
     m = plan_margins(pf.plan, pf.motor, pf.limits)
     return m, [k for k in MARGINS if m[k] > 1]
 
 
-def _print_steps(pf: "PlanFile") -> None:
+def _print_steps(pf: "ScenarioFile") -> None:
     """The plan's one-line summary and its moves and dwells."""
     plan = pf.plan
     print(f"{pf.name}: {_count(len(pf.steps), 'step')} in {_count(plan.n, 'segment')}, {plan.tf - plan.t0:.6g} s "
@@ -124,62 +100,44 @@ def _print_steps(pf: "PlanFile") -> None:
         print(f"  {label:<{width}} start {start:10.6f} s  duration {duration:10.6f} s")
 
 
-def run_plan_file(path: str, x0: Optional[Sequence[float]] = None,
-                  show_steps: bool = True) -> tuple["PlanFile", "SimResult"]:
-    """``flatstep simulate PLAN.toml``: plan the file, refuse it beyond its limits, run it on the drive.
+def check_plan_file(sf: "ScenarioFile", show_steps: bool = True) -> "ScenarioFile":
+    """``sf``, refused if its plan exceeds its [limits] (nothing is run); a waypoint plan's steps printed first.
 
-    ``show_steps``: print the plan's moves and dwells before the run. ``x0``: the plant's initial state.
+    ``show_steps``: print a waypoint plan's moves and dwells (the paper's move is one step).
 
     Raises
     ------
     ValueError
-        The file is bad, has no [limits] (no bus to run on), or its plan exceeds a limit (nothing is run).
+        The plan exceeds a limit of the file's [limits].
     """
-    from ..plan.plan_file import load_plan_file
-
-    pf = load_plan_file(path)
-    if pf.limits is None:
-        raise ValueError(f"{path}:limits: a plan runs on a drive whose bus is [limits] v_bus; the file has no "
-                         "[limits] section")
-    if show_steps:
-        _print_steps(pf)
-    _, over = _margins_line(pf)
-    if over:
-        raise ValueError(f"{path}: the plan exceeds its limits ({', '.join(over)}): nothing was run; "
-                         "'flatstep plan' shows the margins")
-    return pf, _run_on_drive(pf, x0)
+    if show_steps and sf.planner != "rest_to_rest":
+        _print_steps(sf)
+    if sf.limits is not None:
+        _, over = _margins_line(sf)
+        if over:
+            raise ValueError(f"{sf.path}: the plan exceeds its limits ({', '.join(over)}): nothing was run; "
+                             "'flatstep plan' shows the margins")
+    return sf
 
 
-def _scenario_as_plan(path: str) -> tuple["PlanFile", dict[str, Any]]:
-    """A scenario file's move as a one-step plan, and its check (plan.json's ``scenario``).
+def _check_scenario(sf: "ScenarioFile") -> dict[str, Any]:
+    """The paper's move checked against the law and the drive's bus (plan.json's ``scenario``).
 
     The check is :func:`~flatstep.plan.feasibility.check_feasibility` with the plant's constant load and the
-    drive's bus (none without a [drive]); a scenario has no current limit.
+    drive's bus (none without a [drive]); without [limits] there is no current limit.
     """
     from ..plan.feasibility import check_feasibility
-    from ..plan.piecewise import PiecewisePlan
-    from ..plan.plan_file import PlanFile
-    from ..studies.scenario_file import load_scenario
 
-    scenario, _ = load_scenario(path)
-    plan, drive = scenario.plan, scenario.loop.drive if scenario.loop is not None else None
+    scenario = sf.scenario
     constant = scenario.plant.constant_load if scenario.plant is not None else 0.0
     load = constant if constant is not None else 0.0  # a time-varying load: the check without it
-    v_bus = drive.v_bus if drive is not None else None
-    pf = PlanFile(name=scenario.name, motor=scenario.motor, limits=None, plan=PiecewisePlan.from_rest_to_rest(plan),
-                  steps=[(f"move {plan.theta1:g} -> {plan.theta2:g}", plan.t0, plan.tf - plan.t0)],
-                  simulate={})
-    check = check_feasibility(plan, scenario.motor, load_torque=load, v_max=v_bus)
-    info = dict(controller=scenario.controller_type, load_torque=load, v_bus=v_bus, check=check.as_dict())
-    return pf, info
+    check = check_feasibility(scenario.plan, scenario.motor, load_torque=load, v_max=sf.v_bus)
+    return dict(controller=scenario.controller_type, load_torque=load, v_bus=sf.v_bus, check=check.as_dict())
 
 
-def _cmd_plan_scenario(args: argparse.Namespace) -> int:
-    """``flatstep plan SCENARIO.toml``: the scenario's move, its check against the law and the bus, plan.png."""
-    if args.simulate:
-        raise ValueError(f"{args.file} is a scenario file: 'flatstep simulate {args.file}' runs it (--simulate runs "
-                         "plan files, whose drive is their [limits] bus)")
-    pf, info = _scenario_as_plan(args.file)
+def _cmd_plan_scenario(args: argparse.Namespace, pf: "ScenarioFile") -> int:
+    """``flatstep plan FILE.toml`` on the paper's move without [limits]: its check against the law and the bus."""
+    info = _check_scenario(pf)
     _print_steps(pf)
     check = info["check"]
     print(f"  the paper's law on this move (constant load {info['load_torque']:g} N m): torque demand at most "
@@ -197,6 +155,8 @@ def _cmd_plan_scenario(args: argparse.Namespace) -> int:
                                   tf=pf.plan.tf, segments=pf.plan.n,
                                   steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps],
                                   scenario=info, feasible=check["feasible"])
+    if args.simulate and check["feasible"]:
+        report["tracking"] = _simulated(pf)
     out = out_dir(args.out)
     (out / "plan.json").write_text(strict_json(report, indent=2) + "\n")
     if check["torque_margin"] > 0 and check["min_rho"] > 0:
@@ -204,7 +164,27 @@ def _cmd_plan_scenario(args: argparse.Namespace) -> int:
         print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
     else:
         print(f"  wrote {out / 'plan.json'}; no plan.png: the flat maps are singular on this move")
-    return EXIT_OK if check["feasible"] else EXIT_REFUSED
+    return _exit(pf, report)
+
+
+def _exit(pf: "ScenarioFile", report: dict[str, Any]) -> int:
+    """The exit code: refused (2) for an infeasible plan, else the run's status as 'flatstep simulate' gives it."""
+    if not report.get("feasible", True):
+        return EXIT_REFUSED
+    if "tracking" not in report:
+        return EXIT_OK
+    warn(pf.name, report["tracking"])  # the run's status and exit code, as 'flatstep simulate FILE.toml' gives them
+    return exit_code([report["tracking"]["status"]])
+
+
+def _simulated(pf: "ScenarioFile") -> dict[str, Any]:
+    """Run the file's scenario (its drive, sensors, observer, controller) and print and return its tracking."""
+    tr = _tracking(pf, pf.scenario.run())
+    drive = f"on the {tr['control_rate']:g} Hz drive" if tr["control_rate"] else "in continuous time"
+    print(f"  {drive}: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
+          f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
+          f"final error {tr['final_error']:.3g} rad, status {tr['status']}")
+    return tr
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
@@ -219,13 +199,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
 def _cmd_plan(args: argparse.Namespace) -> int:
     """``flatstep plan FILE.toml``: plan the waypoints, print the steps and margins, write plan.png, plan.json."""
-    from ..plan.plan_file import is_plan_file, load_plan_file
+    from ..studies.scenario_file import read_scenario_file
     from ..studies.verify import verify_on_drive
 
     check_output_dir(args.out, "--out", PLAN_FILES, inputs=[args.file], force=args.force)  # before any work
-    if not is_plan_file(args.file) and Path(args.file).is_file():
-        return _cmd_plan_scenario(args)
-    pf = load_plan_file(args.file)
+    pf = read_scenario_file(args.file)
+    if pf.limits is None and pf.planner == "rest_to_rest":
+        return _cmd_plan_scenario(args, pf)
     plan = pf.plan
     _print_steps(pf)
     report: dict[str, Any] = dict(name=pf.name, total_duration=plan.tf - plan.t0, t0=plan.t0, tf=plan.tf,
@@ -242,39 +222,34 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         if over:
             print(f"  infeasible: the plan exceeds {', '.join(over)} (not simulated)")
         else:
-            pf = verify_on_drive(args.file, pf, report, skip=args.no_verify)
+            pf = verify_on_drive(pf, report, skip=args.no_verify)
     if args.simulate and report.get("feasible", True):
-        report["tracking"] = tr = _tracking(pf, _run_on_drive(pf))
-        print(f"  on the {tr['control_rate']:g} Hz drive: max |theta - theta*| {tr['max_abs_theta_error']:.3g} rad "
-              f"(a full step is {tr['full_step']:.4g} rad), peak phase voltage {tr['peak_phase_voltage']:.4g} V, "
-              f"final error {tr['final_error']:.3g} rad, status {tr['status']}")
+        report["tracking"] = _simulated(pf)
     out = out_dir(args.out)
-    plot_plan(pf, out / "plan.png")
+    plot_plan(pf, out / "plan.png", v_bus=pf.v_bus)
     (out / "plan.json").write_text(strict_json(report, indent=2) + "\n")
     print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
-    if not report.get("feasible", True):
-        return EXIT_REFUSED
-    if "tracking" not in report:
-        return EXIT_OK
-    warn(pf.name, report["tracking"])  # the run's status and exit code, as 'flatstep simulate FILE.toml' gives them
-    return exit_code([report["tracking"]["status"]])
+    return _exit(pf, report)
 
 
 def add_plan_command(sub: Any) -> None:
     """Register ``flatstep plan`` on the subcommand parser ``sub``."""
-    p = sub.add_parser("plan", help="plan a waypoint sequence under the motor's limits (docs/planning.md)",
-                       description="Plan a plan file's waypoints (the fastest moves its motor's limits allow, or a "
-                       "segment family): print each move's and dwell's start and duration and the worst use of each "
-                       "limit, write plan.png and plan.json; with --simulate, also run the plan on the 20 kHz drive "
-                       "('flatstep simulate FILE.toml' runs it alone and prints the run's summary and status). Exit "
-                       "2 when the plan exceeds a limit, a path is refused, or the drive does not keep it on the "
-                       "nominal and +-10 % plants (the check; --no-verify skips it), 3 when the --simulate run loses "
-                       "the move, 4 when its controller faulted (as 'flatstep simulate FILE.toml').")
-    p.add_argument("file", help="a plan file (TOML, see examples/plans/*.toml), or a scenario file: its move, "
-                   "checked against the law's singularity and the drive's bus")
+    p = sub.add_parser("plan", help="plan a scenario file's move or waypoint sequence under its limits "
+                       "(docs/planning.md)",
+                       description="Plan a scenario file's [plan] (the paper's move, the fastest moves its motor's "
+                       "[limits] allow, or a segment family): print each move's and dwell's start and duration and "
+                       "the worst use of each limit, write plan.png and plan.json; with --simulate, also run the "
+                       "file's scenario on its drive ('flatstep simulate FILE.toml' runs it alone and prints the "
+                       "run's summary and status). Exit 2 when the plan exceeds a limit, a path is refused, or the "
+                       "drive does not keep it on the nominal and +-10 % plants (the check; --no-verify skips it), 3 "
+                       "when the --simulate run loses the move, 4 when its controller faulted (as 'flatstep simulate "
+                       "FILE.toml').")
+    p.add_argument("file", help="a scenario file (TOML, docs/scenario-reference.md; examples/plans/*.toml): a "
+                   "waypoint plan against its [limits], or the paper's move checked against the law's singularity "
+                   "and the drive's bus")
     p.add_argument("--out", default=".", help="where plan.png and plan.json go (default: .)")
     p.add_argument("--simulate", action="store_true",
-                   help="also run the plan on the 20 kHz drive (bus, sensors, observer, designed gains)")
+                   help="also run the file's scenario (its drive, sensors, observer and controller)")
     p.add_argument("--no-verify", action="store_true",
                    help="skip the check on the drive (the plan on the nominal and +-10 %% plants; docs/planning.md)")
     p.add_argument("--json", action="store_true", help="print plan.json to stdout (the text goes to stderr)")

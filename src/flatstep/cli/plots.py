@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from ..engine.result import SimResult  # noqa: E402
-from ..plan.rest_to_rest import RestToRest  # noqa: E402
+from ..plan.protocol import Plan
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -105,7 +105,7 @@ def count_lines(ax: Axes) -> None:
         ax.axhline(-y, color="k", ls=ls, lw=0.8)
 
 
-def plot_traces(ax: Axes, rows: list[dict[str, Any]], scale: float, plan: RestToRest, lw: float = 0.7) -> None:
+def plot_traces(ax: Axes, rows: list[dict[str, Any]], scale: float, plan: Plan, lw: float = 0.7) -> None:
     """Draw the tracking-error trace of every successful batch row on ``ax``, with the move shaded.
 
     The rows' ``series_theta_error`` against ``series_t``, divided by ``scale``.
@@ -116,7 +116,7 @@ def plot_traces(ax: Axes, rows: list[dict[str, Any]], scale: float, plan: RestTo
     ax.axvspan(plan.t0, plan.tf, color="0.92", zorder=0)
 
 
-def plot_robustness(study: dict[str, Any], count: float | None, plan: RestToRest, title: str = "",
+def plot_robustness(study: dict[str, Any], count: float | None, plan: Plan, title: str = "",
                     path: str | Path | None = None) -> Figure:
     """Tracking-error traces of every plant of a robustness study, one panel per gain set.
 

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..engine.result import SimResult
-from ..plan.rest_to_rest import RestToRest
+from ..plan.protocol import Plan
 from .plots import _finish, count_lines, plot_traces, plt
 
 if TYPE_CHECKING:
@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 
-def _clip_to_move(ax: Axes, results: dict[str, SimResult], name: str, plan: RestToRest, unit: str) -> None:
+def _clip_to_move(ax: Axes, results: dict[str, SimResult], name: str, plan: Plan, unit: str) -> None:
     """Set the y axis to the range of ``name`` from the move's start on; mark what it cuts off before.
 
     A start-up transient (a controller pulling the current to its own set-point in the first periods) would
@@ -40,7 +40,7 @@ def _clip_to_move(ax: Axes, results: dict[str, SimResult], name: str, plan: Rest
                     bbox=dict(boxstyle="round", fc="white", ec="0.7"))
 
 
-def plot_overlay(results: dict[str, SimResult], plan: RestToRest, count: float | None = None, title: str = "",
+def plot_overlay(results: dict[str, SimResult], plan: Plan, count: float | None = None, title: str = "",
                  path: str | Path | None = None) -> Figure:
     """Overlay the controllers' runs; shaded: the move.
 
@@ -74,7 +74,7 @@ def plot_overlay(results: dict[str, SimResult], plan: RestToRest, count: float |
     return _finish(fig, title, path)
 
 
-def plot_plants(study: dict[str, dict[str, Any]], labels: dict[str, str], plan: RestToRest,
+def plot_plants(study: dict[str, dict[str, Any]], labels: dict[str, str], plan: Plan,
                 count: float | None = None, title: str = "", path: str | Path | None = None) -> Figure:
     """One panel per controller: the tracking error on every plant of a robustness study.
 

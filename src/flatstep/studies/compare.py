@@ -109,7 +109,7 @@ def _check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
 
 
 def scenario_kinds(scenario: Scenario) -> tuple[str, ...]:
-    """Every controller type the scenario can run: all of them, less the ``_ff`` ones without a torque model."""
+    """Every controller type the scenario can run (any plan): all, less the ``_ff`` ones without a torque model."""
     return tuple(k for k in CONTROLLER_TYPES if scenario.torques is not None or k not in FEEDFORWARD_TYPES)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Optional
+from typing import Any, Optional
 
 from ..control.smc import SMCGains
 from ..control.tuning import AnyController, make_controller
@@ -18,6 +18,8 @@ from ..model.torque_model import TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.feasibility import FeasibilityReport, check_feasibility
 from ..plan.loss_aware import LossAwareRho
+from ..plan.piecewise import PiecewisePlan
+from ..plan.protocol import Plan
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..validate import check_quantity
 
@@ -34,8 +36,8 @@ class Scenario:
         A label for tables, rows and figures.
     motor : MotorParams
         The controller's model of the motor (and the plant's, when ``plant`` is ``None``).
-    plan : RestToRest
-        The move.
+    plan : RestToRest or PiecewisePlan
+        The move (any plan: the paper's, or a waypoint sequence's segment table).
     controller_type : str
         The law (:data:`flatstep.control.CONTROLLER_TYPES`): the paper's ``"smc"`` with ``gains``, or a
         baseline tuned for this loop by :func:`flatstep.control.make_controller`.
@@ -66,7 +68,7 @@ class Scenario:
 
     name: str = "run"
     motor: MotorParams = field(default_factory=lambda: MotorParams.preset("paper"))
-    plan: RestToRest = PAPER_PLAN
+    plan: Plan = PAPER_PLAN
     controller_type: str = "smc"
     gains: SMCGains = SMCGains()
     measurement: str = "ideal"
@@ -85,12 +87,15 @@ class Scenario:
                                                                   as_name="bandwidth_scale"))
         if not isinstance(self.name, str):
             raise ValueError(f"Scenario.name={self.name!r} must be a string")
-        for name, kind in (("motor", MotorParams), ("plan", RestToRest), ("gains", SMCGains), ("plant", Plant),
-                           ("loop", DriveLoop), ("solver", Continuous), ("torques", TorqueModel),
-                           ("d_current", DCurrentPlan), ("loss_aware", LossAwareRho)):
+        kinds: tuple[tuple[str, Any], ...] = (
+            ("motor", MotorParams), ("plan", (RestToRest, PiecewisePlan)), ("gains", SMCGains), ("plant", Plant),
+            ("loop", DriveLoop), ("solver", Continuous), ("torques", TorqueModel), ("d_current", DCurrentPlan),
+            ("loss_aware", LossAwareRho))
+        for name, kind in kinds:
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
-                raise ValueError(f"Scenario.{name}={value!r} is not a {kind.__name__}")
+                names = " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
+                raise ValueError(f"Scenario.{name}={value!r} is not a {names}")
         if self.loop is not None and self.solver is not None:
             raise ValueError("a scenario has either a loop (sampled control) or a solver (continuous control)")
         self.controller()  # validates the measurement mode and the controller type
@@ -119,7 +124,7 @@ class Scenario:
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""
-        return _feasibility(self.plan, self.motor)
+        return _feasibility(self.plan, self.motor)  # type: ignore[arg-type]  # the plans are frozen dataclasses
 
     def run(self, engine: str = "c") -> SimResult:
         """Refuse an infeasible plan, then simulate the closed loop on ``engine``."""
@@ -129,7 +134,7 @@ class Scenario:
 
 
 @lru_cache(maxsize=256)
-def _feasibility(plan: RestToRest, motor: MotorParams) -> FeasibilityReport:
+def _feasibility(plan: Plan, motor: MotorParams) -> FeasibilityReport:
     """:func:`~flatstep.plan.feasibility.check_feasibility` with no load, cached."""
     return check_feasibility(plan, motor)  # batches share plans: check each once per process
 

@@ -19,12 +19,10 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from itertools import product
-from pathlib import Path
 from typing import Any, Callable, Optional
 
 import numpy as np
@@ -41,11 +39,6 @@ from ..model.motor import MotorParams
 from ..plan.limits import COMMUTATION_ANGLE, MotorLimits
 from ..plan.piecewise import PiecewisePlan
 from ..validate import check_finite
-
-if sys.version_info >= (3, 11):
-    import tomllib as _toml
-else:  # pragma: no cover
-    import tomli as _toml
 
 #: The parameters the uncertainty scales, as :mod:`flatstep.studies.robustness` names them.
 PARAMETERS = ("R", "L", "Km", "J")
@@ -349,19 +342,24 @@ def replan_steps(plan: PiecewisePlan, steps: list[tuple[str, float, float]], mot
     return make
 
 
+#: The control rate [Hz] of the drive a file without one is checked on.
+DEFAULT_CONTROL_RATE = 20e3
+
+
 def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[Any, dict[str, Any]]:
     """A plan file's plan checked on its drive, and backed off when it is a time-optimal sequence.
 
     The first plan is the file's; the second is made within the file's limits tightened to those derived for the drive
     (:meth:`MotorLimits.for_drive`, ``derived`` of :func:`plan_for_drive`), then the binding limit is backed off.
 
-    The drive is the file's (``pf.loop`` if the file has one, else its [simulate] control rate, its [limits] bus
-    and :class:`~flatstep.loop.sensors.Sensors`' defaults). Returns the plan file with the verified plan (or
+    The drive is the file's (its ``[drive]``, ``[sensors]`` and ``[observer]``; a file without a drive is checked
+    on a :data:`DEFAULT_CONTROL_RATE` drive with its ``[drive] v_bus`` and :class:`~flatstep.loop.sensors.Sensors`'
+    defaults). Returns the plan file with the verified plan (or
     the file's own, unverified) and plan.json's ``verify`` entry.
     """
     assert pf.limits is not None, "the check runs a plan on the drive of its [limits] bus"
-    loop = getattr(pf, "loop", None) or DriveLoop.at(pf.simulate["control_rate"], substeps=4,
-                                                      drive=Drive(v_bus=pf.limits.v_bus), sensors=Sensors())
+    loop = pf.scenario.loop or DriveLoop.at(DEFAULT_CONTROL_RATE, substeps=4, drive=Drive(v_bus=pf.limits.v_bus),
+                                            sensors=Sensors())
     if planner != "time_optimal":
         verdict = verify_plan(pf.plan, pf.motor, loop, uncertainty=uncertainty, limits=pf.limits)
         return pf, dict(verdict.as_dict(), backed_off=False)
@@ -382,10 +380,13 @@ def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[An
         info["suggested_limits"] = derived.as_dict()
         return pf, info
     info["limits"] = limits.as_dict()
-    return replace(pf, plan=plan, limits=limits, steps=made["steps"]), info
+    if plan is pf.plan:
+        return pf, info
+    scenario = replace(pf.scenario, plan=plan, t_end=max(pf.scenario.t_end, plan.tf + (pf.scenario.t_end - pf.plan.tf)))
+    return replace(pf, scenario=scenario, limits=limits, steps=made["steps"]), info
 
 
-def verify_on_drive(path: str, pf: Any, report: dict[str, Any], skip: bool = False) -> Any:
+def verify_on_drive(pf: Any, report: dict[str, Any], skip: bool = False) -> Any:
     """``flatstep plan``'s check: fill plan.json's ``duration`` and ``verify``, print one line, return the plan file.
 
     A plan within its limits that the drive does not keep on every case is refused (``report["feasible"]`` set
@@ -396,7 +397,7 @@ def verify_on_drive(path: str, pf: Any, report: dict[str, Any], skip: bool = Fal
         report.update(duration=pf.plan.tf - pf.plan.t0, verify=dict(skipped=True))
         print("  not verified on the drive (--no-verify)")
         return pf
-    planner = _toml.loads(Path(path).read_text()).get("plan", {}).get("planner", "time_optimal")
+    planner = pf.planner
     before = pf.plan.tf - pf.plan.t0
     pf, info = check_plan_file(pf, str(planner))
     report.update(duration=pf.plan.tf - pf.plan.t0, verify=info, feasible=bool(info["verified"]),
