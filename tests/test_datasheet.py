@@ -18,7 +18,7 @@ from flatstep.model.datasheet import (
     torque_constant,
 )
 from flatstep.model.motor import torque
-from flatstep.plan.plan_file import load_plan_file
+from flatstep.studies.scenario_file import read_scenario_file as load_plan_file
 from flatstep.studies.scenario_file import load_scenario
 
 if sys.version_info >= (3, 11):

@@ -8,7 +8,7 @@ import pytest
 
 import flatstep as fs
 from flatstep.engine.result import REST_TOLERANCE, arrival_error, last_move, rest_angles
-from flatstep.plan.plan_file import load_plan_file
+from flatstep.studies.scenario_file import read_scenario_file as load_plan_file
 
 STEP = math.pi / 100  # one full step of a 50-tooth rotor
 
@@ -16,15 +16,21 @@ PLAN_FILE = """name = "{name}"
 [motor]
 preset = "nema17"
 [limits]
-v_bus = 24.0
 i_max = 1.0
 [plan]
 planner = "time_optimal"
 t0 = 0.005
 through = {through}
 waypoints = {waypoints}
-[simulate]
+[drive]
 control_rate = {rate}
+v_bus = 24.0
+[sensors]
+encoder_counts = 16384
+current_bits = 12
+current_range = 2.0
+[controller]
+design = true
 """
 
 
