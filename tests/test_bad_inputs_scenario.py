@@ -136,10 +136,10 @@ CASES += [
      ":motor|give [motor]|nema17"),
 ]
 
-# the tables around a waypoint plan: the controller must follow it, the design's load names its keys
-for kind in ("cascade", "microstep", "exact_linearization", "dq_smc", "dq_smc_i"):
+# the tables around a waypoint plan (every controller type follows one): an unknown type, the design's load
+for kind in ("pid", "cascade+integral", "dq_smc+km_estimate"):
     CASES.append(("controller", _plan("time_optimal") + f'[controller]\ntype = "{kind}"\n',
-                  f"controller.type|{kind!r}|rest_to_rest move only"))
+                  f"controller.type|{kind!r}"))
 CASES += [
     ("plant", "[plant]\ndetent_torque = 1000.0\n[load]\ntorque = 5.0\n[drive]\ncontrol_rate = 20000.0\n"
      "[controller]\ndesign = true\n", "plant.detent_torque|1000.0|load.torque + plant.detent_torque"),

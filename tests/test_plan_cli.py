@@ -128,7 +128,7 @@ def test_simulate_json_matches_the_plan_command(tmp_path, capsys):
     (SHORT + '[simulate]\nt_after = 0.01\n', "bad.toml:simulate: simulate is an old name"),
     ("t_end = nan\n" + SHORT, "bad.toml:t_end"),
     (SHORT.replace('preset = "nema17"', 'preset = "nema17"\nR = -2.0'), "bad.toml:motor.R"),
-    (MOTOR + '[plan]\nplanner = "psi"\ndurations = [0.05]\nwaypoints = [0.0, 1.0]\n[controller]\ntype = "cascade"\n',
+    (MOTOR + '[plan]\nplanner = "psi"\ndurations = [0.05]\nwaypoints = [0.0, 1.0]\n[controller]\ntype = "pid"\n',
      "bad.toml:controller.type"),
     (MOTOR + DRIVE + '[limits]\ni_max = 1\n[plan]\nplanner = "psi"\nrho = 0.5\ndurations = [0.005]\n'
      'waypoints = [0.0, 5.0]\n', "bad.toml: the plan exceeds its limits (voltage"),
@@ -201,10 +201,13 @@ def test_the_papers_move_under_limits_shows_its_margins(cli, tmp_path):
     assert run.returncode == 2 and "r2r.toml: the plan exceeds its limits (current)" in run.stderr
 
 
-def test_compare_on_a_waypoint_plan_runs_only_the_types_that_follow_it(cli, tmp_path):
+def test_compare_on_a_waypoint_plan_runs_every_type(cli, tmp_path):
     path = next(p for p in EXAMPLES if p.stem == "spline")
-    run = cli(["compare", path, "--controllers", "cascade,smc"], cwd=tmp_path)
-    assert run.returncode == 2 and "only ['smc', 'smc_ff'" in run.stderr
+    from flatstep.control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES
     from flatstep.studies.compare import scenario_kinds
 
-    assert set(scenario_kinds(read_scenario_file(path).scenario)) == {"smc", "smc_la"}
+    kinds = set(scenario_kinds(read_scenario_file(path).scenario))
+    assert kinds == set(CONTROLLER_TYPES) - set(FEEDFORWARD_TYPES)  # no [feedforward]: the types without it
+    run = cli(["compare", path, "--controllers", "cascade,smc"], cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "cascaded PID (FOC)" in run.stdout and "flatness + SMC" in run.stdout

@@ -89,13 +89,17 @@ Km = 0.18518
 J = 6.8e-6
 Nr = 50
 [limits]
-v_bus = 24.0
 i_max = 1.68
 {extra}
 [plan]
 planner = "time_optimal"
 t0 = 0.005
 waypoints = [0.0, 6.2832]
+[drive]
+control_rate = 20000.0
+v_bus = 24.0
+[sensors]
+encoder_counts = 16384
 """
 DERIVED = "i_hold = 0.504\nspeed_corner = 11.79\ntorque_angle_max = 0.8181\nv_use = 0.8182\nspeed_max = 60.0"
 
