@@ -1,0 +1,54 @@
+"""Write the seeds and regression inputs of the time_optimal, traj and flat fuzz targets.
+
+Each input follows its harness's layout (fuzz/fuzz_<target>.c) in the encoding of fuzz/decode.h: a value is a tag
+byte and 8 payload bytes, tag 0 the raw IEEE bits, tag 3 with a zero payload the harness's nominal value.
+Run from the repository root: ``python3 fuzz/make_seeds.py``.
+"""
+
+import struct
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+
+
+def val(x: float) -> bytes:
+    """Return the encoding of the exact value x."""
+    return b"\x00" + struct.pack("<d", x)
+
+
+def nom() -> bytes:
+    """Return the encoding of the harness's nominal value."""
+    return b"\x03" + bytes(8)
+
+
+def u32(x: int) -> bytes:
+    """Return a 32-bit mask or count."""
+    return struct.pack("<I", x)
+
+
+def write(kind: str, target: str, name: str, data: bytes) -> None:
+    """Write one input to fuzz/<kind>/<target>/<name>."""
+    path = ROOT / kind / target / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(data)
+
+
+def time_optimal() -> None:
+    """Seeds of fuzz_time_optimal: head, mask, distance, widths, shortfall, motor, limits, table."""
+    for d in (0.1, 1.0, 5.0, 20.0, -2.0):
+        write("seeds", "time_optimal", f"move-{d:g}", bytes([2]) + u32(0) + val(d))
+    write("seeds", "time_optimal", "bus-12V-margins", bytes([8]) + u32(2) + val(1.0) + val(12.0))
+    write("seeds", "time_optimal", "caps", bytes([0]) + u32(0x380) + val(3.0) + val(400.0) + val(2e4) + val(1e7))
+    write("seeds", "time_optimal", "short-workspace", bytes([4]) + u32(0) + val(1.0) + b"\x00")
+    write("seeds", "time_optimal", "three-widths", bytes([1]) + u32(0) + val(1.0) + b"\x03" + nom() * 3)
+    write("seeds", "time_optimal", "motor", bytes([0]) + u32(1) + val(1.0) + nom() * 5 + b"\x32")
+    # moves of 1e-6 .. 1.5e-5 rad once wrote past the workspace (the box filter's running sum)
+    for d in (1e-5, 3e-6, 1.2e-5, 1.5e-5, -1e-5, 2e-5, 1e-7, 1e-9):
+        write("regressions", "time_optimal", f"tiny-move-{d:g}", bytes([2 | 8]) + u32(0) + val(d))
+    for w in (1e300, 1e-300):
+        for d in (1.0, 1e-5):
+            write("regressions", "time_optimal", f"width-{w:g}-move-{d:g}", bytes([1]) + u32(0) + val(d) + b"\x01" + val(w))
+
+
+if __name__ == "__main__":
+    time_optimal()
