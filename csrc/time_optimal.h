@@ -31,7 +31,8 @@ enum {
     TO_ESTART = -2,   // at rest the bus and the limits leave no torque: the motor cannot start
     TO_ENOPLAN = -3,  // no smoothing width and bus fraction give a table within the limits
     TO_EWORK = -4,    // the workspace is shorter than time_optimal_work_len()
-    TO_ELONG = -5,    // the move would take more than TO_MAX_SAMPLES samples: split it into shorter moves
+    TO_ELONG = -5,    // the move would take more than TO_MAX_SAMPLES samples: split it into shorter moves (or its
+                      // timing is not a number: an envelope whose acceleration overflows, as for J near 1e-318)
 };
 
 // The motor's limits on a plan (flatstep.plan.limits.MotorLimits): a cap of 0 is no cap.
@@ -73,7 +74,8 @@ size_t time_optimal_work_len(void);
 int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim, fs_real distance,
                       const fs_real *widths, size_t n_widths, fs_real *work, size_t work_len, struct to_result *out);
 
-// Returns the margins of a table (the search's check: tau = j / TO_CHECK on each segment, and the end).
+// Returns the margins of a table (the search's check: tau = j / TO_CHECK on each segment, and the end); every ratio
+// inf when the motor, the limits (time_optimal_plan's ranges) or the table (traj_valid) is invalid.
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim,
                                        const struct traj *tr);
 

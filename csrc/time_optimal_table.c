@@ -240,6 +240,17 @@ static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
     return deg;
 }
 
+// Returns true when every limit is finite and in range.
+bool to_limits_valid(const struct to_limits *l)
+{
+    const fs_real half_pi = FS_C(1.5707963267948966);
+    return fs_isfinite(l->v_bus) && l->v_bus > 0 && fs_isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max
+           && l->i_run > 0 && l->i_run <= l->i_hold && fs_isfinite(l->speed_corner) && l->speed_corner > 0
+           && l->torque_angle_max > 0 && l->torque_angle_max < half_pi && l->v_use > 0 && l->v_use <= 1
+           && fs_isfinite(l->speed_max) && l->speed_max >= 0 && fs_isfinite(l->accel_max) && l->accel_max >= 0
+           && fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
+}
+
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim, const struct traj *tr)
 {
     struct to_margins out = {0, 0, 0, 0, 0, 0, 0};
@@ -248,6 +259,11 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
     bool bad = false;
     size_t i;
     int j;
+    if (!motor_params_valid(m) || !to_limits_valid(lim) || !traj_valid(tr)) {  // nothing to divide by
+        out.voltage = out.current = out.torque_angle = out.speed = out.acceleration = out.jerk = (fs_real)INFINITY;
+        out.worst = (fs_real)INFINITY;
+        return out;
+    }
     for (i = 0; i < tr->n; i++) {
         fs_real h = tr->breaks[i + 1] - tr->breaks[i];
         const fs_real *th = tr->theta + i * TRAJ_NCOEF, *rh = tr->rho + i * TRAJ_NCOEF;

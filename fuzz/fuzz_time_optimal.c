@@ -2,7 +2,7 @@
 // and workspace length give a documented code with out->n = 0 on error, or a valid table that starts at 0, ends at
 // the distance, keeps its own margins and mirrors for -distance; the planner never writes past a workspace of
 // exactly the advertised length (heap, so ASan sees it). time_optimal_margins on any table near the plan's gives
-// ratios that are never NaN.
+// ratios that are never NaN, and every ratio inf when the motor, the limits or the table is invalid.
 //
 // Input: a header byte (1 widths given, 2 the mirror check, 4 a short workspace, 8 margins on a decoded table),
 // a 32-bit mask of the groups decoded hostile (bit 0 the motor, bits 1..10 each limit; the others take the NEMA 17
@@ -105,6 +105,9 @@ static void fuzz_margins(struct fz_reader *r, const struct motor_params *m, cons
     g = time_optimal_margins(m, l, &tr);
     if (motor_ok(m) && limits_ok(l) && traj_valid(&tr))
         check_margins(&g, "time_optimal_margins");
+    else if (!(isinf(g.voltage) && isinf(g.current) && isinf(g.torque_angle) && isinf(g.speed)
+               && isinf(g.acceleration) && isinf(g.jerk) && isinf(g.worst)))
+        FZ_FAIL("time_optimal_margins: a finite margin %g on an invalid motor, limits or table", g.worst);
 }
 
 // Returns 0 (libFuzzer's convention); aborts when a contract of the time-optimal planner is broken.

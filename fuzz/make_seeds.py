@@ -50,5 +50,33 @@ def time_optimal() -> None:
             write("regressions", "time_optimal", f"width-{w:g}-move-{d:g}", bytes([1]) + u32(0) + val(d) + b"\x01" + val(w))
 
 
+def traj_table(head: int, breaks: list[float], times: list[float]) -> bytes:
+    """Return a fuzz_traj input: the breaks, nominal rows, then the times (each with the guess 0)."""
+    n = len(breaks) - 1
+    rows = nom() * (2 * n * 11)
+    return bytes([head]) + b"".join(val(b) for b in breaks) + rows + bytes([len(times)]) + b"".join(
+        val(t) + b"\x00\x00" for t in times
+    )
+
+
+def traj() -> None:
+    """Seeds of fuzz_traj: head (segments, missing arrays, plan_flag), breaks, rows, times and guesses."""
+    write("seeds", "traj", "nominal-4", bytes([4 | 32]))
+    write("seeds", "traj", "nominal-8", bytes([7 | 64 | 32]))
+    write("seeds", "traj", "one-segment", bytes([1]))
+    write("seeds", "traj", "no-segment", bytes([0]))
+    write("seeds", "traj", "no-theta", bytes([2 | 8]))
+    write("seeds", "traj", "no-breaks", bytes([2 | 16]))
+    nan, inf = float("nan"), float("inf")
+    ends = [0.0, 1.0, 1.00001, 2.0, 1.000005, -1.0, 3.0, nan, inf, -inf, 0.9999999999999999]
+    # a tiny segment between two long ones: the segment lookup and the scaling by 1 / h
+    write("regressions", "traj", "tiny-segment", traj_table(3 | 32, [0.0, 1.0, 1.00001, 2.0], ends))
+    write("regressions", "traj", "segment-1e-77", traj_table(2 | 32, [0.0, 1e-77, 1.0], [5e-78, 1e-77, 0.5]))
+    write("regressions", "traj", "segment-1e-300", traj_table(2, [0.0, 1e-300, 1.0], [5e-301, 0.5]))
+    write("regressions", "traj", "equal-breaks", traj_table(3, [0.0, 1.0, 1.0, 2.0], [1.0, 1.5]))
+    write("regressions", "traj", "huge-breaks", traj_table(2 | 32, [-1e300, 0.0, 1e300], [-5e299, 1.0, 1e300]))
+
+
 if __name__ == "__main__":
     time_optimal()
+    traj()
