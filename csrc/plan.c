@@ -21,11 +21,13 @@ static const fs_real psi_coef[11][4] = {
     {-126, 0, 0, 0},
 };
 
-// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
+// Returns true when every field and theta2 - theta1 are finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
 bool plan_valid(const struct plan *p)
 {
-    // (tf - t0)^3 > 0 as well: a span whose cube underflows would make psi's third derivative divide by 0.
-    return fs_isfinite(p->theta1) && fs_isfinite(p->theta2) && fs_isfinite(p->rho1) && fs_isfinite(p->rho2)
+    // (tf - t0)^3 > 0 as well: a span whose cube underflows would make psi's third derivative divide by 0; a finite
+    // theta2 - theta1: an overflowed one makes the held derivatives 0 inf, NaN.
+    return fs_isfinite(p->theta1) && fs_isfinite(p->theta2) && fs_isfinite(p->theta2 - p->theta1)
+           && fs_isfinite(p->rho1) && fs_isfinite(p->rho2)
            && fs_isfinite(p->t0) && fs_isfinite(p->tf) && p->rho1 > 0 && p->rho2 > 0 && p->tf > p->t0
            && fs_pow(p->tf - p->t0, 3) > 0;
 }

@@ -75,7 +75,8 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
                       const fs_real *widths, size_t n_widths, fs_real *work, size_t work_len, struct to_result *out);
 
 // Returns the margins of a table (the search's check: tau = j / TO_CHECK on each segment, and the end); every ratio
-// inf when the motor, the limits (time_optimal_plan's ranges) or the table (traj_valid) is invalid.
+// inf when the motor, the limits (time_optimal_plan's ranges) or the table (traj_valid) is invalid or the table's
+// values overflow; voltage, torque angle and worst inf where the demand is out of reach. No ratio is NaN.
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim,
                                        const struct traj *tr);
 

@@ -95,7 +95,7 @@ static void fuzz_margins(struct fz_reader *r, const struct motor_params *m, cons
     struct traj tr = {0, breaks, theta, rho};
     struct to_margins g;
     size_t i, k;
-    tr.n = out->n ? out->n : 1 + fz_byte(r, 0) % 4;
+    tr.n = out->n ? out->n : 1 + (size_t)(fz_byte(r, 0) % 4);
     for (i = 0; i <= tr.n; i++)
         breaks[i] = out->n ? fz_value(r, out->breaks[i]) : (i ? breaks[i - 1] + fz_value(r, 0.01) : fz_value(r, 0));
     for (k = 0; k < tr.n * TRAJ_NCOEF; k++) {
@@ -142,7 +142,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     args_ok = motor_ok(&m) && limits_ok(&l) && isfinite(d) && d != 0 && (!(head & 1) || (nw >= 1 && nw <= TO_MAX_WIDTHS));
     for (i = 0; i < nw && (head & 1); i++)
         args_ok &= fz_positive(widths[i]);
-    for (i = 0; !(head & 1) && i < 5; i++)  // the default widths: 1/4 .. 4 times L/R
+    for (i = 0; args_ok && !(head & 1) && i < 5; i++)  // the default widths: 1/4 .. 4 times L/R
         args_ok &= fz_positive((i == 0 ? 0.25 : i == 1 ? 0.5 : (double)(1 << (i - 2))) * (m.L / m.R));
     work = malloc(len * sizeof *work);  // exactly the length passed: ASan sees a write past it
     if (!work)

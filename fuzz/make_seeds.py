@@ -77,6 +77,20 @@ def traj() -> None:
     write("regressions", "traj", "huge-breaks", traj_table(2 | 32, [-1e300, 0.0, 1e300], [-5e299, 1.0, 1e300]))
 
 
+def flat() -> None:
+    """Seeds of fuzz_flat: head (samples), mask (hostile groups), motor, plan, load, times, states, arguments."""
+    write("seeds", "flat", "nominal", bytes([16]) + u32(0))
+    for bit, name in enumerate(("motor", "plan", "load", "times", "arguments", "states")):
+        write("seeds", "flat", f"near-{name}", bytes([16]) + u32(1 << bit))
+    plan = [val(0.0), val(0.02), nom(), nom(), val(0.03), val(0.03)]  # tf = t0: not a plan, held at the start
+    write("seeds", "flat", "empty-span", bytes([16]) + u32(2) + b"".join(plan))
+    plan = [val(0.0), val(0.02), val(0.0), nom(), nom(), nom()]  # rho1 = 0: outside the maps' domain
+    write("seeds", "flat", "zero-current", bytes([16]) + u32(2) + b"".join(plan))
+    states = [val(0.0), val(0.0), nom(), nom(), nom(), nom()]  # ia = ib = 0
+    write("seeds", "flat", "zero-state", bytes([1]) + u32(32) + b"".join(states))
+
+
 if __name__ == "__main__":
     time_optimal()
     traj()
+    flat()

@@ -32,7 +32,8 @@ sources() {
     smc) echo "fuzz/fuzz_smc.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     sampled) echo "fuzz/fuzz_sampled.c fuzz/laws.c fuzz/sampled_check.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     continuous) echo "fuzz/fuzz_continuous.c fuzz/laws.c $(ls csrc/*.c | tr '\n' ' ')" ;;
-    time_optimal | traj | flat) echo "fuzz/fuzz_$1.c $(ls csrc/*.c | tr '\n' ' ')" ;;
+    time_optimal | traj) echo "fuzz/fuzz_$1.c $(ls csrc/*.c | tr '\n' ' ')" ;;
+    flat) echo "fuzz/fuzz_flat.c fuzz/laws.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     *) echo "fuzz: unknown target $1 (smc, sampled, continuous, time_optimal, traj, flat)" >&2; exit 2 ;;
     esac
 }

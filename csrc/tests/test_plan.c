@@ -74,6 +74,9 @@ static int plan_checks(void)
     CHECK(!plan_valid(&bad) && plan_psi(5e-201, 0.0, 1e-200, 3) == 0.0, "a span whose cube underflows is invalid");
     bad = p, bad.theta1 = NAN;
     CHECK(!plan_valid(&bad), "NaN theta1 is invalid");
+    bad = p, bad.theta1 = -1e308, bad.theta2 = 1e308;  // found by the fuzzer: theta2 - theta1 overflows, and the
+    plan_eval(&bad, 0.05, f);                           // held flag's 0 inf derivatives were NaN
+    CHECK(!plan_valid(&bad) && isnan(f[PLAN_DTHETA]), "a move whose span overflows is invalid");
     CHECK(!plan_eval(&p, 0.01, f) && f[PLAN_THETA] == 0.0 && f[PLAN_RHO] == 0.4, "held at the start");
     CHECK(!plan_eval(&p, 0.05, f) && f[PLAN_THETA] == 0.02 && f[PLAN_RHO] == 0.3 && f[PLAN_DDDTHETA] == 0.0,
           "held at the end");

@@ -1,4 +1,5 @@
 // The time-optimal planner: a feasible, continuous table that ends at the distance, mirrored moves, error codes.
+#include <math.h>
 #include <stdlib.h>
 #include "check.h"
 #include "time_optimal.h"
@@ -132,6 +133,56 @@ static int tiny_move_checks(void)
     return 0;
 }
 
+// Returns true when every ratio of g is inf.
+static int all_inf(const struct to_margins *g)
+{
+    return isinf(g->voltage) && isinf(g->current) && isinf(g->torque_angle) && isinf(g->speed)
+           && isinf(g->acceleration) && isinf(g->jerk) && isinf(g->worst);
+}
+
+// Returns 0; margins are never NaN and never divide by zero: every ratio inf on an invalid motor, limits or table
+// or a table whose values overflow, the voltage inf where rho s underflows; a denormal inertia, whose envelope
+// overflows, is refused with TO_ELONG and no table (inputs the fuzzer found, fuzz/regressions/time_optimal).
+static int margins_edge_checks(void)
+{
+    static double breaks[2] = {0, 0.01}, theta[TRAJ_NCOEF], rho[TRAJ_NCOEF];
+    struct traj tr = {1, breaks, theta, rho};
+    struct to_limits l = limits_at(24.0), bad = l;
+    struct motor_params m = NEMA17;
+    struct to_margins g;
+    size_t n = time_optimal_work_len();
+    double *heap = malloc(n * sizeof *heap);
+    int rc;
+    rho[TRAJ_NCOEF - 1] = 0.3;
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(g.worst < 0 && g.voltage > 0 && g.current == 0.3 && g.speed == 0, "a hold at 0.3 A: worst %g", g.worst);
+    breaks[1] = 0;  // a segment of zero length
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(all_inf(&g), "zero-length segment: worst %g", g.worst);
+    breaks[1] = 0.01;
+    bad.v_bus = 0;
+    g = time_optimal_margins(&NEMA17, &bad, &tr);
+    CHECK(all_inf(&g), "v_bus = 0: worst %g", g.worst);
+    m.J = 0;
+    g = time_optimal_margins(&m, &l, &tr);
+    CHECK(all_inf(&g), "J = 0: worst %g", g.worst);
+    rho[TRAJ_NCOEF - 1] = 1e-170;  // (Km rho)^2 underflows: s = 0
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(isinf(g.voltage) && isinf(g.worst) && !isnan(g.torque_angle), "rho 1e-170: voltage %g", g.voltage);
+    rho[TRAJ_NCOEF - 1] = 0.3;
+    theta[0] = 1e300, breaks[1] = 1e-10;  // speed, acceleration and jerk overflow
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(all_inf(&g), "overflowing table: worst %g", g.worst);
+    m.J = 9.71373e-319;
+    CHECK(heap != NULL, "workspace");
+    if (!heap)
+        return 0;
+    rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_ELONG && out.n == 0, "denormal inertia: rc %d, %zu segments", rc, out.n);
+    free(heap);
+    return 0;
+}
+
 // Returns 0 (failures are counted by CHECK).
 int test_time_optimal(void)
 {
@@ -139,5 +190,6 @@ int test_time_optimal(void)
     mirror_checks();
     error_checks();
     tiny_move_checks();
+    margins_edge_checks();
     return 0;
 }
