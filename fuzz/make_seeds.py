@@ -90,7 +90,20 @@ def flat() -> None:
     write("seeds", "flat", "zero-state", bytes([1]) + u32(32) + b"".join(states))
 
 
+def dq_smc() -> None:
+    """Seeds of fuzz_dq_smc: head (measurement, hostile groups), options, the groups, steps."""
+    write("seeds", "dq_smc", "ideal", bytes([0, 0]))
+    write("seeds", "dq_smc", "model", bytes([1, 0]))
+    write("seeds", "dq_smc", "d-current", bytes([8, 0]))
+    write("seeds", "dq_smc", "torques", bytes([32, 0]))
+    write("seeds", "dq_smc", "integral", bytes([64, 0]))
+    write("seeds", "dq_smc", "adaptation", bytes([128, 0]))
+    write("seeds", "dq_smc", "integral-adaptation-model", bytes([1 | 64 | 128, 0]))
+    write("seeds", "dq_smc", "v-limit", bytes([0, 1]) + val(1e-3))
+
+
 if __name__ == "__main__":
     time_optimal()
     traj()
     flat()
+    dq_smc()

@@ -119,6 +119,10 @@ static int flat_checks(void)
     f[PLAN_RHO] = 0.4, f[PLAN_DDTHETA] = 1e5;
     CHECK(flat_to_state(&PAPER, f, 0, x, v) == FLAT_ESQRT && v[1] == 0, "|A| >= Km rho is outside the domain");
     CHECK(flat_voltages(&PAPER, 1e-300, 0, 0, 0, 0, 0, 0, 0, v) == FLAT_ESQRT, "rho sqrt underflow is caught");
+    for (k = 0; k < PLAN_FLAG_LEN; k++)  // found by the fuzzer: the state was left set when the voltages failed
+        f[k] = k == PLAN_RHO ? 1e-300 : 0;
+    x[0] = x[1] = 1;
+    CHECK(flat_to_state(&PAPER, f, 0, x, v) == FLAT_ESQRT && x[0] == 0 && x[1] == 0, "the state zeroed on FLAT_ESQRT");
     x[0] = x[1] = 0;
     CHECK(state_to_flat(&PAPER, x, v, 0, g) == FLAT_ERHO && g[PLAN_DDDTHETA] == 0, "ia = ib = 0 is caught");
     x[0] = 0.4, x[1] = 0, x[2] = 0, x[3] = 0;

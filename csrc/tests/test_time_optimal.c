@@ -142,7 +142,8 @@ static int all_inf(const struct to_margins *g)
 
 // Returns 0; margins are never NaN and never divide by zero: every ratio inf on an invalid motor, limits or table
 // or a table whose values overflow, the voltage inf where rho s underflows; a denormal inertia, whose envelope
-// overflows, is refused with TO_ELONG and no table (inputs the fuzzer found, fuzz/regressions/time_optimal).
+// overflows, is refused with TO_ESTART and no table; an acceleration cap whose envelope underflows below full bus
+// finds no plan (inputs the fuzzer found, fuzz/regressions/time_optimal).
 static int margins_edge_checks(void)
 {
     static double breaks[2] = {0, 0.01}, theta[TRAJ_NCOEF], rho[TRAJ_NCOEF];
@@ -178,7 +179,10 @@ static int margins_edge_checks(void)
     if (!heap)
         return 0;
     rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
-    CHECK(rc == TO_ELONG && out.n == 0, "denormal inertia: rc %d, %zu segments", rc, out.n);
+    CHECK(rc == TO_ESTART && out.n == 0, "denormal inertia: rc %d, %zu segments", rc, out.n);
+    bad = l, bad.accel_max = 5.47e-318;  // the envelope's floor 1e-12 a+(0) underflowed to 0: 1 / 0
+    rc = time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_ENOPLAN && out.n == 0, "denormal acceleration cap: rc %d, %zu segments", rc, out.n);
     free(heap);
     return 0;
 }
