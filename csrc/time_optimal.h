@@ -29,7 +29,8 @@ enum {
     TO_OK = 0,
     TO_EARGS = -1,    // a motor parameter, a limit, the distance or a width is out of range or not finite
     TO_ESTART = -2,   // at rest the bus and the limits leave no torque: the motor cannot start (or its envelope is no
-                      // number: an acceleration below 5e-312 rad/s^2 or beyond the largest double, J near 1e-318)
+                      // number: an acceleration below 5e-312 rad/s^2 or beyond the largest double, J near 1e-318,
+                      // or a top speed of 0, speed_max near 1e-323)
     TO_ENOPLAN = -3,  // no smoothing width and bus fraction give a table within the limits
     TO_EWORK = -4,    // the workspace is shorter than time_optimal_work_len()
     TO_ELONG = -5,    // the move would take more than TO_MAX_SAMPLES samples: split it into shorter moves

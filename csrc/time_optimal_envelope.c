@@ -107,7 +107,9 @@ size_t to_envelope(const struct motor_params *m, const struct to_limits *lim, fs
         }
     }
     w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);
-    if (!(w->ap[TO_GRID - 1] > 0))  // the floor underflowed (a+(0) below 5e-312 rad/s^2), or a+ overflowed to NaN
+    // the floor underflowed (a+(0) below 5e-312 rad/s^2), a+ overflowed to NaN, or the top speed is 0 (a speed cap
+    // that underflowed): no envelope to integrate
+    if (!(w->ap[TO_GRID - 1] > 0 && w->omega[TO_GRID - 1] > 0))
         return 0;
     w->integrals = false;
     return TO_GRID;

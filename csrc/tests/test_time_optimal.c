@@ -1,4 +1,5 @@
 // The time-optimal planner: a feasible, continuous table that ends at the distance, mirrored moves, error codes.
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include "check.h"
@@ -183,6 +184,13 @@ static int margins_edge_checks(void)
     bad = l, bad.accel_max = 5.47e-318;  // the envelope's floor 1e-12 a+(0) underflowed to 0: 1 / 0
     rc = time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, heap, n, &out);
     CHECK(rc == TO_ENOPLAN && out.n == 0, "denormal acceleration cap: rc %d, %zu segments", rc, out.n);
+    {  // the top speed underflowed to 0 (speed cap 5e-41 rad/s, 1.7e-314 V bus): the cruise divided by 0
+        struct motor_params slow = {5.3990332965776108e-255, 0.04, 1.7486033150166349e-314, 9.8958333331243964e-43,
+                                    7.3786976294838206e+20, 68};
+        bad = l, bad.v_bus = 1.7486088035918945e-314, bad.speed_max = 5.3333333333312432e-41;
+        rc = time_optimal_plan(&slow, &bad, -DBL_MAX, NULL, 0, heap, n, &out);
+        CHECK(rc == TO_ESTART && out.n == 0, "top speed 0: rc %d, %zu segments", rc, out.n);
+    }
     free(heap);
     return 0;
 }
