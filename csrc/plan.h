@@ -29,7 +29,8 @@ struct plan_coef {
     fs_real rest[2][PLAN_FLAG_LEN];  // the flag held up to t0 and from tf on
 };
 
-// Returns true when every field and theta2 - theta1 are finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
+// Returns true when every field is finite, the angles and currents at most FS_REAL_MAX / 4 in magnitude (the flag
+// then stays finite), rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0.
 bool plan_valid(const struct plan *p);
 
 // Returns plan_valid(p); fills c from p either way (for tf <= t0 plan_flag then holds the start values, and

@@ -176,7 +176,7 @@ void to_bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *m
     core = mv->t1 + mv->t2 + fs_min(mv->cruise, 4 * width) + 2 * width;
     dt = fs_min(core / TO_FINE, fs_min(fs_min(mv->t1, mv->t2), width) / TO_PER_PHASE);
     mv->dt = dt = fs_max(dt, core / TO_FINE_MAX);
-    x = fs_rint(width / dt);  // numpy's round: half to even, as rint in the default rounding mode
+    x = fs_rint(width / dt);             // numpy's round: half to even, as rint in the default rounding mode
     mv->n_box = x >= 1 ? (size_t)x : 1;  // and 1 for a NaN x (no cast): the timing below refuses it
     x = total / dt;
     if (!(x < TO_MAX_SAMPLES)) {  // too long to sample (and to cast), or NaN: refused by the caller

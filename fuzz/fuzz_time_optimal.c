@@ -37,8 +37,8 @@ static bool motor_ok(const struct motor_params *m)
 // Returns nothing; decodes the limits field by field (bit k + 1 of mask: field k hostile, else 24 V, 1 A).
 static void decode_limits(struct fz_reader *r, uint32_t mask, struct to_limits *l)
 {
-    double *f[10] = {&l->v_bus,        &l->i_max, &l->i_hold,    &l->i_run,     &l->speed_corner,
-                     &l->torque_angle_max, &l->v_use, &l->speed_max, &l->accel_max, &l->jerk_max};
+    double *f[10] = {&l->v_bus, &l->i_max,     &l->i_hold,    &l->i_run,   &l->speed_corner, &l->torque_angle_max,
+                     &l->v_use, &l->speed_max, &l->accel_max, &l->jerk_max};
     const double nominal[10] = {24.0, 1.0, 0.3, 0.3, 10.0, 1.2, 0.9, 0, 0, 0};
     int k;
     for (k = 0; k < 10; k++)
@@ -105,8 +105,8 @@ static void fuzz_margins(struct fz_reader *r, const struct motor_params *m, cons
     g = time_optimal_margins(m, l, &tr);
     if (motor_ok(m) && limits_ok(l) && traj_valid(&tr))
         check_margins(&g, "time_optimal_margins");
-    else if (!(isinf(g.voltage) && isinf(g.current) && isinf(g.torque_angle) && isinf(g.speed)
-               && isinf(g.acceleration) && isinf(g.jerk) && isinf(g.worst)))
+    else if (!(isinf(g.voltage) && isinf(g.current) && isinf(g.torque_angle) && isinf(g.speed) && isinf(g.acceleration)
+               && isinf(g.jerk) && isinf(g.worst)))
         FZ_FAIL("time_optimal_margins: a finite margin %g on an invalid motor, limits or table", g.worst);
 }
 
@@ -139,7 +139,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         m.Nr = b & 0x80 ? (int)fz_u32(&r, 50) : b;
     }
     decode_limits(&r, mask, &l);
-    args_ok = motor_ok(&m) && limits_ok(&l) && isfinite(d) && d != 0 && (!(head & 1) || (nw >= 1 && nw <= TO_MAX_WIDTHS));
+    args_ok =
+        motor_ok(&m) && limits_ok(&l) && isfinite(d) && d != 0 && (!(head & 1) || (nw >= 1 && nw <= TO_MAX_WIDTHS));
     for (i = 0; i < nw && (head & 1); i++)
         args_ok &= fz_positive(widths[i]);
     for (i = 0; args_ok && !(head & 1) && i < 5; i++)  // the default widths: 1/4 .. 4 times L/R

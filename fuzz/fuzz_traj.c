@@ -48,7 +48,7 @@ static void check_time(const struct traj *tr, double t, size_t guess, bool moder
     if (in != (t > tr->breaks[0] && t < tr->breaks[n]))
         FZ_FAIL("traj_flag returned %d at t = %.17g on [%.17g, %.17g]", in, t, tr->breaks[0], tr->breaks[n]);
     if (t >= tr->breaks[0] && t < tr->breaks[n] ? !(tr->breaks[i] <= t && t < tr->breaks[i + 1])
-                                                 : i != (t >= tr->breaks[n] ? n - 1 : 0))
+                                                : i != (t >= tr->breaks[n] ? n - 1 : 0))
         FZ_FAIL("traj_segment gave %zu at t = %.17g", i, t);
     in2 = traj_flag_seg(tr, t, &seg, g);
     if (in2 != in || memcmp(f, g, sizeof f) != 0 || (in && seg != i))
@@ -60,10 +60,12 @@ static void check_time(const struct traj *tr, double t, size_t guess, bool moder
     }
     if (traj_theta(tr, t, 5) != 0 || traj_theta(tr, t, -1) != 0)
         FZ_FAIL("traj_theta: an order out of range is not 0");
-    if (!in && (f[PLAN_DRHO] != 0 || f[PLAN_DTHETA] != 0 || f[PLAN_DDTHETA] != 0 || f[PLAN_DDDTHETA] != 0
-                || traj_theta(tr, t, 4) != 0))
+    if (!in
+        && (f[PLAN_DRHO] != 0 || f[PLAN_DTHETA] != 0 || f[PLAN_DDTHETA] != 0 || f[PLAN_DDDTHETA] != 0
+            || traj_theta(tr, t, 4) != 0))
         FZ_FAIL("traj_flag: a derivative is not 0 outside the table at t = %.17g", t);
-    if (!in && !(t >= tr->breaks[n]) && (f[PLAN_THETA] != tr->theta[TRAJ_NCOEF - 1] || f[PLAN_RHO] != tr->rho[TRAJ_NCOEF - 1]))
+    if (!in && !(t >= tr->breaks[n])
+        && (f[PLAN_THETA] != tr->theta[TRAJ_NCOEF - 1] || f[PLAN_RHO] != tr->rho[TRAJ_NCOEF - 1]))
         FZ_FAIL("traj_flag: the start is not held at t = %.17g", t);
     for (k = 0; moderate && k < PLAN_FLAG_LEN; k++)
         if (!isfinite(f[k]))

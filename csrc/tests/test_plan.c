@@ -1,4 +1,5 @@
 // Planner, flat maps and motor model: boundary values, finite-difference derivatives, round trips.
+#include <float.h>
 #include "check.h"
 #include "flat.h"
 #include "motor.h"
@@ -74,9 +75,17 @@ static int plan_checks(void)
     CHECK(!plan_valid(&bad) && plan_psi(5e-201, 0.0, 1e-200, 3) == 0.0, "a span whose cube underflows is invalid");
     bad = p, bad.theta1 = NAN;
     CHECK(!plan_valid(&bad), "NaN theta1 is invalid");
-    bad = p, bad.theta1 = -1e308, bad.theta2 = 1e308;  // found by the fuzzer: theta2 - theta1 overflows, and the
-    plan_eval(&bad, 0.05, f);                           // held flag's 0 inf derivatives were NaN
+    // found by the fuzzer: theta2 - theta1 overflowed, and the held flag's derivatives 0 inf were NaN; psi's
+    // rounding past 1 took rho1 + psi (rho2 - rho1) to -inf
+    bad = p, bad.theta1 = -1e308, bad.theta2 = 1e308;
+    plan_eval(&bad, 0.05, f);
     CHECK(!plan_valid(&bad) && isnan(f[PLAN_DTHETA]), "a move whose span overflows is invalid");
+    bad = p, bad.rho1 = DBL_MAX, bad.rho2 = 4.4e291, bad.t0 = 7.3e-304, bad.tf = 0.040000000000055637;
+    plan_eval(&bad, 0.04, f);
+    CHECK(!plan_valid(&bad) && isinf(f[PLAN_RHO]), "a current beyond DBL_MAX / 4 is invalid");
+    bad = p, bad.theta2 = DBL_MAX / 4, bad.rho1 = DBL_MAX / 4;
+    CHECK(plan_valid(&bad) && plan_eval(&bad, 0.039999, f) && isfinite(f[PLAN_THETA]) && isfinite(f[PLAN_RHO]),
+          "within DBL_MAX / 4 the flag is finite");
     CHECK(!plan_eval(&p, 0.01, f) && f[PLAN_THETA] == 0.0 && f[PLAN_RHO] == 0.4, "held at the start");
     CHECK(!plan_eval(&p, 0.05, f) && f[PLAN_THETA] == 0.02 && f[PLAN_RHO] == 0.3 && f[PLAN_DDDTHETA] == 0.0,
           "held at the end");

@@ -137,8 +137,8 @@ static int tiny_move_checks(void)
 // Returns true when every ratio of g is inf.
 static int all_inf(const struct to_margins *g)
 {
-    return isinf(g->voltage) && isinf(g->current) && isinf(g->torque_angle) && isinf(g->speed)
-           && isinf(g->acceleration) && isinf(g->jerk) && isinf(g->worst);
+    return isinf(g->voltage) && isinf(g->current) && isinf(g->torque_angle) && isinf(g->speed) && isinf(g->acceleration)
+           && isinf(g->jerk) && isinf(g->worst);
 }
 
 // Returns 0; margins are never NaN and never divide by zero: every ratio inf on an invalid motor, limits or table
@@ -186,7 +186,7 @@ static int margins_edge_checks(void)
     CHECK(rc == TO_ENOPLAN && out.n == 0, "denormal acceleration cap: rc %d, %zu segments", rc, out.n);
     {  // the top speed underflowed to 0 (speed cap 5e-41 rad/s, 1.7e-314 V bus): the cruise divided by 0
         struct motor_params slow = {5.3990332965776108e-255, 0.04, 1.7486033150166349e-314, 9.8958333331243964e-43,
-                                    7.3786976294838206e+20, 68};
+                                    7.3786976294838206e+20,  68};
         bad = l, bad.v_bus = 1.7486088035918945e-314, bad.speed_max = 5.3333333333312432e-41;
         rc = time_optimal_plan(&slow, &bad, -DBL_MAX, NULL, 0, heap, n, &out);
         CHECK(rc == TO_ESTART && out.n == 0, "top speed 0: rc %d, %zu segments", rc, out.n);
