@@ -240,15 +240,16 @@ static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
     return deg;
 }
 
-// Returns true when every limit is finite and in range.
+// Returns true when every limit is finite and in range, and the usable voltage TO_V_MARGIN v_use v_bus does not
+// underflow (the planner divides by it).
 bool to_limits_valid(const struct to_limits *l)
 {
     const fs_real half_pi = FS_C(1.5707963267948966);
     return fs_isfinite(l->v_bus) && l->v_bus > 0 && fs_isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max
            && l->i_run > 0 && l->i_run <= l->i_hold && fs_isfinite(l->speed_corner) && l->speed_corner > 0
            && l->torque_angle_max > 0 && l->torque_angle_max < half_pi && l->v_use > 0 && l->v_use <= 1
-           && fs_isfinite(l->speed_max) && l->speed_max >= 0 && fs_isfinite(l->accel_max) && l->accel_max >= 0
-           && fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
+           && TO_V_MARGIN * l->v_use * l->v_bus > 0 && fs_isfinite(l->speed_max) && l->speed_max >= 0
+           && fs_isfinite(l->accel_max) && l->accel_max >= 0 && fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
 }
 
 // Returns margins of inf: nothing can be measured (invalid arguments, or a table whose values are not numbers).

@@ -22,9 +22,9 @@ static bool limits_ok(const struct to_limits *l)
 {
     return fz_positive(l->v_bus) && isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max && l->i_run > 0
            && l->i_run <= l->i_hold && fz_positive(l->speed_corner) && l->torque_angle_max > 0
-           && l->torque_angle_max < 1.5707963267948966 && l->v_use > 0 && l->v_use <= 1 && isfinite(l->speed_max)
-           && l->speed_max >= 0 && isfinite(l->accel_max) && l->accel_max >= 0 && isfinite(l->jerk_max)
-           && l->jerk_max >= 0;
+           && l->torque_angle_max < 1.5707963267948966 && l->v_use > 0 && l->v_use <= 1
+           && 0.998 * l->v_use * l->v_bus > 0 && isfinite(l->speed_max) && l->speed_max >= 0 && isfinite(l->accel_max)
+           && l->accel_max >= 0 && isfinite(l->jerk_max) && l->jerk_max >= 0;
 }
 
 // Returns true when the motor's documented ranges hold (motor.h).

@@ -181,6 +181,9 @@ static int margins_edge_checks(void)
         return 0;
     rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
     CHECK(rc == TO_ESTART && out.n == 0, "denormal inertia: rc %d, %zu segments", rc, out.n);
+    bad = l, bad.v_bus = bad.v_use = 5.96e-212;  // v_use v_bus underflowed: the first gamma divided by 0
+    rc = time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_EARGS && out.n == 0, "v_use v_bus underflows: rc %d", rc);
     bad = l, bad.accel_max = 5.47e-318;  // the envelope's floor 1e-12 a+(0) underflowed to 0: 1 / 0
     rc = time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, heap, n, &out);
     CHECK(rc == TO_ENOPLAN && out.n == 0, "denormal acceleration cap: rc %d, %zu segments", rc, out.n);
