@@ -107,6 +107,7 @@ size_t to_envelope(const struct motor_params *m, const struct to_limits *lim, fs
         }
     }
     w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);
+    w->am[TO_GRID - 1] = fs_min(w->am[TO_GRID - 1], FS_C(1e-12) * w->am[0]);  // and left: braking at B = 0 is 0 there
     // the floor underflowed (a+(0) below 5e-312 rad/s^2), a+ overflowed to NaN, or the top speed is 0 (a speed cap
     // that underflowed): no envelope to integrate
     if (!(w->ap[TO_GRID - 1] > 0 && w->omega[TO_GRID - 1] > 0))
@@ -179,7 +180,9 @@ void to_bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *m
     x = fs_rint(width / dt);             // numpy's round: half to even, as rint in the default rounding mode
     mv->n_box = x >= 1 ? (size_t)x : 1;  // and 1 for a NaN x (no cast): the timing below refuses it
     x = total / dt;
-    if (!(x < TO_MAX_SAMPLES)) {  // too long to sample (and to cast), or NaN: refused by the caller
+    // too long to sample (and to cast), NaN, or a phase of negative duration (an envelope whose acceleration is
+    // not > 0 inside, at a low bus fraction with little friction): refused by the caller
+    if (!(x >= 0 && x < TO_MAX_SAMPLES && mv->t1 >= 0 && mv->t2 >= 0)) {
         mv->n = (size_t)TO_MAX_SAMPLES + 1, mv->r = mv->k = 0;
         return;
     }
