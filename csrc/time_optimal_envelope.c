@@ -177,8 +177,12 @@ void to_bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *m
     core = mv->t1 + mv->t2 + fs_min(mv->cruise, 4 * width) + 2 * width;
     dt = fs_min(core / TO_FINE, fs_min(fs_min(mv->t1, mv->t2), width) / TO_PER_PHASE);
     mv->dt = dt = fs_max(dt, core / TO_FINE_MAX);
-    x = fs_rint(width / dt);             // numpy's round: half to even, as rint in the default rounding mode
-    mv->n_box = x >= 1 ? (size_t)x : 1;  // and 1 for a NaN x (no cast): the timing below refuses it
+    if (!(dt > 0)) {  // nothing to sample (denormal widths and speeds, or NaN): refused by the caller
+        mv->n_box = 1, mv->n = (size_t)TO_MAX_SAMPLES + 1, mv->r = mv->k = 0;
+        return;
+    }
+    x = fs_rint(width / dt);  // numpy's round: half to even, as rint in the default rounding mode
+    mv->n_box = x >= 1 ? (size_t)fs_min(x, TO_MAX_SAMPLES) : 1;  // 1 for a NaN x (no cast): refused below
     x = total / dt;
     // too long to sample (and to cast), NaN, or a phase of negative duration (an envelope whose acceleration is
     // not > 0 inside, at a low bus fraction with little friction): refused by the caller

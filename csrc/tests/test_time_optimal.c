@@ -187,6 +187,12 @@ static int margins_edge_checks(void)
     m.B = 3.1315130626053307e-294, m.J = 5.600000005216298e-06;  // below full bus, a phase of negative duration
     rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
     CHECK(rc == TO_OK && out.margins.worst <= 0, "B = 3e-294: rc %d, worst %g", rc, out.margins.worst);
+    {  // a denormal width and speed cap: a sampling step of 0, width / 0
+        const double denormal_width = 4.94e-324;
+        bad = l, bad.speed_max = 4.83e-319;
+        rc = time_optimal_plan(&NEMA17, &bad, -2.26e274, &denormal_width, 1, heap, n, &out);
+        CHECK(rc == TO_ELONG && out.n == 0, "step 0: rc %d", rc);
+    }
     bad = l, bad.v_bus = bad.v_use = 5.96e-212;  // v_use v_bus underflowed: the first gamma divided by 0
     rc = time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, heap, n, &out);
     CHECK(rc == TO_EARGS && out.n == 0, "v_use v_bus underflows: rc %d", rc);
