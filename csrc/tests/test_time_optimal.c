@@ -184,6 +184,10 @@ static int margins_edge_checks(void)
     m = NEMA17, m.Km = 0.04, m.B = 0, m.Nr = 60;  // no friction: braking at the top speed was 0, its time 1 / 0
     rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
     CHECK(rc == TO_OK && out.n > 0 && out.margins.worst <= 0, "B = 0: rc %d, worst %g", rc, out.margins.worst);
+    m = NEMA17, m.B = 0;  // braking 0 inside the envelope: refused (1 / 0 before), as the reference refuses it
+    rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_ESTART && out.n == 0, "NEMA 17, B = 0: rc %d", rc);
+    m = NEMA17, m.Km = 0.04, m.Nr = 60;
     m.B = 3.1315130626053307e-294, m.J = 5.600000005216298e-06;  // below full bus, a phase of negative duration
     rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
     CHECK(rc == TO_OK && out.margins.worst <= 0, "B = 3e-294: rc %d, worst %g", rc, out.margins.worst);
