@@ -47,7 +47,8 @@ def time_optimal() -> None:
         write("regressions", "time_optimal", f"tiny-move-{d:g}", bytes([2 | 8]) + u32(0) + val(d))
     for w in (1e300, 1e-300):
         for d in (1.0, 1e-5):
-            write("regressions", "time_optimal", f"width-{w:g}-move-{d:g}", bytes([1]) + u32(0) + val(d) + b"\x01" + val(w))
+            data = bytes([1]) + u32(0) + val(d) + b"\x01" + val(w)
+            write("regressions", "time_optimal", f"width-{w:g}-move-{d:g}", data)
 
 
 def traj_table(head: int, breaks: list[float], times: list[float]) -> bytes:
