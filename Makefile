@@ -36,8 +36,9 @@ ctest:
 	cmake --build build/asan
 	cd build/asan && ctest --output-on-failure
 
-# Fuzz the C core (smc_step, the sampled loop, the continuous loop; libFuzzer + ASan/UBSan, installs clang if
-# missing): 12 s per target in CI (fuzz-ci), or FUZZ_SECONDS per target.
+# Fuzz the C core (smc_step, the sampled loop, the continuous loop, the time-optimal planner, the segment tables,
+# the plan and flat maps, the d-q law; libFuzzer + ASan/UBSan, installs clang if missing): 12 s per target in CI
+# (fuzz-ci), or FUZZ_SECONDS per target.
 FUZZ_SECONDS ?= 300
 fuzz-ci:
 	./fuzz/run.sh 12

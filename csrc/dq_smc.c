@@ -59,6 +59,7 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
     if (!(fs_isfinite(p->adapt.rate) && p->adapt.rate >= 0
           && (p->adapt.rate == 0
               || (positive(p->adapt.Ts) && positive(p->adapt.v_hold) && positive(p->adapt.phi0)
+                  && p->adapt.phi0 * p->adapt.phi0 > 0  // phi0^2 + phi^2 is never 0 (dq_smc_adapt divides by it)
                   && positive(p->adapt.range) && p->adapt.range < 1))))
         return DQ_SMC_EADAPT;
     s->p = *p;

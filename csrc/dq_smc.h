@@ -21,8 +21,8 @@ enum dq_smc_param_error {
     DQ_SMC_ELIMITS,       // v_limit not finite and >= 1e-3
     DQ_SMC_ETORQUES,      // torque_model_valid fails
     DQ_SMC_EINTEGRAL,     // ki not finite and >= 0, or with ki > 0: Ts or v_hold not finite and > 0
-    DQ_SMC_EADAPT,        // rate not finite and >= 0, or with rate > 0: Ts, v_hold, phi0 not finite and > 0 or
-                          // range not in (0, 1)
+    DQ_SMC_EADAPT,        // rate not finite and >= 0, or with rate > 0: Ts, v_hold, phi0 not finite and > 0, phi0^2
+                          // underflows to 0, or range not in (0, 1)
 };
 
 // Integral action on s2 (off with ki = 0): Gamma2 -= ki z, z += Ts s2 after each step, held (anti-windup) while

@@ -60,8 +60,11 @@ int flat_to_state(const struct motor_params *m, const fs_real flag[PLAN_FLAG_LEN
     x[1] *= rho;
     x[2] = flag[PLAN_DTHETA];
     x[3] = flag[PLAN_THETA];
-    return flat_voltages(m, rho, flag[PLAN_DRHO], flag[PLAN_THETA], flag[PLAN_DTHETA], flag[PLAN_DDTHETA],
-                         flag[PLAN_DDDTHETA], phi, c * m->Km * rho, v);
+    k = flat_voltages(m, rho, flag[PLAN_DRHO], flag[PLAN_THETA], flag[PLAN_DTHETA], flag[PLAN_DDTHETA],
+                      flag[PLAN_DDDTHETA], phi, c * m->Km * rho, v);
+    if (k != FLAT_OK)  // out of the voltages' domain (rho S underflows): x zeroed as well
+        x[0] = x[1] = x[2] = x[3] = 0;
+    return k;
 }
 
 // Returns FLAT_OK, or FLAT_ERHO with the flag zeroed when ia = ib = 0 (rho L underflows); writes the flat flag

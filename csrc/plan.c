@@ -21,12 +21,15 @@ static const fs_real psi_coef[11][4] = {
     {-126, 0, 0, 0},
 };
 
-// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0, and a table, if set,
-// is traj_valid.
+// Returns true when every field is finite, the angles and currents at most FS_REAL_MAX / 4 in magnitude, rho1,
+// rho2 > 0 and tf > t0 with (tf - t0)^3 > 0, and a table, if set, is traj_valid.
 bool plan_valid(const struct plan *p)
 {
-    // (tf - t0)^3 > 0 as well: a span whose cube underflows would make psi's third derivative divide by 0.
-    return fs_isfinite(p->theta1) && fs_isfinite(p->theta2) && fs_isfinite(p->rho1) && fs_isfinite(p->rho2)
+    // (tf - t0)^3 > 0 as well: a span whose cube underflows would make psi's third derivative divide by 0. Angles and
+    // currents within FS_REAL_MAX / 4: theta1 + psi (theta2 - theta1) stays finite for psi up to 1.5 (Horner's
+    // rounding takes psi a little past 1), and the held derivatives 0 (theta2 - theta1) are 0, not NaN.
+    const fs_real big = FS_REAL_MAX / 4;
+    return fs_fabs(p->theta1) <= big && fs_fabs(p->theta2) <= big && p->rho1 <= big && p->rho2 <= big
            && fs_isfinite(p->t0) && fs_isfinite(p->tf) && p->rho1 > 0 && p->rho2 > 0 && p->tf > p->t0
            && fs_pow(p->tf - p->t0, 3) > 0 && (p->traj == NULL || traj_valid(p->traj));
 }

@@ -33,8 +33,8 @@ struct plan_coef {
     fs_real rest[2][PLAN_FLAG_LEN];  // the flag held up to t0 and from tf on
 };
 
-// Returns true when every field is finite, rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0, and a table, if set,
-// is traj_valid.
+// Returns true when every field is finite, the angles and currents at most FS_REAL_MAX / 4 in magnitude (the flag
+// then stays finite), rho1, rho2 > 0 and tf > t0 with (tf - t0)^3 > 0, and a table, if set, is traj_valid.
 bool plan_valid(const struct plan *p);
 
 // Returns plan_valid(p); fills c from p either way (for tf <= t0 plan_flag then holds the start values, and

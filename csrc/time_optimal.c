@@ -188,17 +188,6 @@ static bool walk(struct to_search *s, long i, long step, fs_real f)
     return better;
 }
 
-// Returns true when every limit is finite and in range.
-static bool limits_valid(const struct to_limits *l)
-{
-    const fs_real half_pi = FS_C(1.5707963267948966);
-    return fs_isfinite(l->v_bus) && l->v_bus > 0 && fs_isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max
-           && l->i_run > 0 && l->i_run <= l->i_hold && fs_isfinite(l->speed_corner) && l->speed_corner > 0
-           && l->torque_angle_max > 0 && l->torque_angle_max < half_pi && l->v_use > 0 && l->v_use <= 1
-           && fs_isfinite(l->speed_max) && l->speed_max >= 0 && fs_isfinite(l->accel_max) && l->accel_max >= 0
-           && fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
-}
-
 int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim, fs_real distance,
                       const fs_real *widths, size_t n_widths, fs_real *work, size_t work_len, struct to_result *out)
 {
@@ -209,7 +198,7 @@ int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim,
     size_t i, j, k, nw = widths ? n_widths : sizeof DEFAULT_WIDTHS / sizeof *DEFAULT_WIDTHS;
     out->n = 0;
     out->tables = 0;
-    if (!motor_params_valid(m) || !limits_valid(lim) || !fs_isfinite(distance) || distance == 0 || nw < 1
+    if (!motor_params_valid(m) || !to_limits_valid(lim) || !fs_isfinite(distance) || distance == 0 || nw < 1
         || nw > TO_MAX_WIDTHS)
         return TO_EARGS;
     for (i = 0; i < nw; i++) {  // insertion into the sorted widths

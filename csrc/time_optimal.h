@@ -27,8 +27,11 @@ enum {
 // Return codes of time_optimal_plan.
 enum {
     TO_OK = 0,
-    TO_EARGS = -1,    // a motor parameter, a limit, the distance or a width is out of range or not finite
-    TO_ESTART = -2,   // at rest the bus and the limits leave no torque: the motor cannot start
+    TO_EARGS = -1,    // a motor parameter, a limit, the distance or a width is out of range or not finite (or
+                      // v_use v_bus underflows to 0)
+    TO_ESTART = -2,   // at rest the bus and the limits leave no torque: the motor cannot start (or its envelope is no
+                      // number: an acceleration below 5e-312 rad/s^2 or beyond the largest double, J near 1e-318,
+                      // or a top speed of 0, speed_max near 1e-323)
     TO_ENOPLAN = -3,  // no smoothing width and bus fraction give a table within the limits
     TO_EWORK = -4,    // the workspace is shorter than time_optimal_work_len()
     TO_ELONG = -5,    // the move would take more than TO_MAX_SAMPLES samples: split it into shorter moves
@@ -42,7 +45,7 @@ struct to_limits {
     fs_real i_run;             // current across the torque axis at speed [A], in (0, i_hold]
     fs_real speed_corner;      // speed [rad/s] where the across-axis floor is halfway from i_hold to i_run, > 0
     fs_real torque_angle_max;  // largest torque angle [rad], in (0, pi/2)
-    fs_real v_use;             // fraction of v_bus the plan's feedforward may use, in (0, 1]
+    fs_real v_use;             // fraction of v_bus the plan's feedforward may use, in (0, 1], v_use v_bus > 0
     fs_real speed_max, accel_max, jerk_max;  // caps [rad/s, rad/s^2, rad/s^3], >= 0 (0: none)
 };
 
@@ -73,7 +76,9 @@ size_t time_optimal_work_len(void);
 int time_optimal_plan(const struct motor_params *m, const struct to_limits *lim, fs_real distance,
                       const fs_real *widths, size_t n_widths, fs_real *work, size_t work_len, struct to_result *out);
 
-// Returns the margins of a table (the search's check: tau = j / TO_CHECK on each segment, and the end).
+// Returns the margins of a table (the search's check: tau = j / TO_CHECK on each segment, and the end); every ratio
+// inf when the motor, the limits (time_optimal_plan's ranges) or the table (traj_valid) is invalid or the table's
+// values overflow; voltage, torque angle and worst inf where the demand is out of reach. No ratio is NaN.
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim,
                                        const struct traj *tr);
 

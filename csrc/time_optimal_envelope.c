@@ -107,6 +107,15 @@ size_t to_envelope(const struct motor_params *m, const struct to_limits *lim, fs
         }
     }
     w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);
+    w->am[TO_GRID - 1] = fs_min(w->am[TO_GRID - 1], FS_C(1e-12) * w->am[0]);  // and left: braking at B = 0 is 0 there
+    // the floor underflowed (a+(0) below 5e-312 rad/s^2), an acceleration is NaN, speed-up or braking is 0 or less
+    // inside (a low bus fraction with little friction), or the top speed is 0 (a speed cap that underflowed): no
+    // envelope to integrate (its times would divide by 0 or run backwards)
+    for (i = 0; i < TO_GRID; i++)
+        if (!(w->ap[i] > 0 && w->am[i] < 0))
+            return 0;
+    if (!(w->omega[TO_GRID - 1] > 0))
+        return 0;
     w->integrals = false;
     return TO_GRID;
 }
@@ -172,10 +181,16 @@ void to_bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *m
     core = mv->t1 + mv->t2 + fs_min(mv->cruise, 4 * width) + 2 * width;
     dt = fs_min(core / TO_FINE, fs_min(fs_min(mv->t1, mv->t2), width) / TO_PER_PHASE);
     mv->dt = dt = fs_max(dt, core / TO_FINE_MAX);
+    if (!(dt > 0)) {  // nothing to sample (denormal widths and speeds, or NaN): refused by the caller
+        mv->n_box = 1, mv->n = (size_t)TO_MAX_SAMPLES + 1, mv->r = mv->k = 0;
+        return;
+    }
     x = fs_rint(width / dt);  // numpy's round: half to even, as rint in the default rounding mode
-    mv->n_box = x < 1 ? 1 : (size_t)x;
+    mv->n_box = x >= 1 ? (size_t)fs_min(x, TO_MAX_SAMPLES) : 1;  // 1 for a NaN x (no cast): refused below
     x = total / dt;
-    if (!(x < TO_MAX_SAMPLES)) {  // too long to sample (and to cast): refused by the caller
+    // too long to sample (and to cast), NaN, or a phase of negative duration (an envelope whose acceleration is
+    // not > 0 inside, at a low bus fraction with little friction): refused by the caller
+    if (!(x >= 0 && x < TO_MAX_SAMPLES && mv->t1 >= 0 && mv->t2 >= 0)) {
         mv->n = (size_t)TO_MAX_SAMPLES + 1, mv->r = mv->k = 0;
         return;
     }

@@ -74,6 +74,8 @@ static inline fs_real to_interp_walk(fs_real x, const fs_real *xs, const fs_real
 void to_bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *mv);
 
 // time_optimal_table.c
+// Returns true when every limit is finite and in range (time_optimal.h's struct to_limits).
+bool to_limits_valid(const struct to_limits *l);
 bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim, fs_real d, fs_real width,
                        struct to_work *w);
 

@@ -240,14 +240,37 @@ static int deriv_row(const fs_real *row, int k, fs_real h, fs_real *out)
     return deg;
 }
 
+// Returns true when every limit is finite and in range, and the usable voltage TO_V_MARGIN v_use v_bus does not
+// underflow (the planner divides by it).
+bool to_limits_valid(const struct to_limits *l)
+{
+    const fs_real half_pi = FS_C(1.5707963267948966);
+    return fs_isfinite(l->v_bus) && l->v_bus > 0 && fs_isfinite(l->i_max) && l->i_hold > 0 && l->i_hold < l->i_max
+           && l->i_run > 0 && l->i_run <= l->i_hold && fs_isfinite(l->speed_corner) && l->speed_corner > 0
+           && l->torque_angle_max > 0 && l->torque_angle_max < half_pi && l->v_use > 0 && l->v_use <= 1
+           && TO_V_MARGIN * l->v_use * l->v_bus > 0 && fs_isfinite(l->speed_max) && l->speed_max >= 0
+           && fs_isfinite(l->accel_max) && l->accel_max >= 0 && fs_isfinite(l->jerk_max) && l->jerk_max >= 0;
+}
+
+// Returns margins of inf: nothing can be measured (invalid arguments, or a table whose values are not numbers).
+static struct to_margins margins_inf(void)
+{
+    const fs_real inf = (fs_real)INFINITY;
+    struct to_margins out = {inf, inf, inf, inf, inf, inf, inf};
+    return out;
+}
+
 struct to_margins time_optimal_margins(const struct motor_params *m, const struct to_limits *lim, const struct traj *tr)
 {
     struct to_margins out = {0, 0, 0, 0, 0, 0, 0};
     fs_real rho_max = 0, w_max = 0, a_max = 0, j_max = 0, c_max = 0, v2_max = 0, kr, inv_kr, a, s, dphi, x, y;
-    fs_real sin_max = fs_sin(lim->torque_angle_max);
+    fs_real sin_max;
     bool bad = false;
     size_t i;
     int j;
+    if (!motor_params_valid(m) || !to_limits_valid(lim) || !traj_valid(tr))  // nothing to divide by
+        return margins_inf();
+    sin_max = fs_sin(lim->torque_angle_max);
     for (i = 0; i < tr->n; i++) {
         fs_real h = tr->breaks[i + 1] - tr->breaks[i];
         const fs_real *th = tr->theta + i * TRAJ_NCOEF, *rh = tr->rho + i * TRAJ_NCOEF;
@@ -264,6 +287,8 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
                 w = horner(c1, g1, tau), acc = horner(c2, g2, tau), jerk = horner(c3, g3, tau);
                 rho = horner(c0, g0, tau), drho = horner(c4, g4, tau);
             }
+            if (!(fs_isfinite(w) && fs_isfinite(acc) && fs_isfinite(jerk) && fs_isfinite(rho) && fs_isfinite(drho)))
+                return margins_inf();  // the table's values overflow: no ratio is a number
             rho_max = fs_max(rho_max, rho);
             w_max = fs_max(w_max, fs_fabs(w));
             a_max = fs_max(a_max, fs_fabs(acc));
@@ -276,10 +301,18 @@ struct to_margins time_optimal_margins(const struct motor_params *m, const struc
             }
             s = fs_sqrt(kr * kr - a * a);
             inv_kr = 1 / kr;
+            if (!(rho * s > 0 && fs_isfinite(inv_kr))) {  // rho s or kr underflowed: no division by zero
+                bad = true;
+                continue;
+            }
             c_max = fs_max(c_max, fs_fabs(a) * inv_kr);
             dphi = -((m->J * jerk + m->B * acc) * rho - a * drho) / (rho * s) - (fs_real)m->Nr * w;
             x = m->L * drho + m->R * rho + m->Km * w * (a * inv_kr);
             y = m->L * rho * dphi - m->Km * w * (s * inv_kr);
+            if (isnan(x * x + y * y)) {  // inf - inf inside: a voltage beyond any bus
+                bad = true;
+                continue;
+            }
             v2_max = fs_max(v2_max, x * x + y * y);
         }
     }

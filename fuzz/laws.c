@@ -1,5 +1,6 @@
 // The controllers and the plant built from fuzz input, and the wrapper checking every controller call.
 #include "laws.h"
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -10,10 +11,12 @@ static bool motor_ok(const struct motor_params *m)
            && m->B >= 0 && m->Nr >= 1;
 }
 
-// Returns true when plan.h's documented ranges hold: finite, rho1, rho2 > 0, tf > t0 with (tf - t0)^3 > 0.
+// Returns true when plan.h's documented ranges hold: finite, angles and currents within DBL_MAX / 4, rho1, rho2 > 0,
+// tf > t0 with (tf - t0)^3 > 0.
 static bool plan_ok(const struct plan *p)
 {
-    return isfinite(p->theta1) && isfinite(p->theta2) && fz_positive(p->rho1) && fz_positive(p->rho2) && isfinite(p->t0)
+    return fabs(p->theta1) <= DBL_MAX / 4 && fabs(p->theta2) <= DBL_MAX / 4 && p->rho1 <= DBL_MAX / 4
+           && p->rho2 <= DBL_MAX / 4 && fz_positive(p->rho1) && fz_positive(p->rho2) && isfinite(p->t0)
            && isfinite(p->tf) && p->tf > p->t0 && pow(p->tf - p->t0, 3) > 0;
 }
 

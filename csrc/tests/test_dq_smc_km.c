@@ -20,6 +20,8 @@ static int guard_checks(void)
     CHECK(dq_smc_init(&s, &q) == DQ_SMC_EADAPT, "rate = NaN");
     q = p, q.adapt = good, q.adapt.phi0 = 0;
     CHECK(dq_smc_init(&s, &q) == DQ_SMC_EADAPT, "phi0 = 0");
+    q = p, q.adapt = good, q.adapt.phi0 = 1e-170;  // found by the fuzzer: phi0^2 + phi^2 was 0 at rest, 0 / 0
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EADAPT, "phi0^2 underflows");
     q = p, q.adapt = good, q.adapt.range = 1;
     CHECK(dq_smc_init(&s, &q) == DQ_SMC_EADAPT, "range = 1");
     q.adapt.range = 0;

@@ -1,4 +1,5 @@
 // Planner, flat maps and motor model: boundary values, finite-difference derivatives, round trips.
+#include <float.h>
 #include "check.h"
 #include "flat.h"
 #include "motor.h"
@@ -74,6 +75,17 @@ static int plan_checks(void)
     CHECK(!plan_valid(&bad) && plan_psi(5e-201, 0.0, 1e-200, 3) == 0.0, "a span whose cube underflows is invalid");
     bad = p, bad.theta1 = NAN;
     CHECK(!plan_valid(&bad), "NaN theta1 is invalid");
+    // found by the fuzzer: theta2 - theta1 overflowed, and the held flag's derivatives 0 inf were NaN; psi's
+    // rounding past 1 took rho1 + psi (rho2 - rho1) to -inf
+    bad = p, bad.theta1 = -1e308, bad.theta2 = 1e308;
+    plan_eval(&bad, 0.05, f);
+    CHECK(!plan_valid(&bad) && isnan(f[PLAN_DTHETA]), "a move whose span overflows is invalid");
+    bad = p, bad.rho1 = DBL_MAX, bad.rho2 = 4.4e291, bad.t0 = 7.3e-304, bad.tf = 0.040000000000055637;
+    plan_eval(&bad, 0.04, f);
+    CHECK(!plan_valid(&bad) && isinf(f[PLAN_RHO]), "a current beyond DBL_MAX / 4 is invalid");
+    bad = p, bad.theta2 = DBL_MAX / 4, bad.rho1 = DBL_MAX / 4;
+    CHECK(plan_valid(&bad) && plan_eval(&bad, 0.039999, f) && isfinite(f[PLAN_THETA]) && isfinite(f[PLAN_RHO]),
+          "within DBL_MAX / 4 the flag is finite");
     CHECK(!plan_eval(&p, 0.01, f) && f[PLAN_THETA] == 0.0 && f[PLAN_RHO] == 0.4, "held at the start");
     CHECK(!plan_eval(&p, 0.05, f) && f[PLAN_THETA] == 0.02 && f[PLAN_RHO] == 0.3 && f[PLAN_DDDTHETA] == 0.0,
           "held at the end");
@@ -116,6 +128,10 @@ static int flat_checks(void)
     f[PLAN_RHO] = 0.4, f[PLAN_DDTHETA] = 1e5;
     CHECK(flat_to_state(&PAPER, f, 0, x, v) == FLAT_ESQRT && v[1] == 0, "|A| >= Km rho is outside the domain");
     CHECK(flat_voltages(&PAPER, 1e-300, 0, 0, 0, 0, 0, 0, 0, v) == FLAT_ESQRT, "rho sqrt underflow is caught");
+    for (k = 0; k < PLAN_FLAG_LEN; k++)  // found by the fuzzer: the state was left set when the voltages failed
+        f[k] = k == PLAN_RHO ? 1e-300 : 0;
+    x[0] = x[1] = 1;
+    CHECK(flat_to_state(&PAPER, f, 0, x, v) == FLAT_ESQRT && x[0] == 0 && x[1] == 0, "the state zeroed on FLAT_ESQRT");
     x[0] = x[1] = 0;
     CHECK(state_to_flat(&PAPER, x, v, 0, g) == FLAT_ERHO && g[PLAN_DDDTHETA] == 0, "ia = ib = 0 is caught");
     x[0] = 0.4, x[1] = 0, x[2] = 0, x[3] = 0;

@@ -1,4 +1,6 @@
 // The time-optimal planner: a feasible, continuous table that ends at the distance, mirrored moves, error codes.
+#include <float.h>
+#include <math.h>
 #include <stdlib.h>
 #include "check.h"
 #include "time_optimal.h"
@@ -132,6 +134,86 @@ static int tiny_move_checks(void)
     return 0;
 }
 
+// Returns true when every ratio of g is inf.
+static int all_inf(const struct to_margins *g)
+{
+    return isinf(g->voltage) && isinf(g->current) && isinf(g->torque_angle) && isinf(g->speed) && isinf(g->acceleration)
+           && isinf(g->jerk) && isinf(g->worst);
+}
+
+// Returns 0; margins are never NaN and never divide by zero: every ratio inf on an invalid motor, limits or table
+// or a table whose values overflow, the voltage inf where rho s underflows; a denormal inertia, whose envelope
+// overflows, is refused with TO_ESTART and no table; an acceleration cap whose envelope underflows below full bus
+// finds no plan (inputs the fuzzer found, fuzz/regressions/time_optimal).
+static int margins_edge_checks(void)
+{
+    static double breaks[2] = {0, 0.01}, theta[TRAJ_NCOEF], rho[TRAJ_NCOEF];
+    struct traj tr = {1, breaks, theta, rho};
+    struct to_limits l = limits_at(24.0), bad = l;
+    struct motor_params m = NEMA17;
+    struct to_margins g;
+    size_t n = time_optimal_work_len();
+    double *heap = malloc(n * sizeof *heap);
+    int rc;
+    rho[TRAJ_NCOEF - 1] = 0.3;
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(g.worst < 0 && g.voltage > 0 && g.current == 0.3 && g.speed == 0, "a hold at 0.3 A: worst %g", g.worst);
+    breaks[1] = 0;  // a segment of zero length
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(all_inf(&g), "zero-length segment: worst %g", g.worst);
+    breaks[1] = 0.01;
+    bad.v_bus = 0;
+    g = time_optimal_margins(&NEMA17, &bad, &tr);
+    CHECK(all_inf(&g), "v_bus = 0: worst %g", g.worst);
+    m.J = 0;
+    g = time_optimal_margins(&m, &l, &tr);
+    CHECK(all_inf(&g), "J = 0: worst %g", g.worst);
+    rho[TRAJ_NCOEF - 1] = 1e-170;  // (Km rho)^2 underflows: s = 0
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(isinf(g.voltage) && isinf(g.worst) && !isnan(g.torque_angle), "rho 1e-170: voltage %g", g.voltage);
+    rho[TRAJ_NCOEF - 1] = 0.3;
+    theta[0] = 1e300, breaks[1] = 1e-10;  // speed, acceleration and jerk overflow
+    g = time_optimal_margins(&NEMA17, &l, &tr);
+    CHECK(all_inf(&g), "overflowing table: worst %g", g.worst);
+    m.J = 9.71373e-319;
+    CHECK(heap != NULL, "workspace");
+    if (!heap)
+        return 0;
+    rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_ESTART && out.n == 0, "denormal inertia: rc %d, %zu segments", rc, out.n);
+    m = NEMA17, m.Km = 0.04, m.B = 0, m.Nr = 60;  // no friction: braking at the top speed was 0, its time 1 / 0
+    rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_OK && out.n > 0 && out.margins.worst <= 0, "B = 0: rc %d, worst %g", rc, out.margins.worst);
+    m = NEMA17, m.B = 0;  // braking 0 inside the envelope: refused (1 / 0 before), as the reference refuses it
+    rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_ESTART && out.n == 0, "NEMA 17, B = 0: rc %d", rc);
+    m = NEMA17, m.Km = 0.04, m.Nr = 60;
+    m.B = 3.1315130626053307e-294, m.J = 5.600000005216298e-06;  // below full bus, a phase of negative duration
+    rc = time_optimal_plan(&m, &l, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_OK && out.margins.worst <= 0, "B = 3e-294: rc %d, worst %g", rc, out.margins.worst);
+    {  // a denormal width and speed cap: a sampling step of 0, width / 0
+        const double denormal_width = 4.94e-324;
+        bad = l, bad.speed_max = 4.83e-319;
+        rc = time_optimal_plan(&NEMA17, &bad, -2.26e274, &denormal_width, 1, heap, n, &out);
+        CHECK(rc == TO_ELONG && out.n == 0, "step 0: rc %d", rc);
+    }
+    bad = l, bad.v_bus = bad.v_use = 5.96e-212;  // v_use v_bus underflowed: the first gamma divided by 0
+    rc = time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_EARGS && out.n == 0, "v_use v_bus underflows: rc %d", rc);
+    bad = l, bad.accel_max = 5.47e-318;  // the envelope's floor 1e-12 a+(0) underflowed to 0: 1 / 0
+    rc = time_optimal_plan(&NEMA17, &bad, 1.0, NULL, 0, heap, n, &out);
+    CHECK(rc == TO_ENOPLAN && out.n == 0, "denormal acceleration cap: rc %d, %zu segments", rc, out.n);
+    {  // the top speed underflowed to 0 (speed cap 5e-41 rad/s, 1.7e-314 V bus): the cruise divided by 0
+        struct motor_params slow = {5.3990332965776108e-255, 0.04, 1.7486033150166349e-314, 9.8958333331243964e-43,
+                                    7.3786976294838206e+20,  68};
+        bad = l, bad.v_bus = 1.7486088035918945e-314, bad.speed_max = 5.3333333333312432e-41;
+        rc = time_optimal_plan(&slow, &bad, -DBL_MAX, NULL, 0, heap, n, &out);
+        CHECK(rc == TO_ESTART && out.n == 0, "top speed 0: rc %d, %zu segments", rc, out.n);
+    }
+    free(heap);
+    return 0;
+}
+
 // Returns 0 (failures are counted by CHECK).
 int test_time_optimal(void)
 {
@@ -139,5 +221,6 @@ int test_time_optimal(void)
     mirror_checks();
     error_checks();
     tiny_move_checks();
+    margins_edge_checks();
     return 0;
 }

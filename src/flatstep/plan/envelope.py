@@ -115,6 +115,7 @@ def envelope(motor: MotorParams, limits: MotorLimits, gamma: float) -> Envelope:
     if limits.accel_max:
         a_plus, a_minus = np.minimum(a_plus, limits.accel_max), np.maximum(a_minus, -limits.accel_max)
     a_plus[-1] = max(a_plus[-1], 1e-12 * a_plus[0])  # the top speed is reached in finite time on the grid
+    a_minus[-1] = min(a_minus[-1], 1e-12 * a_minus[0])  # and left: without friction (B = 0) braking there is 0
     return Envelope(omega, a_plus, a_minus)
 
 
