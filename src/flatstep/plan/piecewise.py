@@ -29,7 +29,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.equilibria import equilibrium_currents
 from ..model.flat import FlatFlag
+from ..validate import InputError, short_repr
+from ..validate.limits import MAX_FLAG_BOUND
+from ..validate.ranges import QUANTITIES
 from .rest_to_rest import _PSI_HORNER, RestToRest
+from .table_checks import flag_bound, lowest_rho
 
 if TYPE_CHECKING:  # SciPy's interpolate is imported where a conversion needs it, not with the package
     from scipy.interpolate import PPoly
@@ -37,8 +41,6 @@ if TYPE_CHECKING:  # SciPy's interpolate is imported where a conversion needs it
 Array = NDArray[np.float64]
 #: Coefficients per segment and output (degree 10, the degree of the paper's psi).
 NCOEF = 11
-#: Intervals per segment on which a new :class:`PiecewisePlan` checks that rho stays > 0.
-RHO_CHECKS = 16
 #: Highest derivative of theta that :meth:`PiecewisePlan.theta` evaluates.
 MAX_ORDER = 4
 #: ``FALL[k, j] = p! / (p - k)!`` for the power ``p = 10 - j`` of coefficient ``j``: the k-th derivative's factor.
@@ -64,17 +66,60 @@ def horner_rows(table: Array, i: NDArray[np.intp], tau: Array, order: int = 0) -
 
 
 def _table(name: str, value: ArrayLike, n: int) -> Array:
-    """A coefficient table as an (n, 11) float array, or a ValueError naming it."""
-    arr = np.array(value, dtype=float)
+    """A coefficient table as an (n, 11) float array, or an InputError naming it."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(name, value, f"{name}={short_repr(value)} is not a table of numbers; give ({n}, k) power "
+                         f"coefficients, 1 <= k <= {NCOEF}") from None
     if arr.ndim == 2 and arr.shape[0] == n and 0 < arr.shape[1] <= NCOEF:
         arr = np.hstack([np.zeros((n, NCOEF - arr.shape[1])), arr])  # a lower degree: leading zeros
     if arr.shape != (n, NCOEF):
-        raise ValueError(f"{name} has shape {arr.shape}; expected ({n}, k) with 1 <= k <= {NCOEF} "
-                         "(one row of power coefficients, highest first, per segment)")
+        raise InputError(name, value, f"{name} has shape {arr.shape}; expected ({n}, k) with 1 <= k <= {NCOEF} "
+                         f"(one row of power coefficients, highest first, per segment): {name}={short_repr(value)}")
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} holds non-finite coefficients in segment(s) "
-                         f"{np.flatnonzero(~np.isfinite(arr).all(axis=1)).tolist()}; every coefficient must be finite")
+        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
+        raise InputError(name, value, f"{name} holds non-finite coefficients in segment(s) {bad.tolist()[:8]} "
+                         f"({name}={short_repr(value)}); every coefficient must be finite")
     return arr
+
+
+def _breaks(value: ArrayLike) -> Array:
+    """The breaks as a float array, or an InputError: at least 2, finite, strictly increasing, in the time range."""
+    try:
+        b = np.array(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise InputError("breaks", value, f"breaks={short_repr(value)} is not an array of times [s]; give at least "
+                         "2 finite, strictly increasing times") from None
+    if b.size < 2 or not np.isfinite(b).all() or not (np.diff(b) > 0).all():
+        raise InputError("breaks", value, f"breaks={short_repr(b.tolist())} must be at least 2 finite, strictly "
+                         "increasing times [s]")
+    time = QUANTITIES["time"]
+    if not (time.contains(float(b[0])) and time.contains(float(b[-1]))):
+        raise InputError("breaks", value, f"breaks={short_repr(b.tolist())}: the plan's times must lie in "
+                         f"{time.describe()} ({time.why})")
+    with np.errstate(over="ignore"):
+        short = not np.isfinite((1.0 / np.diff(b)) ** MAX_ORDER).all()
+    if short:
+        raise InputError("breaks", value, f"breaks={short_repr(b.tolist())}: a segment is so short that "
+                         f"(1/h)^{MAX_ORDER} overflows")
+    return b
+
+
+def _check_table(b: Array, theta: Array, rho: Array) -> None:
+    """Raise an InputError unless rho > 0 on every whole segment and the flag's bound is within MAX_FLAG_BOUND."""
+    bound, i = flag_bound(b, theta, rho, MAX_ORDER)
+    if not bound <= MAX_FLAG_BOUND:
+        raise InputError("theta", bound, f"segment {i} on [{float(b[i])!r}, {float(b[i + 1])!r}] s: its coefficients and duration "
+                         f"bound the flat flag (theta, its first {MAX_ORDER} derivatives, rho, rho') by {bound:.4g}, "
+                         f"above the limit of {MAX_FLAG_BOUND:g} (flatstep.validate.limits.MAX_FLAG_BOUND): the "
+                         "flag would overflow; give coefficients of a motor's size or longer segments")
+    low = lowest_rho(rho)
+    if low is not None:
+        value, k, tau = low
+        t = b[k] + tau * (b[k + 1] - b[k])
+        raise InputError("rho", value, f"rho falls to {value!r} A on the plan (segment {k}, t={t:.6g} s); the "
+                         "current magnitude must stay > 0 on every whole segment")
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,35 +142,25 @@ class PiecewisePlan:
     _c: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
-        b = np.array(self.breaks, dtype=float).ravel()
-        if b.size < 2 or not np.isfinite(b).all() or not (np.diff(b) > 0).all():
-            raise ValueError(f"breaks={b.tolist()!r} must be at least 2 finite, strictly increasing times [s]")
-        with np.errstate(over="ignore"):
-            ih = 1.0 / np.diff(b)
-            short = not np.isfinite(ih**MAX_ORDER).all()
-        if short:
-            raise ValueError(f"breaks={b.tolist()!r}: a segment is so short that (1/h)^{MAX_ORDER} overflows")
+        b = _breaks(self.breaks)
         n = b.size - 1
         object.__setattr__(self, "breaks", b)
         object.__setattr__(self, "theta", _table("theta", self.theta, n))
         object.__setattr__(self, "rho", _table("rho", self.rho, n))
-        # rho on 17 points of every segment, its ends included (rho alone: the full flag costs 4x more)
-        tau = np.tile(np.linspace(0.0, 1.0, RHO_CHECKS + 1), n)
-        lowest = float(np.min(horner_rows(self.rho, np.repeat(np.arange(n), RHO_CHECKS + 1), tau)))
-        if not lowest > 0:
-            raise ValueError(f"rho falls to {lowest!r} A on the plan; the current magnitude must stay > 0")
+        _check_table(self.breaks, self.theta, self.rho)
         for a in (self.breaks, self.theta, self.rho):
             a.flags.writeable = False
 
     @classmethod
     def _of_checked_table(cls, breaks: Array, theta: Array, rho: Array) -> PiecewisePlan:
-        """The plan of a table csrc/time_optimal.c planned, without the constructor's sampling of rho (private).
+        """The plan of a table csrc/time_optimal.c planned, without the constructor's conversions (private).
 
         Only for the C planner's own tables (flatstep.plan.time_optimal.time_optimal and time_optimal_sequence with
-        ``engine="c"``, their dwells' rows held at ``i_hold`` > 0 added): its search accepts a table only where rho
-        > 0 on the 9 points ``tau = j/8`` of every segment (time_optimal_margins), not the constructor's 17, and it
-        writes (n + 1,) breaks and (n, 11) rows. The breaks must still be finite and increasing and every
-        coefficient finite (checked here: a ValueError otherwise); any other table goes through the constructor.
+        ``engine="c"``, their dwells' rows held at ``i_hold`` > 0 added), which come as (n + 1,) breaks and
+        (n, 11) rows of floats: no copy, no padding of lower degrees. Its search accepts a table where rho > 0 on
+        the 9 points ``tau = j/8`` of every segment (time_optimal_margins); that is not a proof, so the table gets
+        the constructor's exact checks all the same: finite, increasing breaks in the time range, finite
+        coefficients, rho > 0 on every whole segment, a flag within ``MAX_FLAG_BOUND`` (a ValueError otherwise).
         """
         b = np.asarray(breaks, dtype=float)
         th, rh = np.asarray(theta, dtype=float), np.asarray(rho, dtype=float)
@@ -134,6 +169,8 @@ class PiecewisePlan:
                 and np.isfinite(th).all() and np.isfinite(rh).all()):
             raise ValueError(f"a table of {n} segment(s) with breaks {b.tolist()!r} is not a finished C plan: its "
                              f"breaks must increase, its rows be ({n}, {NCOEF}) and every value finite")
+        _breaks(b)
+        _check_table(b, th, rh)
         plan = object.__new__(cls)
         for name, value in (("breaks", b), ("theta", th), ("rho", rh), ("_c", {})):
             object.__setattr__(plan, name, value)
