@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
-from ..validate import check_integer, check_quantity
+from ..validate import check_instance, check_integer, check_quantity
 from .piecewise import check_plan
 from .rest_to_rest import RestToRest
 
@@ -84,8 +84,7 @@ def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: floa
     [t0, tf] and the worst torque margin is refined by a bounded scalar minimisation around the worst sample.
     """
     check_plan(plan)
-    if not isinstance(motor, MotorParams):
-        raise ValueError(f"check_feasibility takes a MotorParams, got motor={motor!r}")
+    check_instance("motor", motor, MotorParams, "a MotorParams (e.g. MotorParams.preset('paper'))")
     n = check_integer("n", n, low=3, high=10_000_000, why="samples of the plan")
     load_torque = check_quantity("load", load_torque, as_name="load_torque")
     if v_max is not None:

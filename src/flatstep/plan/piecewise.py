@@ -29,7 +29,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.equilibria import equilibrium_currents
 from ..model.flat import FlatFlag
-from ..validate import InputError, short_repr
+from ..validate import InputError, check_integer, check_quantity, short_repr
+from ..validate.checks import is_real
 from ..validate.limits import MAX_FLAG_BOUND
 from ..validate.ranges import QUANTITIES
 from .rest_to_rest import _PSI_HORNER, RestToRest
@@ -108,12 +109,14 @@ def _breaks(value: ArrayLike) -> Array:
 
 def _check_table(b: Array, theta: Array, rho: Array) -> None:
     """Raise an InputError unless rho > 0 on every whole segment and the flag's bound is within MAX_FLAG_BOUND."""
-    bound, i = flag_bound(b, theta, rho, MAX_ORDER)
-    if not bound <= MAX_FLAG_BOUND:
-        raise InputError("theta", bound, f"segment {i} on [{float(b[i])!r}, {float(b[i + 1])!r}] s: its coefficients and duration "
-                         f"bound the flat flag (theta, its first {MAX_ORDER} derivatives, rho, rho') by {bound:.4g}, "
-                         f"above the limit of {MAX_FLAG_BOUND:g} (flatstep.validate.limits.MAX_FLAG_BOUND): the "
-                         "flag would overflow; give coefficients of a motor's size or longer segments")
+    for name, rows, order in (("theta", theta, MAX_ORDER), ("rho", rho, 1)):
+        bound, i = flag_bound(b, rows, order)
+        if not bound <= MAX_FLAG_BOUND:
+            raise InputError(name, bound, f"{name}: segment {i} on [{float(b[i])!r}, {float(b[i + 1])!r}] s has "
+                             f"coefficients and a duration that bound {name} and its first {order} derivatives by "
+                             f"{bound:.4g}, above the limit of {MAX_FLAG_BOUND:g} (flatstep.validate.limits."
+                             f"MAX_FLAG_BOUND): the flag would overflow; give coefficients of a motor's size or "
+                             f"longer segments ({name}[{i}]={short_repr(rows[i].tolist())})")
     low = lowest_rho(rho)
     if low is not None:
         value, k, tau = low
@@ -257,8 +260,8 @@ class PiecewisePlan:
 
     def theta_deriv(self, t: ArrayLike, order: int) -> Array:
         """The ``order``-th time derivative (0..4) of theta at times ``t`` (C ``traj_theta``)."""
-        if not 0 <= order <= MAX_ORDER:
-            raise ValueError(f"order={order!r} is out of range; the table gives theta's derivatives 0..{MAX_ORDER}")
+        order = check_integer("order", order, low=0, high=MAX_ORDER, why="the table gives theta's derivatives "
+                              f"0..{MAX_ORDER}")
         t = np.asarray(t, dtype=float)
         tv = t.ravel()
         i, ih, tau, inside = self._locate(tv)
@@ -293,6 +296,8 @@ class PiecewisePlan:
     @classmethod
     def hold(cls, theta: float, rho: float, t0: float, t1: float) -> "PiecewisePlan":
         """One segment holding ``theta`` [rad] at the current magnitude ``rho`` [A] over ``[t0, t1]``."""
+        theta, rho = check_quantity("angle", theta, as_name="theta"), check_quantity("current", rho, as_name="rho")
+        t0, t1 = check_quantity("time", t0, as_name="t0"), check_quantity("time", t1, as_name="t1")
         row = np.zeros((1, NCOEF))
         row[0, -1] = theta
         rho_row = np.zeros((1, NCOEF))
@@ -302,8 +307,13 @@ class PiecewisePlan:
     @classmethod
     def concatenate(cls, parts: Sequence["PiecewisePlan"]) -> "PiecewisePlan":
         """One table of consecutive tables, each starting where the one before ends (a ValueError if not)."""
-        if not parts:
-            raise ValueError("no tables to concatenate: give at least one")
+        if not isinstance(parts, (list, tuple)) or not parts:
+            raise InputError("parts", parts, f"parts={short_repr(parts)}: no tables to concatenate; give a list of at "
+                             "least one PiecewisePlan")
+        for k, p in enumerate(parts):
+            if not isinstance(p, PiecewisePlan):
+                raise InputError(f"parts[{k}]", p, f"parts[{k}]={short_repr(p)} is not a PiecewisePlan "
+                                 f"({type(p).__name__}); give the tables to join")
         for k, (a, b) in enumerate(zip(parts[:-1], parts[1:], strict=True)):
             if abs(b.t0 - a.tf) > 1e-12 * max(1.0, abs(a.tf)):
                 raise ValueError(f"table {k + 1} starts at t0={b.t0!r} s, but table {k} ends at tf={a.tf!r} s: "
@@ -317,6 +327,12 @@ class PiecewisePlan:
 
         The coefficients of :math:`(t - b_i)^p` become those of :math:`\tau^p` by the factor :math:`h_i^p`.
         """
+        from scipy.interpolate import PPoly
+
+        for name, pp in (("theta", theta), ("rho", rho)):
+            if not isinstance(pp, PPoly) and not (name == "rho" and is_real(pp)):
+                raise InputError(name, pp, f"{name}={short_repr(pp)} is not a scipy PPoly ({type(pp).__name__})"
+                                 + ("; give a PPoly or a number [A]" if name == "rho" else "; give a PPoly"))
         b = np.asarray(theta.x, dtype=float)
         h = np.diff(b)
 
@@ -328,7 +344,7 @@ class PiecewisePlan:
             powers = np.arange(c.shape[0] - 1, -1, -1)[:, None]
             return (c * h[None, :] ** powers).T
 
-        rh = np.full((b.size - 1, 1), float(rho)) if isinstance(rho, (int, float)) else local(rho)
+        rh = np.full((b.size - 1, 1), float(rho)) if is_real(rho) else local(rho)
         return cls(b, local(theta), rh)
 
     def to_ppoly(self) -> tuple["PPoly", "PPoly"]:
@@ -374,5 +390,5 @@ Plan = Union[RestToRest, PiecewisePlan]
 def check_plan(plan: object) -> None:
     """Raise a ValueError unless ``plan`` is a move a controller can track (it has ``flag``, ``x0``, ``t0``, ``tf``)."""
     if not all(hasattr(plan, a) for a in ("flag", "x0", "t0", "tf")):
-        raise ValueError(f"plan={plan!r} is not a flatstep plan (a RestToRest from point_to_point, or a trajectory "
-                         "with flag(t), x0(Nr), t0 and tf)")
+        raise InputError("plan", plan, f"plan={short_repr(plan)} is not a flatstep plan (a RestToRest from "
+                         "point_to_point, or a trajectory with flag(t), x0(Nr), t0 and tf)")

@@ -13,9 +13,9 @@ every piece is certified, or an end value of a piece is :math:`\le 0` (rho falls
 a rho that dips below 0 between any sample points is found.
 
 **The flag's bound.** On a segment of duration :math:`h`, :math:`|d^k\theta/dt^k| \le h^{-k}\sum_j |c_j|
-(d - j)!/(d - j - k)!` for :math:`\tau \in [0, 1]`; :func:`flag_bound` is the largest such bound over the
-table (theta's derivatives 0..4, rho's 0..1), which :class:`~flatstep.plan.piecewise.PiecewisePlan` holds to
-:data:`flatstep.validate.limits.MAX_FLAG_BOUND`.
+(d - j)!/(d - j - k)!` for :math:`\tau \in [0, 1]`; :func:`flag_bound` is the largest such bound over a
+table (theta's derivatives 0..4 and rho's 0..1 are bounded so), which
+:class:`~flatstep.plan.piecewise.PiecewisePlan` holds to :data:`flatstep.validate.limits.MAX_FLAG_BOUND`.
 """
 from __future__ import annotations
 
@@ -76,18 +76,17 @@ def lowest_rho(rows: Array) -> Optional[tuple[float, int, float]]:
     return float(b[i].min()), int(seg[i]), float(lo[i] + 0.5 * width)
 
 
-def flag_bound(breaks: Array, theta: Array, rho: Array, max_order: int = 4) -> tuple[float, int]:
-    """The largest bound on |theta^(k)| (k = 0..max_order) and |rho|, |rho'| over the table, and its segment.
+def flag_bound(breaks: Array, rows: Array, max_order: int) -> tuple[float, int]:
+    """The largest bound on the derivatives 0..max_order of a table's rows (n, d + 1), and its segment.
 
     Infinite where the bound overflows (module docstring).
     """
-    d = theta.shape[1] - 1
+    d = rows.shape[1] - 1
     fall = np.array([[math.perm(d - j, k) for j in range(d + 1)] for k in range(max_order + 1)], dtype=float)
     with np.errstate(over="ignore", invalid="ignore"):
         ih = 1.0 / np.diff(breaks)
-        at, ar = np.abs(theta), np.abs(rho)
-        bounds = [at @ fall[k] * ih**k for k in range(max_order + 1)] + [ar @ fall[0], ar @ fall[1] * ih]
-        worst = np.max(np.column_stack(bounds), axis=1)
+        a = np.abs(rows)
+        worst = np.max(np.column_stack([a @ fall[k] * ih**k for k in range(max_order + 1)]), axis=1)
     worst = np.where(np.isnan(worst), np.inf, worst)
     i = int(np.argmax(worst))
     return float(worst[i]), i

@@ -236,7 +236,8 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     search both ways. Each width's search starts at the gamma the previous feasible width found.
     """
     d = abs(check_angle(distance, "distance"))
-    check_motor(motor), check_limits(limits), _check_widths(widths)
+    check_motor(motor), check_limits(limits)
+    _check_widths(widths)
     ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
     full = envelope(motor, planning_limits(limits), 1.0)
     best: Optional[Candidate] = None

@@ -67,7 +67,8 @@ def check_sequence(name: str, value: Any, *, low: int, high: int, what: str, lim
     n = len(value)
     if not low <= n <= high:
         where = f" (flatstep.validate.limits.{limit})" if limit else ""
-        raise InputError(name, value, f"{name} has {n} {what}; give {low} to {high}{where}: {name}={short_repr(value)}")
+        raise InputError(name, value, f"{name} has {n} {what}; give at least {low} and at most {high}{where}: "
+                                      f"{name}={short_repr(value)}")
     return n
 
 
