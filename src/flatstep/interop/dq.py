@@ -47,6 +47,6 @@ def dq_state_to_flag(x: ArrayLike, v: ArrayLike, motor: MotorParams, load_torque
 
 def dq_flag_to_state(flag: DQFlag, motor: MotorParams, load_torque: float = 0.0) -> tuple[Array, Array]:
     """The state ``x`` and input ``v`` along a d-q flat flag (inverse of :func:`dq_state_to_flag`)."""
-    check_instance("flag", flag, DQFlag, "a DQFlag (theta, dtheta, ddtheta, dddtheta, i_d, di_d)")
+    check_instance("flag", flag, DQFlag, "a DQFlag", "theta, dtheta, ddtheta, dddtheta, i_d, di_d")
     check_instance("motor", motor, MotorParams, "a flatstep MotorParams")
     return flat_dq.dq_to_state(flag, motor, _load(load_torque))

@@ -19,17 +19,17 @@ ENGINES = ("c", "python")
 
 def check_motor(motor: Any, name: str = "motor") -> MotorParams:
     """``motor``, or an InputError unless it is a :class:`~flatstep.model.motor.MotorParams`."""
-    return check_instance(name, motor, MotorParams, "a MotorParams (e.g. MotorParams.preset('nema17'))")
+    return check_instance(name, motor, MotorParams, "a MotorParams", "e.g. MotorParams.preset('nema17')")
 
 
 def check_limits(limits: Any, name: str = "limits") -> MotorLimits:
     """``limits``, or an InputError unless it is a :class:`~flatstep.plan.limits.MotorLimits` (a dict is not)."""
-    return check_instance(name, limits, MotorLimits, "a MotorLimits (e.g. MotorLimits(v_bus=24.0, i_max=1.0))")
+    return check_instance(name, limits, MotorLimits, "a MotorLimits", "e.g. MotorLimits(v_bus=24.0, i_max=1.0)")
 
 
 def check_plan_table(plan: Any, name: str = "plan") -> PiecewisePlan:
     """``plan``, or an InputError unless it is a :class:`~flatstep.plan.piecewise.PiecewisePlan`."""
-    return check_instance(name, plan, PiecewisePlan, "a PiecewisePlan (a segment table)")
+    return check_instance(name, plan, PiecewisePlan, "a PiecewisePlan", "a segment table")
 
 
 def check_t0(t0: Any, name: str = "t0") -> float:

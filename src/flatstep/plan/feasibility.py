@@ -84,7 +84,7 @@ def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: floa
     [t0, tf] and the worst torque margin is refined by a bounded scalar minimisation around the worst sample.
     """
     check_plan(plan)
-    check_instance("motor", motor, MotorParams, "a MotorParams (e.g. MotorParams.preset('paper'))")
+    check_instance("motor", motor, MotorParams, "a MotorParams", "e.g. MotorParams.preset('paper')")
     n = check_integer("n", n, low=3, high=10_000_000, why="samples of the plan")
     load_torque = check_quantity("load", load_torque, as_name="load_torque")
     if v_max is not None:

@@ -66,13 +66,21 @@ def horner_rows(table: Array, i: NDArray[np.intp], tau: Array, order: int = 0) -
     return a
 
 
+def _numbers(name: str, value: ArrayLike, valid: str) -> Array:
+    """``value`` as a new float array, or an InputError unless it holds real numbers only (no str, bool, None)."""
+    try:
+        arr = np.array(value)
+    except (TypeError, ValueError, OverflowError):
+        arr = np.array(None)
+    if arr.dtype.kind not in "iuf":
+        raise InputError(name, value, f"{name}={short_repr(value)} is not an array of real numbers (a "
+                         f"{type(value).__name__} of dtype {arr.dtype}); {valid}")
+    return arr.astype(float)
+
+
 def _table(name: str, value: ArrayLike, n: int) -> Array:
     """A coefficient table as an (n, 11) float array, or an InputError naming it."""
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError(name, value, f"{name}={short_repr(value)} is not a table of numbers; give ({n}, k) power "
-                         f"coefficients, 1 <= k <= {NCOEF}") from None
+    arr = _numbers(name, value, f"give ({n}, k) power coefficients, 1 <= k <= {NCOEF}")
     if arr.ndim == 2 and arr.shape[0] == n and 0 < arr.shape[1] <= NCOEF:
         arr = np.hstack([np.zeros((n, NCOEF - arr.shape[1])), arr])  # a lower degree: leading zeros
     if arr.shape != (n, NCOEF):
@@ -87,11 +95,7 @@ def _table(name: str, value: ArrayLike, n: int) -> Array:
 
 def _breaks(value: ArrayLike) -> Array:
     """The breaks as a float array, or an InputError: at least 2, finite, strictly increasing, in the time range."""
-    try:
-        b = np.array(value, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise InputError("breaks", value, f"breaks={short_repr(value)} is not an array of times [s]; give at least "
-                         "2 finite, strictly increasing times") from None
+    b = _numbers("breaks", value, "give at least 2 finite, strictly increasing times [s]").ravel()
     if b.size < 2 or not np.isfinite(b).all() or not (np.diff(b) > 0).all():
         raise InputError("breaks", value, f"breaks={short_repr(b.tolist())} must be at least 2 finite, strictly "
                          "increasing times [s]")

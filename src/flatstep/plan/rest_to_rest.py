@@ -134,7 +134,7 @@ def point_to_point(motor: MotorParams, theta1: float, theta2: float, rho1: float
     """
     from .feasibility import check_feasibility
 
-    check_instance("motor", motor, MotorParams, "a MotorParams (e.g. MotorParams.preset('paper'))")
+    check_instance("motor", motor, MotorParams, "a MotorParams", "e.g. MotorParams.preset('paper')")
     plan = RestToRest(theta1, theta2, rho1, rho2, t0, tf)
     check_feasibility(plan, motor, load_torque=load_torque, v_max=v_max, i_max=i_max).raise_if_infeasible()
     return plan

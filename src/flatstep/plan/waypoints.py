@@ -154,7 +154,9 @@ def _check_points(waypoints: Any, family: Any) -> list[Waypoint]:
         if not (isinstance(p, Waypoint) or is_real(p)):
             raise InputError(f"waypoints[{i}]", p, f"waypoints[{i}]={short_repr(p)} is not a Waypoint or an angle "
                              f"({type(p).__name__}); give a number [rad] or a Waypoint(theta, velocity, dwell)")
-        points.append(p if isinstance(p, Waypoint) else Waypoint(float(p)))
+        if not isinstance(p, Waypoint):
+            p = Waypoint(check_quantity("angle", p, as_name=f"waypoints[{i}]"))
+        points.append(p)
     for i, p in enumerate(points):
         rest = i in (0, len(points) - 1) or p.dwell > 0 or family in ("psi", "scurve")
         if rest and p.velocity not in (None, 0.0):

@@ -43,14 +43,20 @@ _REPR.maxstring, _REPR.maxother, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 
 
 def short_repr(value: object) -> str:
     """``repr(value)``, shortened for a message when it is long (a list of a million waypoints)."""
-    return _REPR.repr(value)
+    if isinstance(value, (list, tuple, dict, set, np.ndarray)) and len(value) > 8:
+        return _REPR.repr(value)
+    text = repr(value)
+    return text if len(text) <= 200 else _REPR.repr(value)
 
 
-def check_instance(name: str, value: Any, kind: Union[type, tuple[type, ...]], what: str) -> Any:
-    """Return ``value``, or raise if it is not an instance of ``kind`` (``what`` says what is valid, e.g. "a Plant")."""
+def check_instance(name: str, value: Any, kind: Union[type, tuple[type, ...]], what: str, hint: str = "") -> Any:
+    """Return ``value``, or raise if it is not an instance of ``kind``.
+
+    ``what`` says what is valid (``"a MotorLimits"``), ``hint`` how to make one.
+    """
     if not isinstance(value, kind):
-        raise InputError(name, value, f"{name}={short_repr(value)} is not {what} ({type(value).__name__}); "
-                                      f"give {what}")
+        raise InputError(name, value, f"{name}={short_repr(value)} is a {type(value).__name__}, not {what}; give "
+                                      f"{what}" + (f" ({hint})" if hint else ""))
     return value
 
 
