@@ -206,6 +206,7 @@ bad("point_to_point", "t0", lambda v: point_to_point(PAPER, 0.0, 0.02, 0.4, 0.4,
 bad("point_to_point", "theta2", lambda v: point_to_point(PAPER, 0.0, v, 0.4, 0.4), [1e7, "0.02"])
 bad("check_feasibility", "plan", lambda v: check_feasibility(v, PAPER), ["plan"])
 bad("check_feasibility", "motor", lambda v: check_feasibility(PAPER_PLAN, v), ["paper"])
+bad("check_feasibility", "n", lambda v: check_feasibility(PAPER_PLAN, PAPER, n=v), [10**7, 2, "2001"])
 bad("psi", "order", lambda v: psi(0.03, 0.02, 0.04, v), [6, -1, 1.5])
 bad("psi", "tf", lambda v: psi(0.03, 0.02, v), [0.01, math.nan])
 bad("DCurrentPlan", "t0", lambda v: DCurrentPlan(t0=v), [-1.0, math.nan])

@@ -37,7 +37,7 @@ class DCurrentPlan:
 
     def __post_init__(self) -> None:
         for name in ("i_d1", "i_d2"):
-            object.__setattr__(self, name, check_quantity("current_offset", getattr(self, name), as_name=name))
+            object.__setattr__(self, name, check_quantity("d_current", getattr(self, name), as_name=name))
         for name in ("t0", "tf"):
             object.__setattr__(self, name, check_quantity("time", getattr(self, name), as_name=name))
         for name, unit in (("weakening", " A s/rad"), ("weakening_speed", " rad/s")):

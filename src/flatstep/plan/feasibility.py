@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
 from ..validate import check_instance, check_integer, check_quantity
+from ..validate.limits import MAX_PLAN_SAMPLES
 from .piecewise import check_plan
 from .rest_to_rest import RestToRest
 
@@ -85,7 +86,8 @@ def check_feasibility(plan: RestToRest, motor: MotorParams, *, load_torque: floa
     """
     check_plan(plan)
     check_instance("motor", motor, MotorParams, "a MotorParams", "e.g. MotorParams.preset('paper')")
-    n = check_integer("n", n, low=3, high=10_000_000, why="samples of the plan")
+    n = check_integer("n", n, low=3, high=MAX_PLAN_SAMPLES, why="samples of the plan, at most "
+                      "flatstep.validate.limits.MAX_PLAN_SAMPLES")
     load_torque = check_quantity("load", load_torque, as_name="load_torque")
     if v_max is not None:
         v_max = check_quantity("v_bus", v_max, as_name="v_max")

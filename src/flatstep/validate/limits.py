@@ -156,7 +156,7 @@ PLAN_LIMITS = (
      "family), a plan file; checked before any work"),
     ("MAX_PLAN_SAMPLES", lambda: f"{MAX_PLAN_SAMPLES:.0e}".replace("e+0", "e"),
      "time samples of one time-optimal move; also segments x `samples_per_segment` of `plan_margins` and "
-     "`copper_loss`"),
+     "`copper_loss`, and the samples `n` of `check_feasibility`"),
     ("MIN_MOVE_DISTANCE", lambda: f"{MIN_MOVE_DISTANCE:g} rad", "the shortest move `time_optimal` plans"),
     ("MIN_SMOOTHING_WIDTH, MAX_SMOOTHING_WIDTH", lambda: f"{MIN_SMOOTHING_WIDTH:g} to {MAX_SMOOTHING_WIDTH:g} s",
      "each smoothing width given to `time_optimal`"),

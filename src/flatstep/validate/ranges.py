@@ -70,6 +70,7 @@ QUANTITIES: dict[str, Quantity] = {
     "torque_angle": _q(0.0, 1.5707963267948966, "rad", "a torque angle above 0 and below pi/2 (where the law is "
                        "singular)", high_open=True),
     "fraction": _q(0.0, 1.0, "", "a share above 0 and at most 1"),
+    "d_current": _q(-1e3, 1e3, "A", "a d current within +-1000 A (negative weakens the field)", low_closed=True),
     # the controller
     "gain": _q(1e-12, 1e12, "", "a gain from 1e-12 to 1e12", low_closed=True),
     "damping": _q(1e-6, 1e3, "", "a damping ratio from 1e-6 to 1000", low_closed=True),
