@@ -57,7 +57,7 @@ def lowest_rho(rows: Array) -> Optional[tuple[float, int, float]]:
     ``value`` is rho at ``tau`` of ``segment`` (<= 0), or, for a rho that comes within rounding of 0 without an
     end value <= 0, the piece's lowest Bernstein coefficient (module docstring).
     """
-    b = rows @ _to_bernstein(rows.shape[1])
+    b = np.einsum("nj,jk->nk", rows, _to_bernstein(rows.shape[1]))
     seg = np.arange(rows.shape[0])
     lo, width = np.zeros(rows.shape[0]), 1.0
     for _ in range(MAX_DEPTH + 1):
@@ -85,8 +85,8 @@ def flag_bound(breaks: Array, rows: Array, max_order: int) -> tuple[float, int]:
     fall = np.array([[math.perm(d - j, k) for j in range(d + 1)] for k in range(max_order + 1)], dtype=float)
     with np.errstate(over="ignore", invalid="ignore"):
         ih = 1.0 / np.diff(breaks)
-        a = np.abs(rows)
-        worst = np.max(np.column_stack([a @ fall[k] * ih**k for k in range(max_order + 1)]), axis=1)
+        sums = np.einsum("nj,kj->nk", np.abs(rows), fall)  # sum_j |c_j| (d - j)! / (d - j - k)!, per order k
+        worst = np.max(sums * ih[:, None] ** np.arange(max_order + 1), axis=1)
     worst = np.where(np.isnan(worst), np.inf, worst)
     i = int(np.argmax(worst))
     return float(worst[i]), i
