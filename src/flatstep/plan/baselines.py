@@ -107,7 +107,8 @@ def with_torque_current(rows: Array, h: Array, motor: MotorParams, limits: Motor
 
     Each segment's current is a degree-7 segment through its own one-sided :math:`(\rho, \dot\rho)` at both ends.
     """
-    check_motor(motor), check_limits(limits)
+    check_motor(motor)
+    check_limits(limits)
     theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
     rows, h = _split(rows, h, _SPLIT)
     ends = []
@@ -135,7 +136,8 @@ def baseline_plan(kind: str, distance: float, motor: MotorParams, limits: MotorL
     """The ``kind`` baseline over ``distance`` [rad] under the caps, as a table with the torque current."""
     kind = check_choice("kind", kind, KINDS)
     distance, d = _check_distance(distance), abs(distance)
-    check_motor(motor), check_limits(limits)
+    check_motor(motor)
+    check_limits(limits)
     v_max, a_max, j_max = _check_caps(v_max, a_max, j_max)
     theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
     if kind == "trapezoid":
@@ -178,7 +180,8 @@ def best_baseline(kind: str, distance: float, motor: MotorParams,
     jerk time, for ruckig), the largest feasible acceleration cap by bisection. Returns the plan and its caps.
     """
     kind, distance = check_choice("kind", kind, KINDS), _check_distance(distance)
-    check_motor(motor), check_limits(limits)
+    check_motor(motor)
+    check_limits(limits)
     a_top = motor.Km * float(limits.iq_cap(0.0)) / motor.J
     w_top = limits.v_use * limits.v_bus / motor.Km
     tau_e = motor.L / motor.R

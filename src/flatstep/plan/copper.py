@@ -75,7 +75,8 @@ def min_copper_plan(distance: float, duration: float, motor: MotorParams, limits
     T = check_quantity("time", duration, as_name="duration")
     if T <= 0:
         raise InputError("duration", duration, f"duration={T!r} s must be > 0")
-    check_motor(motor), check_limits(limits)
+    check_motor(motor)
+    check_limits(limits)
     theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
     psi, basis = _family()
     res = minimize(lambda z: _loss(psi + basis @ z, abs(d), T, motor, limits), np.zeros(basis.shape[1]),

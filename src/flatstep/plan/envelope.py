@@ -152,6 +152,7 @@ def bang_bang_time(distance: float, motor: MotorParams, limits: MotorLimits) -> 
     from .arguments import check_angle, check_limits, check_motor
 
     d = abs(check_angle(distance, "distance"))
-    check_motor(motor), check_limits(limits)
+    check_motor(motor)
+    check_limits(limits)
     b = bang_bang(d, envelope(motor, limits, 1.0))
     return b.t1 + b.cruise + b.t2

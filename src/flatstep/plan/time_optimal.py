@@ -168,7 +168,8 @@ def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamm
                   theta1: float = 0.0, t0: float = 0.0) -> PiecewisePlan:
     """The bang-bang move on the envelope at ``gamma``, smoothed twice by a box of ``width`` [s], as a plan."""
     distance, theta1, t0 = check_angle(distance, "distance"), check_angle(theta1, "theta1"), check_t0(t0)
-    check_motor(motor), check_limits(limits)
+    check_motor(motor)
+    check_limits(limits)
     gamma = check_quantity("fraction", gamma, as_name="gamma")
     lo, hi = limits_mod.MIN_SMOOTHING_WIDTH, limits_mod.MAX_SMOOTHING_WIDTH
     if not (is_real(width) and math.isfinite(width) and lo <= width <= hi):
@@ -236,7 +237,8 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     search both ways. Each width's search starts at the gamma the previous feasible width found.
     """
     d = abs(check_angle(distance, "distance"))
-    check_motor(motor), check_limits(limits)
+    check_motor(motor)
+    check_limits(limits)
     _check_widths(widths)
     ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
     full = envelope(motor, planning_limits(limits), 1.0)
@@ -306,12 +308,18 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
 
     Raises
     ------
+    InputError
+        A ValueError naming the argument, for one of a wrong type or out of its range (angles within +-1e6 rad,
+        ``t0 >= 0``, ``motor`` a MotorParams, ``limits`` a MotorLimits), a move shorter than ``MIN_MOVE_DISTANCE``
+        or an unknown engine, checked before any planning.
     ValueError
-        For a zero distance, an unknown engine, or when no smoothing width and headroom give a feasible table.
+        When no smoothing width and headroom give a feasible table.
     """
     d = check_angle(distance, "distance")
     theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
-    check_motor(motor), check_limits(limits), check_engine(engine)
+    check_motor(motor)
+    check_limits(limits)
+    check_engine(engine)
     if abs(d) < limits_mod.MIN_MOVE_DISTANCE:
         raise InputError("distance", distance, f"distance={distance!r} rad: a move needs at least "
                          f"{limits_mod.MIN_MOVE_DISTANCE:g} rad (flatstep.validate.limits.MIN_MOVE_DISTANCE); a "
@@ -351,7 +359,9 @@ def time_optimal_sequence(waypoints: list[tuple[float, float]], motor: MotorPara
     every waypoint's type and range before any planning.
     """
     theta, dwell = _check_sequence(waypoints)
-    check_motor(motor), check_limits(limits), check_engine(engine)
+    check_motor(motor)
+    check_limits(limits)
+    check_engine(engine)
     t0 = check_t0(t0)
     if engine == "c":
         from .._core_time_optimal import plan_table
