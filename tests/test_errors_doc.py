@@ -20,3 +20,12 @@ def test_the_limits_are_the_codes():
     assert limits.MAX_PLAN_SAMPLES == 2_000_000 and "| `MAX_PLAN_SAMPLES` | 2e6" in DOC
     assert limits.MAX_OPTIMAL_MOVES == 1000 and "| `MAX_OPTIMAL_MOVES` | 1000" in DOC
     assert limits.MAX_STUDY_STEPS == 50_000_000 and "| `MAX_STUDY_STEPS` | 5e7" in DOC
+
+
+def test_the_planning_limits_are_the_codes():
+    """The planning API's limits are printed from the constants, and the ranges its checks use are in the table."""
+    assert limits.plan_limits_markdown() in DOC
+    assert "| `MAX_FLAG_BOUND` | 1e+30 |" in DOC and limits.MAX_FLAG_BOUND == 1e30
+    assert "| `MAX_SMOOTHING_WIDTHS` | 8 |" in DOC and limits.MAX_SMOOTHING_WIDTHS == 8
+    for name in ("speed", "velocity", "acceleration", "jerk", "torque_angle", "fraction"):
+        assert f"| `{name}` |" in DOC

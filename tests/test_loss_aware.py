@@ -20,7 +20,7 @@ TORQUES = TorqueModel(detent_torque=1e-3, coulomb_torque=2e-4, coulomb_speed=0.5
 @pytest.mark.parametrize("kwargs, match", [
     (dict(margin=math.pi / 2, rho_hold=0.1), "margin=1.57.* must be in \\[0, pi/2\\)"),
     (dict(margin=-0.1, rho_hold=0.1), "margin=-0.1"),
-    (dict(rho_hold=0.0), "rho_hold=0.0 A must be > 0"),
+    (dict(rho_hold=0.0), "rho_hold=0.0 A is out of range"),
 ])
 def test_bad_values(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -78,5 +78,5 @@ def test_scenario_keys(tmp_path):
     assert fs.make_controller("smc", scenario.motor, scenario.plan, control_period=TS,
                               measurement="ideal").loss_aware is None
     path.write_text('[controller]\ntype = "smc_la"\nrho_hold = -1.0\n')
-    with pytest.raises(ValueError, match=r"la.toml:controller.rho_hold: rho_hold=-1.0 A must be > 0"):
+    with pytest.raises(ValueError, match=r"la.toml:controller.rho_hold: rho_hold=-1.0 A is out of range"):
         load_scenario(path)

@@ -20,7 +20,10 @@ from control.flatsys import BasisFamily
 from numpy.typing import ArrayLike, NDArray
 
 from ..plan.rest_to_rest import MAX_ORDER, psi
-from ..validate import check_finite, check_integer
+from ..validate import InputError, check_integer, check_quantity, check_sequence
+
+#: Most flat outputs a basis serves (a two-phase motor has two).
+MAX_OUTPUTS = 8
 
 
 class PsiFamily(BasisFamily):
@@ -29,19 +32,20 @@ class PsiFamily(BasisFamily):
     Parameters
     ----------
     flaglen : sequence of int
-        The flag length ``q`` of each flat output (e.g. ``(2, 4)`` for ``(rho, theta)``); 1 <= q <= 5.
+        The flag length ``q`` of each flat output (e.g. ``(2, 4)`` for ``(rho, theta)``); 1 <= q <= 5, at most
+        :data:`MAX_OUTPUTS` outputs.
     t0, tf : float
-        The start and end of the move [s], ``tf > t0``.
+        The start and end of the move [s], ``0 <= t0 < tf`` (the range of ``time``).
     """
 
     def __init__(self, flaglen: Sequence[int], t0: float, tf: float) -> None:
-        lengths = [check_integer("flaglen", q) for q in flaglen]
-        if not lengths or any(q > MAX_ORDER for q in lengths):
-            raise ValueError(f"flaglen={list(flaglen)!r} must name at least one flat output, each flag 1..{MAX_ORDER} "
-                             "long (psi has analytic derivatives up to that order)")
-        self.t0, self.tf = check_finite("t0", t0), check_finite("tf", tf)
+        check_sequence("flaglen", flaglen, low=1, high=MAX_OUTPUTS, what="flag lengths (one per flat output)")
+        lengths = [check_integer("flaglen", q, low=1, high=MAX_ORDER, why="psi has analytic derivatives up to that "
+                                 f"order: flaglen={list(flaglen)!r}") for q in flaglen]
+        self.t0 = check_quantity("time", t0, as_name="t0")
+        self.tf = check_quantity("time", tf, as_name="tf")
         if not self.tf > self.t0:
-            raise ValueError(f"tf={tf!r} s must be greater than t0={t0!r} s")
+            raise InputError("tf", tf, f"tf={tf!r} s must be greater than t0={t0!r} s")
         super().__init__(max(2 * q for q in lengths))
         self.nvars = len(lengths)
         self.coef_length = [2 * q for q in lengths]
@@ -49,9 +53,11 @@ class PsiFamily(BasisFamily):
 
     def eval_deriv(self, i: int, k: int, t: ArrayLike, var: int | None = None) -> NDArray[np.float64]:
         """The ``k``-th time derivative of basis function ``i`` of flat output ``var`` at ``t``."""
+        if var is not None:
+            var = check_integer("var", var, low=0, high=self.nvars - 1, why="the flat output's index")
         n = self.coef_length[0 if var is None else var]
-        if not 0 <= i < n:
-            raise ValueError(f"basis function i={i!r} does not exist; flat output {var} has {n} (0..{n - 1})")
+        i = check_integer("i", i, low=0, high=n - 1, why=f"basis function i does not exist; flat output {var} has {n}")
+        k = check_integer("k", k, low=0, high=MAX_ORDER, why="the derivative's order")
         t = np.asarray(t, dtype=float)
         if i == n - 1:
             return psi(t, self.t0, self.tf, k)

@@ -9,6 +9,8 @@ from numpy.typing import NDArray
 
 from ..control.protocol import is_static
 from ..model.motor import INPUT_NAMES
+from ..validate import InputError, short_repr
+from .arguments import check_name
 from .plant_sys import OUTPUT_NAMES
 
 
@@ -44,10 +46,12 @@ def controller_nlsys(controller: Any, *, name: Optional[str] = "controller",
     control.NonlinearIOSystem
         No states; inputs ``ia, ib, omega, theta, ddtheta``; outputs ``va, vb``.
     """
+    check_name(name)
     if not is_static(controller):
-        raise ValueError(f"{type(controller).__name__} is not a static controller (it keeps state between "
-                         "control periods, or has no voltages(t, x, ddtheta)); only static laws such as "
-                         "FlatnessSMC run in continuous time")
+        raise InputError("controller", controller, f"controller={short_repr(controller)}: "
+                         f"{type(controller).__name__} is not a static controller (it keeps state between control "
+                         "periods, or has no voltages(t, x, ddtheta)); only static laws such as FlatnessSMC run in "
+                         "continuous time")
 
     def output(t: float, x: NDArray[np.float64], u: NDArray[np.float64], params: Any) -> NDArray[np.float64]:
         y = np.asarray(u, dtype=float)

@@ -20,7 +20,8 @@ from numpy.typing import NDArray
 
 from ..model.flat import FlatFlag, flat_to_state, state_to_flat
 from ..model.motor import INPUT_NAMES, STATE_NAMES, MotorParams, rhs
-from ..validate import check_finite
+from ..validate import InputError, check_instance, check_quantity, short_repr
+from .arguments import check_name
 from .dq import DQFlag, dq_flag_to_state, dq_state_to_flag
 
 Array = NDArray[np.float64]
@@ -87,16 +88,17 @@ def flatsys(motor: MotorParams, outputs: str = "rho_theta", *, load_torque: floa
         gives the flag as a list of arrays (:data:`FLAG_LENGTHS`), ``reverse(zflag)`` the state and input.
         Its update function is eq. (1), so it also simulates.
     """
-    if outputs not in _MAPS:
-        raise ValueError(f"outputs={outputs!r} is not a choice of flat outputs; valid: {sorted(_MAPS)}")
-    if not isinstance(motor, MotorParams):
-        raise ValueError(f"motor={motor!r} is not a flatstep MotorParams")
-    default = check_finite("load_torque", load_torque)
+    if not (isinstance(outputs, str) and outputs in _MAPS):
+        raise InputError("outputs", outputs, f"outputs={short_repr(outputs)} is not a choice of flat outputs; valid: "
+                         f"{sorted(_MAPS)}")
+    check_instance("motor", motor, MotorParams, "a flatstep MotorParams")
+    default = check_quantity("load", load_torque, as_name="load_torque")
+    check_name(name)
     forward_map, reverse_map = _MAPS[outputs]
 
     def tau(params: Optional[dict[str, Any]]) -> float:
         value = (params or {}).get("load_torque", default)
-        return check_finite("params['load_torque']", value)
+        return check_quantity("load", value, as_name="params['load_torque']")
 
     def forward(x: Array, u: Array, params: Optional[dict[str, Any]] = None) -> Flag:
         return forward_map(motor, tau(params), np.asarray(x, dtype=float), np.asarray(u, dtype=float))

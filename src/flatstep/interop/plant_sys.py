@@ -9,6 +9,8 @@ from numpy.typing import NDArray
 
 from ..model.motor import INPUT_NAMES, STATE_NAMES, MotorParams, load_function
 from ..model.plant import Plant, plant_rhs
+from ..validate import check_bool, check_instance
+from .arguments import check_name
 
 #: The outputs of :func:`nlsys`: the state and the rotor's acceleration, the measurement ``y`` a flatstep
 #: controller reads (:mod:`flatstep.control.protocol`).
@@ -48,8 +50,9 @@ def nlsys(plant: Union[Plant, MotorParams], *, load_input: bool = False, name: O
     """
     if isinstance(plant, MotorParams):
         plant = Plant(plant)
-    if not isinstance(plant, Plant):
-        raise ValueError(f"plant={plant!r} is not a flatstep Plant or MotorParams")
+    check_instance("plant", plant, Plant, "a flatstep Plant or MotorParams")
+    load_input = check_bool("load_input", load_input)
+    check_name(name)
     motor, effects, tau = plant.motor, plant.effects, load_function(plant.load)
 
     def load(t: float, u: NDArray[np.float64]) -> float:

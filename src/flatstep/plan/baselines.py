@@ -15,13 +15,15 @@ with :math:`i_q = (J\ddot\theta + B\dot\theta)/K_m`, so only the shape of :math:
 from __future__ import annotations
 
 import math
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.special import comb
 
 from ..model.motor import MotorParams
+from ..validate import InputError, check_choice, check_quantity
+from .arguments import check_angle, check_limits, check_motor, check_t0
 from .limits import MotorLimits, plan_margins
 from .piecewise import NCOEF, PiecewisePlan, horner
 from .segments import hermite_rows, scurve_rows
@@ -31,8 +33,25 @@ KINDS = ("trapezoid", "ruckig")
 _SPLIT = 6  # sub-segments per phase, for the current's table
 
 
+def _check_distance(distance: Any) -> float:
+    """``distance`` as float, or an InputError unless it is a non-zero angle in the range of ``angle``."""
+    d = check_angle(distance, "distance")
+    if d == 0:
+        raise InputError("distance", distance, "distance=0.0 rad: a move needs a distance; a rest is a dwell")
+    return d
+
+
+def _check_caps(v_max: Any, a_max: Any, j_max: Any) -> tuple[float, float, Optional[float]]:
+    """The caps as floats (``j_max`` may be None), or an InputError naming the one out of its range."""
+    return (check_quantity("speed", v_max, as_name="v_max"), check_quantity("acceleration", a_max, as_name="a_max"),
+            None if j_max is None else check_quantity("jerk", j_max, as_name="j_max"))
+
+
 def ruckig_duration(distance: float, v_max: float, a_max: float, j_max: float) -> float:
     """Ruckig's time-optimal rest-to-rest duration over ``distance`` under the caps [s]."""
+    distance = check_angle(distance, "distance")
+    v_max, a_max, _ = _check_caps(v_max, a_max, None)
+    j_max = check_quantity("jerk", j_max, as_name="j_max")
     from ruckig import InputParameter, Result, Ruckig, Trajectory
 
     inp = InputParameter(1)
@@ -48,6 +67,8 @@ def ruckig_duration(distance: float, v_max: float, a_max: float, j_max: float) -
 
 def trapezoid_rows(distance: float, v_max: float, a_max: float) -> tuple[Array, Array]:
     """The trapezoid (or triangle) from 0 over ``distance`` > 0: rows (k, 11) and durations (k,)."""
+    distance = _check_distance(distance)
+    v_max, a_max, _ = _check_caps(v_max, a_max, None)
     ta = v_max / a_max
     if a_max * ta * ta >= distance:  # the speed cap is not reached: a triangle
         ta, cruise = math.sqrt(distance / a_max), 0.0
@@ -86,6 +107,9 @@ def with_torque_current(rows: Array, h: Array, motor: MotorParams, limits: Motor
 
     Each segment's current is a degree-7 segment through its own one-sided :math:`(\rho, \dot\rho)` at both ends.
     """
+    check_motor(motor)
+    check_limits(limits)
+    theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
     rows, h = _split(rows, h, _SPLIT)
     ends = []
     for tau in (0.0, 1.0):
@@ -110,15 +134,18 @@ def baseline_plan(kind: str, distance: float, motor: MotorParams, limits: MotorL
                   a_max: float, j_max: Optional[float] = None, *, theta1: float = 0.0,
                   t0: float = 0.0) -> PiecewisePlan:
     """The ``kind`` baseline over ``distance`` [rad] under the caps, as a table with the torque current."""
-    d = abs(distance)
+    kind = check_choice("kind", kind, KINDS)
+    distance, d = _check_distance(distance), abs(distance)
+    check_motor(motor)
+    check_limits(limits)
+    v_max, a_max, j_max = _check_caps(v_max, a_max, j_max)
+    theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
     if kind == "trapezoid":
         rows, h = trapezoid_rows(d, v_max, a_max)
     elif kind == "ruckig":
         if j_max is None:
-            raise ValueError("a ruckig profile needs j_max")
+            raise InputError("j_max", j_max, "j_max=None: a ruckig profile needs j_max")
         rows, h = scurve_rows(0.0, d, v_max, a_max, j_max)
-    else:
-        raise ValueError(f"kind={kind!r} is not a baseline; valid: {KINDS}")
     return with_torque_current(rows, h, motor, limits, theta1=theta1, t0=t0,
                                sign=1.0 if distance >= 0 else -1.0)
 
@@ -152,6 +179,9 @@ def best_baseline(kind: str, distance: float, motor: MotorParams,
     Speed caps on a grid up to the bus's top speed, then a finer grid around the best one; for each (and each
     jerk time, for ruckig), the largest feasible acceleration cap by bisection. Returns the plan and its caps.
     """
+    kind, distance = check_choice("kind", kind, KINDS), _check_distance(distance)
+    check_motor(motor)
+    check_limits(limits)
     a_top = motor.Km * float(limits.iq_cap(0.0)) / motor.J
     w_top = limits.v_use * limits.v_bus / motor.Km
     tau_e = motor.L / motor.R

@@ -19,7 +19,8 @@ from numpy.typing import NDArray
 from scipy.integrate import trapezoid
 
 from ..model.motor import MotorParams
-from ..validate import check_finite, check_positive
+from ..validate import InputError, check_quantity
+from .arguments import check_angle, check_limits, check_motor, check_plan_table, check_samples_per_segment, check_t0
 from .baselines import _split, with_torque_current
 from .limits import MotorLimits, plan_margins
 from .piecewise import NCOEF, PiecewisePlan, horner
@@ -50,6 +51,8 @@ def _loss(c: Array, distance: float, duration: float, motor: MotorParams, limits
 
 def copper_loss(plan: PiecewisePlan, motor: MotorParams, samples_per_segment: int = 64) -> float:
     r"""The planned copper loss :math:`R\int\rho^{*2}\,dt` [J] over the plan's move (midpoint rule)."""
+    plan, motor = check_plan_table(plan), check_motor(motor)
+    samples_per_segment = check_samples_per_segment(samples_per_segment, plan.n)
     tau = (np.arange(samples_per_segment) + 0.5) / samples_per_segment
     rho = horner(np.repeat(plan.rho, tau.size, axis=0), np.tile(tau, plan.n))
     return float(motor.R * np.sum(rho**2 * np.repeat(plan.durations / tau.size, tau.size)))
@@ -66,10 +69,15 @@ def min_copper_plan(distance: float, duration: float, motor: MotorParams, limits
     """
     from scipy.optimize import minimize
 
-    d = check_finite("distance", distance)
+    d = check_angle(distance, "distance")
     if d == 0:
-        raise ValueError("distance=0.0 rad: a move needs a distance; a rest is a dwell")
-    T = check_positive("duration", duration, unit=" s")
+        raise InputError("distance", distance, "distance=0.0 rad: a move needs a distance; a rest is a dwell")
+    T = check_quantity("time", duration, as_name="duration")
+    if T <= 0:
+        raise InputError("duration", duration, f"duration={T!r} s must be > 0")
+    check_motor(motor)
+    check_limits(limits)
+    theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
     psi, basis = _family()
     res = minimize(lambda z: _loss(psi + basis @ z, abs(d), T, motor, limits), np.zeros(basis.shape[1]),
                    method="BFGS")

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import check_finite, check_nonnegative
+from ..validate import InputError, check_nonnegative, check_quantity
 from .rest_to_rest import psi
 
 
@@ -36,13 +36,15 @@ class DCurrentPlan:
     weakening_speed: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("i_d1", "i_d2", "t0", "tf"):
-            object.__setattr__(self, name, check_finite(name, getattr(self, name)))
+        for name in ("i_d1", "i_d2"):
+            object.__setattr__(self, name, check_quantity("d_current", getattr(self, name), as_name=name))
+        for name in ("t0", "tf"):
+            object.__setattr__(self, name, check_quantity("time", getattr(self, name), as_name=name))
         for name, unit in (("weakening", " A s/rad"), ("weakening_speed", " rad/s")):
             object.__setattr__(self, name, check_nonnegative(name, getattr(self, name), unit=unit))
         if not self.tf > self.t0:
-            raise ValueError(f"tf={self.tf!r} s must be greater than t0={self.t0!r} s (the d current changes "
-                             "from t0 to tf)")
+            raise InputError("tf", self.tf, f"tf={self.tf!r} s must be greater than t0={self.t0!r} s (the d "
+                             "current changes from t0 to tf)")
 
     def flag(self, t: ArrayLike, dtheta: ArrayLike = 0.0,
              ddtheta: ArrayLike = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -30,7 +30,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..model.motor import MotorParams
-from ..validate import check_finite
 from .limits import MotorLimits
 
 Array = NDArray[np.float64]
@@ -151,6 +150,10 @@ def bang_bang(distance: float, env: Envelope) -> BangBang:
 
 def bang_bang_time(distance: float, motor: MotorParams, limits: MotorLimits) -> float:
     """The lower bound: the bang-bang move on the full bus ignoring inductance and jerk (module docstring)."""
-    d = abs(check_finite("distance", distance))
+    from .arguments import check_angle, check_limits, check_motor
+
+    d = abs(check_angle(distance, "distance"))
+    check_motor(motor)
+    check_limits(limits)
     b = bang_bang(d, envelope(motor, limits, 1.0))
     return b.t1 + b.cruise + b.t2

@@ -10,7 +10,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
-from ..validate import check_integer, check_quantity
+from ..validate import check_instance, check_integer, check_quantity
+from ..validate.limits import MAX_PLAN_SAMPLES
 from .protocol import Plan, check_plan
 
 
@@ -83,9 +84,9 @@ def check_feasibility(plan: Plan, motor: MotorParams, *, load_torque: float = 0.
     [t0, tf] and the worst torque margin is refined by a bounded scalar minimisation around the worst sample.
     """
     check_plan(plan)
-    if not isinstance(motor, MotorParams):
-        raise ValueError(f"check_feasibility takes a MotorParams, got motor={motor!r}")
-    n = check_integer("n", n, low=3, high=10_000_000, why="samples of the plan")
+    check_instance("motor", motor, MotorParams, "a MotorParams", "e.g. MotorParams.preset('paper')")
+    n = check_integer("n", n, low=3, high=MAX_PLAN_SAMPLES, why="samples of the plan, at most "
+                      "flatstep.validate.limits.MAX_PLAN_SAMPLES")
     load_torque = check_quantity("load", load_torque, as_name="load_torque")
     if v_max is not None:
         v_max = check_quantity("v_bus", v_max, as_name="v_max")

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.flat import flat_to_state
 from ..model.motor import MotorParams
-from ..validate import check_finite, check_positive
+from ..validate import InputError, check_finite, check_positive, check_quantity
 from .piecewise import PiecewisePlan
 
 Array = NDArray[np.float64]
@@ -89,6 +89,11 @@ class MotorLimits:
         Fraction of v_bus the plan's feedforward may use, in (0, 1]; the rest is the controller's to correct.
     speed_max, accel_max, jerk_max : float, optional
         Caps [rad/s, rad/s^2, rad/s^3].
+
+    Every field is a number (not a bool, not a string) in its range of :mod:`flatstep.validate.ranges`:
+    ``v_bus`` that of ``v_bus``, the currents that of ``current``, ``speed_corner`` and ``speed_max`` that of
+    ``speed``, ``accel_max`` ``acceleration``, ``jerk_max`` ``jerk``, ``torque_angle_max`` ``torque_angle`` and
+    ``v_use`` ``fraction``; an :class:`~flatstep.validate.InputError` names the field otherwise.
     """
 
     v_bus: float
@@ -103,26 +108,19 @@ class MotorLimits:
     jerk_max: Optional[float] = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "v_bus", check_positive("v_bus", self.v_bus, unit=" V"))
-        object.__setattr__(self, "i_max", check_positive("i_max", self.i_max, unit=" A"))
-        object.__setattr__(self, "i_hold", check_positive("i_hold", self.i_hold, unit=" A"))
-        if self.i_hold >= self.i_max:
-            raise ValueError(f"i_hold={self.i_hold!r} A must be below i_max={self.i_max!r} A, or no torque is left")
-        if self.i_run is not None:
-            run = check_positive("i_run", self.i_run, unit=" A")
-            if run > self.i_hold:
-                raise ValueError(f"i_run={run!r} A must be in (0, i_hold={self.i_hold!r} A]")
-            object.__setattr__(self, "i_run", run)
-        object.__setattr__(self, "speed_corner", check_positive("speed_corner", self.speed_corner, unit=" rad/s"))
-        angle = check_finite("torque_angle_max", self.torque_angle_max)
-        if not 0 < angle < math.pi / 2:
-            raise ValueError(f"torque_angle_max={angle!r} rad must be in (0, pi/2)")
-        use = check_finite("v_use", self.v_use)
-        if not 0 < use <= 1:
-            raise ValueError(f"v_use={use!r} must be in (0, 1]: the fraction of the bus the plan may use")
-        for name in ("speed_max", "accel_max", "jerk_max"):
+        # every field in its range of flatstep.validate.ranges (an InputError naming the field otherwise)
+        for name, kind in (("v_bus", "v_bus"), ("i_max", "current"), ("i_hold", "current"),
+                           ("speed_corner", "speed"), ("torque_angle_max", "torque_angle"), ("v_use", "fraction")):
+            object.__setattr__(self, name, check_quantity(kind, getattr(self, name), as_name=name))
+        for name, kind in (("i_run", "current"), ("speed_max", "speed"), ("accel_max", "acceleration"),
+                           ("jerk_max", "jerk")):
             if getattr(self, name) is not None:
-                object.__setattr__(self, name, check_positive(name, getattr(self, name)))
+                object.__setattr__(self, name, check_quantity(kind, getattr(self, name), as_name=name))
+        if self.i_hold >= self.i_max:
+            raise InputError("i_hold", self.i_hold, f"i_hold={self.i_hold!r} A must be below i_max={self.i_max!r} A, "
+                             "or no torque is left")
+        if self.i_run is not None and self.i_run > self.i_hold:
+            raise InputError("i_run", self.i_run, f"i_run={self.i_run!r} A must be in (0, i_hold={self.i_hold!r} A]")
 
     @classmethod
     def for_drive(cls, motor: MotorParams, *, v_bus: float, i_max: float, control_rate: float,
@@ -201,7 +199,12 @@ def plan_margins(plan: PiecewisePlan, motor: MotorParams, limits: MotorLimits,
     """The plan's worst use of each limit (module docstring): ratios, feasible when all are <= 1.
 
     The peaks themselves are returned beside them (``v_peak`` [V], ``rho_peak`` [A], ``speed_peak`` ...).
+    ``samples_per_segment`` times the plan's segments is at most ``MAX_PLAN_SAMPLES``.
     """
+    from .arguments import check_limits, check_motor, check_plan_table, check_samples_per_segment
+
+    plan, motor, limits = check_plan_table(plan), check_motor(motor), check_limits(limits)
+    samples_per_segment = check_samples_per_segment(samples_per_segment, plan.n)
     tau = (np.arange(samples_per_segment) + 0.5) / samples_per_segment
     t = np.concatenate([(plan.breaks[:-1, None] + plan.durations[:, None] * tau[None, :]).ravel(), plan.breaks])
     f = plan.flag(np.sort(t))

@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.flat import FlatFlag
 from ..model.motor import MotorParams
 from ..model.torque_model import TorqueModel
-from ..validate import check_finite, check_positive
+from ..validate import InputError, check_finite, check_quantity
 from .protocol import Plan
 
 
@@ -39,10 +39,10 @@ class LossAwareRho:
     def __post_init__(self) -> None:
         margin = check_finite("margin", self.margin)
         if not 0.0 <= margin < math.pi / 2:
-            raise ValueError(f"margin={margin!r} rad must be in [0, pi/2): the torque angle's distance from the "
-                             "singularity cos(delta) = 1")
+            raise InputError("margin", margin, f"margin={margin!r} rad must be in [0, pi/2): the torque angle's "
+                             "distance from the singularity cos(delta) = 1")
         object.__setattr__(self, "margin", margin)
-        object.__setattr__(self, "rho_hold", check_positive("rho_hold", self.rho_hold, unit=" A"))
+        object.__setattr__(self, "rho_hold", check_quantity("current", self.rho_hold, as_name="rho_hold"))
 
     def reference(self, flag: FlatFlag, t: ArrayLike, motor: MotorParams,
                   torques: TorqueModel) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

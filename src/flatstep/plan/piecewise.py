@@ -29,7 +29,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.equilibria import equilibrium_currents
 from ..model.flat import FlatFlag
+from ..validate import InputError, check_integer, check_quantity, short_repr
+from ..validate.checks import is_real
+from ..validate.limits import MAX_FLAG_BOUND
+from ..validate.ranges import QUANTITIES
 from .rest_to_rest import _PSI_HORNER, RestToRest
+from .table_checks import flag_bound, lowest_rho
 
 if TYPE_CHECKING:  # SciPy's interpolate is imported where a conversion needs it, not with the package
     from scipy.interpolate import PPoly
@@ -37,8 +42,6 @@ if TYPE_CHECKING:  # SciPy's interpolate is imported where a conversion needs it
 Array = NDArray[np.float64]
 #: Coefficients per segment and output (degree 10, the degree of the paper's psi).
 NCOEF = 11
-#: Intervals per segment on which a new :class:`PiecewisePlan` checks that rho stays > 0.
-RHO_CHECKS = 16
 #: Highest derivative of theta that :meth:`PiecewisePlan.theta` evaluates.
 MAX_ORDER = 4
 #: ``FALL[k, j] = p! / (p - k)!`` for the power ``p = 10 - j`` of coefficient ``j``: the k-th derivative's factor.
@@ -63,18 +66,67 @@ def horner_rows(table: Array, i: NDArray[np.intp], tau: Array, order: int = 0) -
     return a
 
 
+def _numbers(name: str, value: ArrayLike, valid: str) -> Array:
+    """``value`` as a new float array, or an InputError unless it holds real numbers only (no str, bool, None)."""
+    try:
+        arr = np.array(value)
+    except (TypeError, ValueError, OverflowError):
+        arr = np.array(None)
+    if arr.dtype.kind not in "iuf":
+        raise InputError(name, value, f"{name}={short_repr(value)} is not an array of real numbers (a "
+                         f"{type(value).__name__} of dtype {arr.dtype}); {valid}")
+    return arr.astype(float)
+
+
 def _table(name: str, value: ArrayLike, n: int) -> Array:
-    """A coefficient table as an (n, 11) float array, or a ValueError naming it."""
-    arr = np.array(value, dtype=float)
+    """A coefficient table as an (n, 11) float array, or an InputError naming it."""
+    arr = _numbers(name, value, f"give ({n}, k) power coefficients, 1 <= k <= {NCOEF}")
     if arr.ndim == 2 and arr.shape[0] == n and 0 < arr.shape[1] <= NCOEF:
         arr = np.hstack([np.zeros((n, NCOEF - arr.shape[1])), arr])  # a lower degree: leading zeros
     if arr.shape != (n, NCOEF):
-        raise ValueError(f"{name} has shape {arr.shape}; expected ({n}, k) with 1 <= k <= {NCOEF} "
-                         "(one row of power coefficients, highest first, per segment)")
+        raise InputError(name, value, f"{name} has shape {arr.shape}; expected ({n}, k) with 1 <= k <= {NCOEF} "
+                         f"(one row of power coefficients, highest first, per segment): {name}={short_repr(value)}")
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} holds non-finite coefficients in segment(s) "
-                         f"{np.flatnonzero(~np.isfinite(arr).all(axis=1)).tolist()}; every coefficient must be finite")
+        bad = np.flatnonzero(~np.isfinite(arr).all(axis=1))
+        raise InputError(name, value, f"{name} holds non-finite coefficients in segment(s) {bad.tolist()[:8]} "
+                         f"({name}={short_repr(value)}); every coefficient must be finite")
     return arr
+
+
+def _breaks(value: ArrayLike) -> Array:
+    """The breaks as a float array, or an InputError: at least 2, finite, strictly increasing, in the time range."""
+    b = _numbers("breaks", value, "give at least 2 finite, strictly increasing times [s]").ravel()
+    if b.size < 2 or not np.isfinite(b).all() or not (np.diff(b) > 0).all():
+        raise InputError("breaks", value, f"breaks={short_repr(b.tolist())} must be at least 2 finite, strictly "
+                         "increasing times [s]")
+    time = QUANTITIES["time"]
+    if not (time.contains(float(b[0])) and time.contains(float(b[-1]))):
+        raise InputError("breaks", value, f"breaks={short_repr(b.tolist())}: the plan's times must lie in "
+                         f"{time.describe()} ({time.why})")
+    with np.errstate(over="ignore"):
+        short = not np.isfinite((1.0 / np.diff(b)) ** MAX_ORDER).all()
+    if short:
+        raise InputError("breaks", value, f"breaks={short_repr(b.tolist())}: a segment is so short that "
+                         f"(1/h)^{MAX_ORDER} overflows")
+    return b
+
+
+def _check_table(b: Array, theta: Array, rho: Array) -> None:
+    """Raise an InputError unless rho > 0 on every whole segment and the flag's bound is within MAX_FLAG_BOUND."""
+    for name, rows, order in (("theta", theta, MAX_ORDER), ("rho", rho, 1)):
+        bound, i = flag_bound(b, rows, order)
+        if not bound <= MAX_FLAG_BOUND:
+            raise InputError(name, bound, f"{name}: segment {i} on [{float(b[i])!r}, {float(b[i + 1])!r}] s has "
+                             f"coefficients and a duration that bound {name} and its first {order} derivatives by "
+                             f"{bound:.4g}, above the limit of {MAX_FLAG_BOUND:g} (flatstep.validate.limits."
+                             f"MAX_FLAG_BOUND): the flag would overflow; give coefficients of a motor's size or "
+                             f"longer segments ({name}[{i}]={short_repr(rows[i].tolist())})")
+    low = lowest_rho(rho)
+    if low is not None:
+        value, k, tau = low
+        t = b[k] + tau * (b[k + 1] - b[k])
+        raise InputError("rho", value, f"rho falls to {value!r} A on the plan (segment {k}, t={t:.6g} s); the "
+                         "current magnitude must stay > 0 on every whole segment")
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,35 +149,25 @@ class PiecewisePlan:
     _c: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
-        b = np.array(self.breaks, dtype=float).ravel()
-        if b.size < 2 or not np.isfinite(b).all() or not (np.diff(b) > 0).all():
-            raise ValueError(f"breaks={b.tolist()!r} must be at least 2 finite, strictly increasing times [s]")
-        with np.errstate(over="ignore"):
-            ih = 1.0 / np.diff(b)
-            short = not np.isfinite(ih**MAX_ORDER).all()
-        if short:
-            raise ValueError(f"breaks={b.tolist()!r}: a segment is so short that (1/h)^{MAX_ORDER} overflows")
+        b = _breaks(self.breaks)
         n = b.size - 1
         object.__setattr__(self, "breaks", b)
         object.__setattr__(self, "theta", _table("theta", self.theta, n))
         object.__setattr__(self, "rho", _table("rho", self.rho, n))
-        # rho on 17 points of every segment, its ends included (rho alone: the full flag costs 4x more)
-        tau = np.tile(np.linspace(0.0, 1.0, RHO_CHECKS + 1), n)
-        lowest = float(np.min(horner_rows(self.rho, np.repeat(np.arange(n), RHO_CHECKS + 1), tau)))
-        if not lowest > 0:
-            raise ValueError(f"rho falls to {lowest!r} A on the plan; the current magnitude must stay > 0")
+        _check_table(self.breaks, self.theta, self.rho)
         for a in (self.breaks, self.theta, self.rho):
             a.flags.writeable = False
 
     @classmethod
     def _of_checked_table(cls, breaks: Array, theta: Array, rho: Array) -> PiecewisePlan:
-        """The plan of a table csrc/time_optimal.c planned, without the constructor's sampling of rho (private).
+        """The plan of a table csrc/time_optimal.c planned, without the constructor's conversions (private).
 
         Only for the C planner's own tables (flatstep.plan.time_optimal.time_optimal and time_optimal_sequence with
-        ``engine="c"``, their dwells' rows held at ``i_hold`` > 0 added): its search accepts a table only where rho
-        > 0 on the 9 points ``tau = j/8`` of every segment (time_optimal_margins), not the constructor's 17, and it
-        writes (n + 1,) breaks and (n, 11) rows. The breaks must still be finite and increasing and every
-        coefficient finite (checked here: a ValueError otherwise); any other table goes through the constructor.
+        ``engine="c"``, their dwells' rows held at ``i_hold`` > 0 added), which come as (n + 1,) breaks and
+        (n, 11) rows of floats: no copy, no padding of lower degrees. Its search accepts a table where rho > 0 on
+        the 9 points ``tau = j/8`` of every segment (time_optimal_margins); that is not a proof, so the table gets
+        the constructor's exact checks all the same: finite, increasing breaks in the time range, finite
+        coefficients, rho > 0 on every whole segment, a flag within ``MAX_FLAG_BOUND`` (a ValueError otherwise).
         """
         b = np.asarray(breaks, dtype=float)
         th, rh = np.asarray(theta, dtype=float), np.asarray(rho, dtype=float)
@@ -134,6 +176,8 @@ class PiecewisePlan:
                 and np.isfinite(th).all() and np.isfinite(rh).all()):
             raise ValueError(f"a table of {n} segment(s) with breaks {b.tolist()!r} is not a finished C plan: its "
                              f"breaks must increase, its rows be ({n}, {NCOEF}) and every value finite")
+        _breaks(b)
+        _check_table(b, th, rh)
         plan = object.__new__(cls)
         for name, value in (("breaks", b), ("theta", th), ("rho", rh), ("_c", {})):
             object.__setattr__(plan, name, value)
@@ -220,8 +264,8 @@ class PiecewisePlan:
 
     def theta_deriv(self, t: ArrayLike, order: int) -> Array:
         """The ``order``-th time derivative (0..4) of theta at times ``t`` (C ``traj_theta``)."""
-        if not 0 <= order <= MAX_ORDER:
-            raise ValueError(f"order={order!r} is out of range; the table gives theta's derivatives 0..{MAX_ORDER}")
+        order = check_integer("order", order, low=0, high=MAX_ORDER, why="the table gives theta's derivatives "
+                              f"0..{MAX_ORDER}")
         t = np.asarray(t, dtype=float)
         tv = t.ravel()
         i, ih, tau, inside = self._locate(tv)
@@ -256,6 +300,8 @@ class PiecewisePlan:
     @classmethod
     def hold(cls, theta: float, rho: float, t0: float, t1: float) -> "PiecewisePlan":
         """One segment holding ``theta`` [rad] at the current magnitude ``rho`` [A] over ``[t0, t1]``."""
+        theta, rho = check_quantity("angle", theta, as_name="theta"), check_quantity("current", rho, as_name="rho")
+        t0, t1 = check_quantity("time", t0, as_name="t0"), check_quantity("time", t1, as_name="t1")
         row = np.zeros((1, NCOEF))
         row[0, -1] = theta
         rho_row = np.zeros((1, NCOEF))
@@ -265,8 +311,13 @@ class PiecewisePlan:
     @classmethod
     def concatenate(cls, parts: Sequence["PiecewisePlan"]) -> "PiecewisePlan":
         """One table of consecutive tables, each starting where the one before ends (a ValueError if not)."""
-        if not parts:
-            raise ValueError("no tables to concatenate: give at least one")
+        if not isinstance(parts, (list, tuple)) or not parts:
+            raise InputError("parts", parts, f"parts={short_repr(parts)}: no tables to concatenate; give a list of at "
+                             "least one PiecewisePlan")
+        for k, p in enumerate(parts):
+            if not isinstance(p, PiecewisePlan):
+                raise InputError(f"parts[{k}]", p, f"parts[{k}]={short_repr(p)} is not a PiecewisePlan "
+                                 f"({type(p).__name__}); give the tables to join")
         for k, (a, b) in enumerate(zip(parts[:-1], parts[1:], strict=True)):
             if abs(b.t0 - a.tf) > 1e-12 * max(1.0, abs(a.tf)):
                 raise ValueError(f"table {k + 1} starts at t0={b.t0!r} s, but table {k} ends at tf={a.tf!r} s: "
@@ -280,6 +331,12 @@ class PiecewisePlan:
 
         The coefficients of :math:`(t - b_i)^p` become those of :math:`\tau^p` by the factor :math:`h_i^p`.
         """
+        from scipy.interpolate import PPoly
+
+        for name, pp in (("theta", theta), ("rho", rho)):
+            if not isinstance(pp, PPoly) and not (name == "rho" and is_real(pp)):
+                raise InputError(name, pp, f"{name}={short_repr(pp)} is not a scipy PPoly ({type(pp).__name__})"
+                                 + ("; give a PPoly or a number [A]" if name == "rho" else "; give a PPoly"))
         b = np.asarray(theta.x, dtype=float)
         h = np.diff(b)
 
@@ -291,7 +348,7 @@ class PiecewisePlan:
             powers = np.arange(c.shape[0] - 1, -1, -1)[:, None]
             return (c * h[None, :] ** powers).T
 
-        rh = np.full((b.size - 1, 1), float(rho)) if isinstance(rho, (int, float)) else local(rho)
+        rh = np.full((b.size - 1, 1), float(rho)) if is_real(rho) else local(rho)
         return cls(b, local(theta), rh)
 
     def to_ppoly(self) -> tuple["PPoly", "PPoly"]:

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.equilibria import equilibrium_currents, stable_angle
 from ..model.flat import FlatFlag
 from ..model.motor import MotorParams
-from ..validate import check_finite, check_quantity
+from ..validate import InputError, check_finite, check_instance, check_integer, check_quantity
 
 if TYPE_CHECKING:  # piecewise imports this module
     from .piecewise import PiecewisePlan
@@ -44,10 +44,10 @@ def psi(t: ArrayLike, t0: float, tf: float, order: int = 0) -> NDArray[np.float6
 
     .. math:: \frac{d^k\psi}{dt^k} = \frac{\psi^{(k)}(\tau)}{(t_f - t_0)^k}
     """
-    if not 0 <= order <= MAX_ORDER:
-        raise ValueError(f"order={order!r} is out of range; psi has analytic derivatives 0..{MAX_ORDER}")
+    order = check_integer("order", order, low=0, high=MAX_ORDER, why="psi's analytic derivatives")
+    t0, tf = check_finite("t0", t0), check_finite("tf", tf)
     if not tf > t0:
-        raise ValueError(f"tf={tf!r} must be greater than t0={t0!r}")
+        raise InputError("tf", tf, f"tf={tf!r} must be greater than t0={t0!r}")
     t = np.asarray(t, dtype=float)
     T = tf - t0
     tau = np.clip((t - t0) / T, 0.0, 1.0)
@@ -80,7 +80,7 @@ class RestToRest:
                            ("t0", "time"), ("tf", "time")):  # ranges: flatstep.validate.ranges
             object.__setattr__(self, name, check_quantity(kind, getattr(self, name), as_name=name))
         if not self.tf > self.t0:
-            raise ValueError(f"tf={self.tf!r} s must be greater than t0={self.t0!r} s")
+            raise InputError("tf", self.tf, f"tf={self.tf!r} s must be greater than t0={self.t0!r} s")
 
     @classmethod
     def from_currents(cls, ia1: float, ib1: float, ia2: float, ib2: float, Nr: int,
@@ -148,6 +148,7 @@ def point_to_point(motor: MotorParams, theta1: float, theta2: float, rho1: float
     """
     from .feasibility import check_feasibility
 
+    check_instance("motor", motor, MotorParams, "a MotorParams", "e.g. MotorParams.preset('paper')")
     plan = RestToRest(theta1, theta2, rho1, rho2, t0, tf)
     check_feasibility(plan, motor, load_torque=load_torque, v_max=v_max, i_max=i_max).raise_if_infeasible()
     return plan

@@ -20,16 +20,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import NamedTuple, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..model.motor import MotorParams
-from ..validate import InputError, check_finite
+from ..validate import InputError, check_quantity, check_sequence, short_repr
 from ..validate import limits as limits_mod
 from ..validate.checks import is_real
-from ..validate.limits import MAX_PLAN_SAMPLES
+from ..validate.limits import MAX_OPTIMAL_MOVES, MAX_PLAN_SAMPLES
+from .arguments import check_angle, check_engine, check_limits, check_motor, check_t0
 from .envelope import Envelope, bang_bang, bang_bang_time, envelope, iq_bounds, voltage_excess
 from .limits import MotorLimits
 from .piecewise import NCOEF, PiecewisePlan
@@ -166,6 +167,17 @@ def search_width(distance: float, motor: MotorParams, limits: MotorLimits, width
 def smoothed_plan(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float, width: float, *,
                   theta1: float = 0.0, t0: float = 0.0) -> PiecewisePlan:
     """The bang-bang move on the envelope at ``gamma``, smoothed twice by a box of ``width`` [s], as a plan."""
+    distance, theta1, t0 = check_angle(distance, "distance"), check_angle(theta1, "theta1"), check_t0(t0)
+    check_motor(motor)
+    check_limits(limits)
+    gamma = check_quantity("fraction", gamma, as_name="gamma")
+    lo, hi = limits_mod.MIN_SMOOTHING_WIDTH, limits_mod.MAX_SMOOTHING_WIDTH
+    if not (is_real(width) and math.isfinite(width) and lo <= width <= hi):
+        raise InputError("width", width, f"width={width!r}: a smoothing width is a number of seconds in "
+                         f"[{lo:g}, {hi:g}] (flatstep.validate.limits.MIN_SMOOTHING_WIDTH, MAX_SMOOTHING_WIDTH)")
+    if abs(distance) < limits_mod.MIN_MOVE_DISTANCE:
+        raise InputError("distance", distance, f"distance={distance!r} rad: a move needs at least "
+                         f"{limits_mod.MIN_MOVE_DISTANCE:g} rad (flatstep.validate.limits.MIN_MOVE_DISTANCE)")
     table = smoothed_table(abs(distance), envelope(motor, limits, gamma), width, motor, limits)
     return _plan(table, distance, theta1, t0)
 
@@ -224,7 +236,10 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     infeasible widths do not stop a walk before a feasible one is found, and an infeasible middle width sends the
     search both ways. Each width's search starts at the gamma the previous feasible width found.
     """
-    d = abs(distance)
+    d = abs(check_angle(distance, "distance"))
+    check_motor(motor)
+    check_limits(limits)
+    _check_widths(widths)
     ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
     full = envelope(motor, planning_limits(limits), 1.0)
     best: Optional[Candidate] = None
@@ -273,8 +288,10 @@ def _check_widths(widths: Optional[tuple[float, ...]]) -> None:
     """Raises an InputError unless ``widths`` is None or 1 to 8 finite smoothing widths within the documented range."""
     if widths is None:
         return
-    if isinstance(widths, (str, bytes)) or not hasattr(widths, "__len__") or not 1 <= len(widths) <= 8:
-        raise InputError("widths", widths, f"widths={widths!r}: give a tuple of 1 to 8 smoothing widths [s]")
+    top = limits_mod.MAX_SMOOTHING_WIDTHS
+    if not isinstance(widths, (tuple, list, np.ndarray)) or not 1 <= len(widths) <= top:
+        raise InputError("widths", widths, f"widths={short_repr(widths)}: give a tuple of 1 to {top} smoothing "
+                         "widths [s] (flatstep.validate.limits.MAX_SMOOTHING_WIDTHS)")
     lo, hi = limits_mod.MIN_SMOOTHING_WIDTH, limits_mod.MAX_SMOOTHING_WIDTH
     for w in widths:
         if not (is_real(w) and math.isfinite(w) and lo <= w <= hi):
@@ -291,11 +308,18 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
 
     Raises
     ------
+    InputError
+        A ValueError naming the argument, for one of a wrong type or out of its range (angles within +-1e6 rad,
+        ``t0 >= 0``, ``motor`` a MotorParams, ``limits`` a MotorLimits), a move shorter than ``MIN_MOVE_DISTANCE``
+        or an unknown engine, checked before any planning.
     ValueError
-        For a zero distance, an unknown engine, or when no smoothing width and headroom give a feasible table.
+        When no smoothing width and headroom give a feasible table.
     """
-    d = check_finite("distance", distance)
-    theta1, t0 = check_finite("theta1", theta1), check_finite("t0", t0)
+    d = check_angle(distance, "distance")
+    theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
+    check_motor(motor)
+    check_limits(limits)
+    check_engine(engine)
     if abs(d) < limits_mod.MIN_MOVE_DISTANCE:
         raise InputError("distance", distance, f"distance={distance!r} rad: a move needs at least "
                          f"{limits_mod.MIN_MOVE_DISTANCE:g} rad (flatstep.validate.limits.MIN_MOVE_DISTANCE); a "
@@ -305,9 +329,25 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
         from .._core_time_optimal import plan_table
 
         return _plan(plan_table(d, motor, limits, widths), d, theta1, t0, from_c=True)
-    if engine != "python":
-        raise ValueError(f"engine={engine!r} is not a planner engine; valid: 'c', 'python'")
     return _plan(plan_move(d, motor, limits, widths).table, d, theta1, t0)
+
+
+def _check_sequence(waypoints: Any) -> tuple[list[float], list[float]]:
+    """The angles and dwells of ``[(theta, dwell), ...]``, or an InputError naming the waypoint (before any work)."""
+    check_sequence("waypoints", waypoints, low=2, high=MAX_OPTIMAL_MOVES + 1, what="waypoints (theta, dwell)",
+                   limit="MAX_OPTIMAL_MOVES, plus the start")
+    theta, dwell = [], []
+    for i, w in enumerate(waypoints):
+        if not (isinstance(w, (tuple, list, np.ndarray)) and len(w) == 2):
+            raise InputError(f"waypoints[{i}]", w, f"waypoints[{i}]={short_repr(w)} is not a pair (theta [rad], "
+                             "dwell [s]); give each waypoint as (theta, dwell)")
+        theta.append(check_angle(w[0], f"waypoints[{i}] theta"))
+        dwell.append(check_quantity("time", w[1], as_name=f"waypoints[{i}] dwell"))
+    for i in range(len(theta) - 1):
+        if theta[i + 1] == theta[i]:
+            raise InputError(f"waypoints[{i + 1}]", waypoints[i + 1], f"waypoints {i} and {i + 1} sit at "
+                             f"{theta[i]} rad: give the rest as a dwell")
+    return theta, dwell
 
 
 def time_optimal_sequence(waypoints: list[tuple[float, float]], motor: MotorParams, limits: MotorLimits, *,
@@ -315,20 +355,14 @@ def time_optimal_sequence(waypoints: list[tuple[float, float]], motor: MotorPara
     """Time-optimal rest-to-rest moves through ``waypoints`` ``[(theta, dwell), ...]``, each followed by its dwell.
 
     The first waypoint is the start; a dwell of the first holds the start before the first move. The tables are
-    joined into one plan (one validation of the whole table).
+    joined into one plan (one validation of the whole table). At most ``MAX_OPTIMAL_MOVES`` moves, checked with
+    every waypoint's type and range before any planning.
     """
-    if len(waypoints) < 2:
-        raise ValueError(f"{len(waypoints)} waypoint(s): a sequence needs at least 2")
-    theta = [check_finite(f"waypoint {i} theta", w[0]) for i, w in enumerate(waypoints)]
-    dwell = [check_finite(f"waypoint {i} dwell", w[1]) for i, w in enumerate(waypoints)]
-    t0 = check_finite("t0", t0)
-    if min(dwell) < 0:
-        raise ValueError(f"dwells {dwell} s must be >= 0")
-    for i in range(len(theta) - 1):
-        if theta[i + 1] == theta[i]:
-            raise ValueError(f"waypoints {i} and {i + 1} sit at {theta[i]} rad: give the rest as a dwell")
-    if engine not in ("c", "python"):
-        raise ValueError(f"engine={engine!r} is not a planner engine; valid: 'c', 'python'")
+    theta, dwell = _check_sequence(waypoints)
+    check_motor(motor)
+    check_limits(limits)
+    check_engine(engine)
+    t0 = check_t0(t0)
     if engine == "c":
         from .._core_time_optimal import plan_table
 

@@ -20,12 +20,14 @@ within them, and for ``hermite`` and ``spline`` the time scaling of the piece th
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional, Sequence, Union
+from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..validate import check_finite, check_positive, check_quantity
+from ..validate import InputError, check_instance, check_quantity, check_sequence, short_repr
+from ..validate.checks import is_real
+from ..validate.limits import MAX_OPTIMAL_MOVES
 from .piecewise import NCOEF, PiecewisePlan, horner
 from .segments import dwell_row, hermite_rows, psi_duration, psi_rows, scurve_rows
 
@@ -45,21 +47,24 @@ class Waypoint:
     def __post_init__(self) -> None:
         object.__setattr__(self, "theta", check_quantity("angle", self.theta, as_name="waypoint theta"))
         if self.velocity is not None:
-            object.__setattr__(self, "velocity", check_finite("waypoint velocity", self.velocity))
+            object.__setattr__(self, "velocity", check_quantity("velocity", self.velocity, as_name="waypoint velocity"))
         object.__setattr__(self, "dwell", check_quantity("time", self.dwell, as_name="waypoint dwell"))
 
 
 @dataclass(frozen=True)
 class Caps:
-    """Speed, acceleration and jerk caps [rad/s, rad/s^2, rad/s^3] that set durations not given."""
+    """Speed, acceleration and jerk caps [rad/s, rad/s^2, rad/s^3] that set durations not given.
+
+    Each in its range of :mod:`flatstep.validate.ranges` (``speed``, ``acceleration``, ``jerk``).
+    """
 
     v_max: float
     a_max: float
     j_max: float
 
     def __post_init__(self) -> None:
-        for name, unit in (("v_max", " rad/s"), ("a_max", " rad/s^2"), ("j_max", " rad/s^3")):
-            object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=unit))
+        for name, kind in (("v_max", "speed"), ("a_max", "acceleration"), ("j_max", "jerk")):
+            object.__setattr__(self, name, check_quantity(kind, getattr(self, name), as_name=name))
 
 
 def _peaks(rows: Array, h: Array) -> Array:
@@ -138,20 +143,38 @@ def _piece(family: str, points: Sequence[Waypoint], h: Optional[Array],
     return _spline(theta, h) if family == "spline" else (_hermite(theta, h, given), h)
 
 
-def _check_points(waypoints: Sequence[Union[Waypoint, float]], family: str) -> list[Waypoint]:
-    """The waypoints as :class:`Waypoint`, or a ValueError naming what is wrong."""
-    if family not in FAMILIES:
-        raise ValueError(f"family={family!r} is not a segment family; valid: {FAMILIES}")
-    points = [p if isinstance(p, Waypoint) else Waypoint(float(p)) for p in waypoints]
-    if len(points) < 2:
-        raise ValueError(f"{len(points)} waypoint(s): a move needs at least 2")
+def _check_points(waypoints: Any, family: Any) -> list[Waypoint]:
+    """The waypoints as :class:`Waypoint`, or an InputError naming what is wrong (their count before anything)."""
+    if not (isinstance(family, str) and family in FAMILIES):
+        raise InputError("family", family, f"family={short_repr(family)} is not a segment family; valid: {FAMILIES}")
+    check_sequence("waypoints", waypoints, low=2, high=MAX_OPTIMAL_MOVES + 1, what="waypoints",
+                   limit="MAX_OPTIMAL_MOVES, plus the start")
+    points = []
+    for i, p in enumerate(waypoints):
+        if not (isinstance(p, Waypoint) or is_real(p)):
+            raise InputError(f"waypoints[{i}]", p, f"waypoints[{i}]={short_repr(p)} is not a Waypoint or an angle "
+                             f"({type(p).__name__}); give a number [rad] or a Waypoint(theta, velocity, dwell)")
+        if not isinstance(p, Waypoint):
+            p = Waypoint(check_quantity("angle", p, as_name=f"waypoints[{i}]"))
+        points.append(p)
     for i, p in enumerate(points):
         rest = i in (0, len(points) - 1) or p.dwell > 0 or family in ("psi", "scurve")
         if rest and p.velocity not in (None, 0.0):
             why = "the end points and dwells are rests" if family not in ("psi", "scurve") else \
                 f"the {family} family rests at every waypoint"
-            raise ValueError(f"waypoint {i}: velocity={p.velocity!r} rad/s, but {why}; give 0 or None")
+            raise InputError(f"waypoints[{i}]", p.velocity, f"waypoint {i}: velocity={p.velocity!r} rad/s, but "
+                             f"{why}; give 0 or None")
     return points
+
+
+def _check_durations(durations: Any, moves: int) -> Array:
+    """The durations of ``moves`` moves as an array, or an InputError (their count checked before their values)."""
+    check_sequence("durations", durations, low=moves, high=moves, what="durations (one per move)")
+    h = [check_quantity("time", d, as_name=f"durations[{i}]") for i, d in enumerate(durations)]
+    for i, d in enumerate(h):
+        if d <= 0:
+            raise InputError(f"durations[{i}]", d, f"durations[{i}]={d!r} s must be > 0")
+    return np.array(h)
 
 
 def plan_waypoints(waypoints: Sequence[Union[Waypoint, float]], *, family: str = "psi", rho: float = 0.5,
@@ -162,7 +185,8 @@ def plan_waypoints(waypoints: Sequence[Union[Waypoint, float]], *, family: str =
     Parameters
     ----------
     waypoints : sequence of Waypoint or float
-        The angles to pass, in order; a float is a waypoint with no speed given and no dwell.
+        The angles to pass, in order; a float is a waypoint with no speed given and no dwell. At most
+        ``MAX_OPTIMAL_MOVES`` + 1 (flatstep.validate.limits), checked before any work.
     family : str
         The segment family: ``"psi"``, ``"hermite"``, ``"spline"`` or ``"scurve"``.
     rho : float
@@ -175,18 +199,19 @@ def plan_waypoints(waypoints: Sequence[Union[Waypoint, float]], *, family: str =
         The speed, acceleration and jerk caps that set the durations not given (needed by ``scurve``).
     """
     points = _check_points(waypoints, family)
-    rho = check_positive("rho", rho, unit=" A")
-    t0 = check_finite("t0", t0)
+    rho = check_quantity("current", rho, as_name="rho")
+    t0 = check_quantity("time", t0, as_name="t0")
+    if caps is not None:
+        check_instance("caps", caps, Caps, "a Caps(v_max, a_max, j_max)")
     h_all: Optional[Array] = None
     if durations is not None:
         if family == "scurve":
-            raise ValueError("durations were given, but an S-curve's durations follow from caps; give caps only")
-        h_all = np.array([check_positive(f"durations[{i}]", d, unit=" s") for i, d in enumerate(durations)])
-        if h_all.size != len(points) - 1:
-            raise ValueError(f"{h_all.size} durations for {len(points)} waypoints; give one per move "
-                             f"({len(points) - 1})")
+            raise InputError("durations", durations, f"durations={short_repr(durations)} were given, but an "
+                             "S-curve's durations follow from caps; give caps only")
+        h_all = _check_durations(durations, len(points) - 1)
     elif caps is None:
-        raise ValueError("neither durations nor caps: give the duration of each move or the caps that set them")
+        raise InputError("caps", caps, "caps=None and durations=None: neither durations nor caps; give the duration "
+                         "of each move or the caps that set them")
     rests = [0] + [i for i, p in enumerate(points[1:-1], 1) if p.dwell > 0 or family in ("psi", "scurve")]
     rests.append(len(points) - 1)
     rows, hs = [], []
@@ -196,11 +221,12 @@ def plan_waypoints(waypoints: Sequence[Union[Waypoint, float]], *, family: str =
     for a, b in zip(rests[:-1], rests[1:], strict=True):
         piece = points[a:b + 1]
         if all(p.theta == piece[0].theta for p in piece):
-            raise ValueError(f"waypoints {a}..{b} all sit at {piece[0].theta} rad: a move needs a distance; "
-                             "give the rest as a dwell")
+            raise InputError("waypoints", piece[0].theta, f"waypoints {a}..{b} all sit at {piece[0].theta} rad: a "
+                             "move needs a distance; give the rest as a dwell")
         if h_all is None and any(p.theta == q.theta for p, q in zip(piece[:-1], piece[1:], strict=True)):
-            raise ValueError(f"two consecutive waypoints among {a}..{b} sit at the same angle; give the rest there "
-                             "as a dwell, or give durations")
+            same = next(p.theta for p, q in zip(piece[:-1], piece[1:], strict=True) if p.theta == q.theta)
+            raise InputError("waypoints", same, f"two consecutive waypoints among {a}..{b} sit at the same angle, "
+                             f"{same} rad; give the rest there as a dwell, or give durations")
         r, h = _piece(family, piece, None if h_all is None else h_all[a:b], caps)
         rows.append(r)
         hs.append(h)

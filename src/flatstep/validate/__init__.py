@@ -13,13 +13,17 @@ from .checks import (
     check_choice,
     check_count,
     check_finite,
+    check_instance,
     check_integer,
     check_nonnegative,
     check_positive,
     check_quantity,
+    check_sequence,
+    short_repr,
 )
 from .ranges import INTEGER_RANGES, QUANTITIES
 
-__all__ = ["InputError", "check_bool", "check_choice", "check_count", "check_finite", "check_integer",
-           "check_nonnegative", "check_positive", "check_quantity", "INTEGER_RANGES", "QUANTITIES"]
+__all__ = ["InputError", "check_bool", "check_choice", "check_count", "check_finite", "check_instance",
+           "check_integer", "check_nonnegative", "check_positive", "check_quantity", "check_sequence", "short_repr",
+           "INTEGER_RANGES", "QUANTITIES"]
 

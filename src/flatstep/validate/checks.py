@@ -7,7 +7,8 @@ the value, says why it is wrong and what would be valid. A ``bool`` is not a num
 from __future__ import annotations
 
 import math
-from typing import Any, Iterable, Optional
+import reprlib
+from typing import Any, Iterable, Optional, Union
 
 import numpy as np
 
@@ -34,6 +35,47 @@ class InputError(ValueError):
 def is_real(value: object) -> bool:
     """Whether ``value`` is a real number of a numeric type (not a bool, not a string)."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+_REPR = reprlib.Repr()
+_REPR.maxstring, _REPR.maxother, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 80, 80, 6, 6, 4
+
+
+def short_repr(value: object) -> str:
+    """``repr(value)``, shortened for a message when it is long (a list of a million waypoints)."""
+    if isinstance(value, (list, tuple, dict, set, np.ndarray)) and len(value) > 8:
+        return _REPR.repr(value)
+    text = repr(value)
+    return text if len(text) <= 200 else _REPR.repr(value)
+
+
+def check_instance(name: str, value: Any, kind: Union[type, tuple[type, ...]], what: str, hint: str = "") -> Any:
+    """Return ``value``, or raise if it is not an instance of ``kind``.
+
+    ``what`` says what is valid (``"a MotorLimits"``), ``hint`` how to make one.
+    """
+    if not isinstance(value, kind):
+        raise InputError(name, value, f"{name}={short_repr(value)} is a {type(value).__name__}, not {what}; give "
+                                      f"{what}" + (f" ({hint})" if hint else ""))
+    return value
+
+
+def check_sequence(name: str, value: Any, *, low: int, high: int, what: str, limit: str = "") -> int:
+    """Return ``len(value)``, or raise unless ``value`` is a list, tuple or 1-D array of ``low`` to ``high`` items.
+
+    ``what`` names the items (``"waypoints"``); ``limit`` names the constant that sets ``high``. A string, a
+    mapping, a set or an iterator is refused: its items have no order or no length to check before any work.
+    """
+    ok = isinstance(value, (list, tuple)) or (isinstance(value, np.ndarray) and value.ndim == 1)
+    if not ok:
+        raise InputError(name, value, f"{name}={short_repr(value)} is not a sequence ({type(value).__name__}); "
+                                      f"give a list of {low} to {high} {what}")
+    n = len(value)
+    if not low <= n <= high:
+        where = f" (flatstep.validate.limits.{limit})" if limit else ""
+        raise InputError(name, value, f"{name} has {n} {what}; give at least {low} and at most {high}{where}: "
+                                      f"{name}={short_repr(value)}")
+    return n
 
 
 def check_finite(name: str, value: Any) -> float:

@@ -42,6 +42,13 @@ MIN_MOVE_DISTANCE = 1e-7
 #: 0.1-50 ms for NEMA 14-23 motors).
 MIN_SMOOTHING_WIDTH = 1e-6
 MAX_SMOOTHING_WIDTH = 1.0
+#: Most smoothing widths one time-optimal plan may try (csrc/time_optimal.h ``TO_MAX_WIDTHS``).
+MAX_SMOOTHING_WIDTHS = 8
+#: Largest bound a plan's segment table may put on its flat flag, in SI units: on every segment
+#: :math:`h^{-k}\sum_j |c_j| (10 - j)!/(10 - j - k)!` for theta's derivatives k = 0..4 and rho's k = 0..1
+#: (flatstep.plan.piecewise.PiecewisePlan). Far above any motor's angles, speeds and currents, far below where the
+#: flag or the flat maps (products of it with L, Nr, J, Km) overflow to inf.
+MAX_FLAG_BOUND = 1e30
 #: Segments of one PWM period in switched mode (csrc/drive.h ``DRIVE_PWM_SEGMENTS``).
 PWM_SEGMENTS = 9
 
@@ -140,3 +147,28 @@ def check_study(runs: int, cost: RunEstimate, *, engine: str = "c", what: str = 
                          f"({total:.4g} in all) on engine={engine!r}, above the limit of {limit:.4g} "
                          f"(flatstep.validate.limits.{name}); lower --samples, skip the study (--no-robustness), "
                          "use the C engine, or run it through flatstep.run_batch (docs/scaling.md)")
+
+
+#: The planning API's limits, for docs/errors.md (:func:`plan_limits_markdown`): name, value, what counts.
+PLAN_LIMITS = (
+    ("MAX_OPTIMAL_MOVES", lambda: f"{MAX_OPTIMAL_MOVES}",
+     "moves (waypoints less one) of one waypoint sequence: `time_optimal_sequence`, `plan_waypoints` (every "
+     "family), a plan file; checked before any work"),
+    ("MAX_PLAN_SAMPLES", lambda: f"{MAX_PLAN_SAMPLES:.0e}".replace("e+0", "e"),
+     "time samples of one time-optimal move; also segments x `samples_per_segment` of `plan_margins` and "
+     "`copper_loss`, and the samples `n` of `check_feasibility`"),
+    ("MIN_MOVE_DISTANCE", lambda: f"{MIN_MOVE_DISTANCE:g} rad", "the shortest move `time_optimal` plans"),
+    ("MIN_SMOOTHING_WIDTH, MAX_SMOOTHING_WIDTH", lambda: f"{MIN_SMOOTHING_WIDTH:g} to {MAX_SMOOTHING_WIDTH:g} s",
+     "each smoothing width given to `time_optimal`"),
+    ("MAX_SMOOTHING_WIDTHS", lambda: f"{MAX_SMOOTHING_WIDTHS}", "smoothing widths one `time_optimal` call tries"),
+    ("MAX_FLAG_BOUND", lambda: f"{MAX_FLAG_BOUND:g}",
+     "the bound a `PiecewisePlan`'s coefficients and breaks put on its flat flag (theta and 4 derivatives, rho "
+     "and its rate, SI units): a larger table would make `flag()` overflow"),
+)
+
+
+def plan_limits_markdown() -> str:
+    """The planning API's limits (:data:`PLAN_LIMITS`) as a Markdown table (docs/errors.md)."""
+    rows = ["| limit | value | what counts |", "|---|---|---|"]
+    rows += [f"| `{name}` | {value()} | {what} |" for name, value, what in PLAN_LIMITS]
+    return "\n".join(rows)

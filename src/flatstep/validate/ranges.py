@@ -62,6 +62,15 @@ QUANTITIES: dict[str, Quantity] = {
     "time": _q(0.0, 1e6, "s", "the run starts at t = 0: times are >= 0 and at most 1e6 s", low_closed=True),
     "t_end": _q(0.0, 1e6, "s", "a horizon above 0"),
     "duration": _q(1e-3, 3600.0, "s", "a recording from 1 ms to one hour", low_closed=True),
+    # the planner's limits and caps (flatstep.plan.limits.MotorLimits, flatstep.plan.waypoints.Caps)
+    "speed": _q(0.0, 1e6, "rad/s", "a speed above 0 and at most 1e6 rad/s"),
+    "velocity": _q(-1e6, 1e6, "rad/s", "a speed within +-1e6 rad/s", low_closed=True),
+    "acceleration": _q(0.0, 1e9, "rad/s^2", "an acceleration above 0 and at most 1e9 rad/s^2"),
+    "jerk": _q(0.0, 1e12, "rad/s^3", "a jerk above 0 and at most 1e12 rad/s^3"),
+    "torque_angle": _q(0.0, 1.5707963267948966, "rad", "a torque angle above 0 and below pi/2 (where the law is "
+                       "singular)", high_open=True),
+    "fraction": _q(0.0, 1.0, "", "a share above 0 and at most 1"),
+    "d_current": _q(-1e3, 1e3, "A", "a d current within +-1000 A (negative weakens the field)", low_closed=True),
     # the controller
     "gain": _q(1e-12, 1e12, "", "a gain from 1e-12 to 1e12", low_closed=True),
     "damping": _q(1e-6, 1e3, "", "a damping ratio from 1e-6 to 1000", low_closed=True),
