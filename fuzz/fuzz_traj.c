@@ -82,7 +82,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     double *rho = malloc((n ? n : 1) * TRAJ_NCOEF * sizeof *rho), t[N_T_MAX], *flags = NULL, f[PLAN_FLAG_LEN], span;
     struct traj tr = {n, breaks, theta, rho};
     struct plan_coef c;
-    struct plan p = {0, 1, 0.4, 0.4, 0, 1};
+    struct plan p = {0, 1, 0.4, 0.4, 0, 1, NULL};
     bool valid, moderate = true;
     if (!breaks || !theta || !rho)
         goto done;
