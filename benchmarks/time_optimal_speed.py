@@ -1,7 +1,7 @@
 """The time-optimal planner: the C planner and the Python reference side by side in one run, medians and ratios.
 
 Run ``python benchmarks/time_optimal_speed.py``: plans 0.1, 1, 5 and 20 rad at 24 V and 12 V (the limits of
-flatstep.plan.compare) and a 100-waypoint sequence with both engines, checks that they plan the same durations,
+flatstep.studies.plan_compare) and a 100-waypoint sequence with both engines, checks that they plan the same durations,
 and prints the median times. ``python benchmarks/time_optimal_speed.py REV`` adds ``time_optimal.py`` as it was
 at git revision ``REV`` (its relative imports made absolute) as a third column.
 """

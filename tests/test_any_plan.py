@@ -4,7 +4,7 @@ The table runs each of :data:`flatstep.control.tuning.CONTROLLER_TYPES` on four 
 (a :class:`~flatstep.plan.rest_to_rest.RestToRest`, psi evaluated in C), a psi and a Hermite waypoint sequence with a
 dwell (:func:`~flatstep.plan.waypoints.plan_waypoints`) and a time-optimal move whose rho* rises with the torque it
 needs (:func:`~flatstep.plan.time_optimal.time_optimal`), all segment tables in C. The drive: 20 kHz, ideal sensors,
-no bus limit, the flatness gains from :func:`~flatstep.control.design.design_gains` for each plan, the baselines
+no bus limit, the flatness gains from :func:`~flatstep.loop.design.design_gains` for each plan, the baselines
 tuned by rule; the plant is the controllers' model with a detent torque, which the ``_ff`` types know.
 
 Tracking on the C engine: a closed-loop type within :data:`CLOSED_LOOP_TOL` of theta* all along the run and at its
@@ -20,7 +20,7 @@ import flatstep as fs
 from flatstep import _core
 from flatstep._core_structs import controller_struct
 from flatstep._flatstep_core import ffi
-from flatstep.control.design import design_gains
+from flatstep.loop.design import design_gains
 from flatstep.control.protocol import is_static
 from flatstep.control.tuning import CONTROLLER_TYPES, make_controller
 from flatstep.loop.reference import run_reference

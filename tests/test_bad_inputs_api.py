@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.control.design import design_gains
+from flatstep.loop.design import design_gains
 from flatstep.plan.feasibility import check_feasibility
 from flatstep.studies.scenario_file import Robustness
 

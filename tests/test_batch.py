@@ -14,6 +14,7 @@ from types import SimpleNamespace
 import pytest
 
 import flatstep as fs
+import flatstep._version
 from flatstep.loop.drive import Drive
 from flatstep.loop.sensors import Sensors
 from flatstep.studies.batch import run_batch, scenario_grid
@@ -206,7 +207,7 @@ def test_a_file_of_another_batch_is_refused_naming_the_difference(tmp_path, monk
     before = out.read_bytes()
     ran = counting(monkeypatch)
     if "version" in second:
-        monkeypatch.setattr(fs, "__version__", second.pop("version"))
+        monkeypatch.setattr(flatstep._version, "__version__", second.pop("version"))
     scenarios = second.pop("scenarios", GRID[:2])
     with pytest.raises(ValueError, match=match) as info:
         run_batch(scenarios, out=out, workers=1, **second)

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep.control.design import LAMBDA_TS, design_gains
+from flatstep.loop.design import LAMBDA_TS, design_gains
 
 
 def test_rules_hold(motor, plan):

@@ -4,7 +4,7 @@ import pytest
 
 import flatstep as fs
 from flatstep._core_structs import _in, _out, controller_struct, ffi, lib
-from flatstep.control.design import design_gains
+from flatstep.loop.design import design_gains
 from flatstep.control.dq_smc import DQIntegral
 from flatstep.control.protocol import is_static
 from flatstep.control.tuning import LABELS, make_controller

@@ -60,7 +60,7 @@ def test_continuous_loop_runs_static_laws_with_effects(kind, motor, plan):
     gains = fs.SMCGains(W1=300.0, W2=300.0)
     ctrl = fs.make_controller(kind, motor, plan, control_period=5e-5, measurement="ideal", smc_gains=gains)
     plant = fs.Plant(motor, fs.PlantEffects(detent_torque=2e-4, coulomb_torque=1e-4, coulomb_speed=1.0), load=1e-5)
-    solver = fs.Continuous(method="DOP853", rtol=1e-10, atol=1e-12, dt_out=1e-4)
+    solver = fs.Continuous(method="DOP853", rtol=1e-10, atol=1e-12, dt_out=1e-4, max_wall_time=300.0)
     c = fs.simulate(plant, plan, ctrl, solver=solver)
     ref = fs.simulate(plant, plan, ctrl, solver=solver, engine="scipy")
     assert c.meta["engine"] == "c" and ref.meta["engine"] == "scipy"

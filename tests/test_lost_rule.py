@@ -129,7 +129,7 @@ def test_simulate_and_plan_simulate_agree_on_a_kept_round_trip(cli, tmp_path):
     """0 -> 0.5 -> 0 on the 20 kHz drive is tracked to well under a step: ok and exit 0 in both commands (the old
     rule called it lost in 'simulate', exit 3, and ok in 'plan --simulate', exit 0)."""
     path = plan_file(tmp_path)
-    sim = cli(["simulate", path, "--json"], cwd=tmp_path)
+    sim = cli(["simulate", path, "--json", "--no-verify"], cwd=tmp_path)
     assert sim.returncode == 0, sim.stderr
     assert json.loads(sim.stdout[sim.stdout.index("{"):])["status"] == "ok"
     run = cli(["plan", path, "--simulate", "--out", "p"], cwd=tmp_path)
@@ -140,7 +140,7 @@ def test_simulate_and_plan_simulate_agree_on_a_kept_round_trip(cli, tmp_path):
 def test_simulate_and_plan_simulate_agree_on_a_lost_round_trip(cli, tmp_path):
     """The same trip on a 2 kHz drive loses its move: status lost, exit 3 and a warning in both commands."""
     path = plan_file(tmp_path, rate=2000.0)
-    sim = cli(["simulate", path, "--json"], cwd=tmp_path)
+    sim = cli(["simulate", path, "--json", "--no-verify"], cwd=tmp_path)
     run = cli(["plan", path, "--simulate", "--no-verify", "--out", "p"], cwd=tmp_path)  # unchecked: as simulate runs it
     tracking = json.loads((tmp_path / "p" / "plan.json").read_text())["tracking"]
     summary = json.loads(sim.stdout[sim.stdout.index("{"):])
@@ -159,3 +159,11 @@ def test_the_plan_check_does_not_call_the_lost_trip_feasible(cli, tmp_path):
         assert report["tracking"]["status"] == "ok" and report["verify"]["backed_off"], report["verify"]
     else:
         assert not report["verify"]["verified"] and "binds" in run.stdout + run.stderr and "tracking" not in report
+
+
+def test_simulate_refuses_the_trip_the_check_does_not_keep(cli, tmp_path):
+    """simulate runs only what plan reports feasible: the trip the 2 kHz drive loses is refused, naming what binds."""
+    path = plan_file(tmp_path, rate=2000.0)
+    run = cli(["simulate", path], cwd=tmp_path)
+    assert run.returncode == 2 and "the plan is not kept on the drive" in run.stderr and "binds" in run.stderr
+    assert "--no-verify" in run.stderr and "status:" not in run.stdout  # the steps at most: nothing was run

@@ -112,13 +112,25 @@ def test_simulate_a_plan_reports_a_lost_move(tmp_path, capsys):
 def test_simulate_json_matches_the_plan_command(tmp_path, capsys):
     path = tmp_path / "short.toml"
     path.write_text("t_end = 0.3\n" + SHORT)
-    assert main(["simulate", str(path), "--json"]) == 0
+    assert main(["simulate", str(path), "--json", "--no-verify"]) == 0
     summary = json.loads(capsys.readouterr().out)  # JSON alone
     assert main(["plan", str(path), "--out", str(tmp_path), "--simulate", "--no-verify"]) == 0
     tracking = json.loads((tmp_path / "plan.json").read_text())["tracking"]
     assert tracking["control_rate"] == 20000.0
     assert summary["max_abs_theta_error"] == pytest.approx(tracking["max_abs_theta_error"], rel=1e-12)
     assert summary["theta_final"] == pytest.approx(1.0, abs=1e-3)
+
+
+def test_simulate_runs_the_plan_that_plan_reports_feasible(tmp_path, capsys):
+    """Checked on the drive by both commands: simulate runs the plan (backed off or not) that plan verified."""
+    path = tmp_path / "short.toml"
+    path.write_text("t_end = 0.3\n" + SHORT)
+    assert main(["simulate", str(path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert main(["plan", str(path), "--out", str(tmp_path), "--simulate"]) == 0
+    report = json.loads((tmp_path / "plan.json").read_text())
+    assert report["verify"]["verified"] and report["tracking"]["status"] == summary["status"] == "ok"
+    assert summary["max_abs_theta_error"] == pytest.approx(report["tracking"]["max_abs_theta_error"], rel=1e-12)
 
 
 @pytest.mark.parametrize("text, where", [

@@ -1,10 +1,10 @@
-"""The planning comparison (flatstep.plan.compare) on one move: plans, durations, tracking on the drive."""
+"""The planning comparison (flatstep.studies.plan_compare) on one move: plans, durations, tracking on the drive."""
 import math
 
 import pytest
 
 from flatstep.model.motor import PRESETS
-from flatstep.plan.compare import I_RUN, PLANNERS, TORQUE_ANGLE, V_USE, _row, plans_for
+from flatstep.studies.plan_compare import I_RUN, PLANNERS, TORQUE_ANGLE, V_USE, _row, plans_for
 from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal import bang_bang_time
 

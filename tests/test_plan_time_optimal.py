@@ -5,7 +5,7 @@ from typing import Any, cast
 import numpy as np
 import pytest
 
-from flatstep.control.design import design_gains
+from flatstep.loop.design import design_gains
 from flatstep.control.smc import FlatnessSMC
 from flatstep.engine.simulate import simulate
 from flatstep.loop.drive import Drive

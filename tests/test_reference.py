@@ -127,7 +127,7 @@ def test_delays_noise_and_switching_cost_accuracy_but_keep_the_move(motor, plan)
 
 def test_compute_delay_needs_smaller_gains(motor, plan):
     """One period of computation delay with lambda Ts = 0.3 still works; the paper's lambda Ts = 1 does not."""
-    from flatstep.control.design import design_gains
+    from flatstep.loop.design import design_gains
 
     d = design_gains(motor, plan, compute_delay=True)
     lp = loop(drive=Drive(), sensors=Sensors(), observer=d.observer, compute_delay=True)

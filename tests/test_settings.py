@@ -29,7 +29,7 @@ def test_bad_settings_are_refused(kwargs, match):
 
 @pytest.mark.parametrize("method", C_METHODS + SCIPY_METHODS)
 def test_each_method_runs_on_its_engine_and_is_refused_by_the_other(motor, plan, method):
-    solver = fs.Continuous(method, rtol=1e-8, atol=1e-10, dt_out=1e-3)
+    solver = fs.Continuous(method, rtol=1e-8, atol=1e-10, dt_out=1e-3, max_wall_time=300.0)
     engine, other = ("c", "scipy") if method in C_METHODS else ("scipy", "c")
     if method in C_METHODS and method in SCIPY_METHODS:  # DOP853 is both
         other = None

@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1] / "src" / "flatstep"
 
 #: The layers, lowest first: a package folder (or a top-level module) and its rank.
 LAYERS = {
-    "validate": 0, "errors": 0, "json_out": 0,
+    "validate": 0, "errors": 0, "json_out": 0, "_version": 0,
     "model": 1,
     "plan": 2,
     "control": 3,

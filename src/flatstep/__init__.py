@@ -3,6 +3,7 @@
 The public API, listed in ``__all__`` in the order a move flows through it: model, plan, flat maps, control, loop,
 engine, studies.
 """
+from ._version import __version__ as __version__
 from .control import (
     CONTROLLER_TYPES,
     CascadeFOC,
@@ -36,8 +37,6 @@ from .plan.rest_to_rest import PAPER_PLAN, RestToRest, point_to_point, psi
 from .studies.batch import run_batch, scenario_grid
 from .studies.batch_file import BatchWriteError
 from .studies.scenario import PAPER_SCENARIOS, Scenario
-
-__version__ = "0.1.0"
 
 __all__ = [
     "MotorParams", "PRESETS", "rhs", "Plant", "PlantEffects", "TorqueModel",

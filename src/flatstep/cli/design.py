@@ -4,9 +4,9 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
-from ..control.design import design_gains
 from ..control.smc import SMCGains
 from ..json_out import strict_json
+from ..loop.design import design_gains
 from ..loop.drive import Drive
 from ..loop.reference import DriveLoop
 from ..loop.sensors import Sensors

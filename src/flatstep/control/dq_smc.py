@@ -16,7 +16,7 @@ model the law gives :math:`\dot s_1 = -W_1 s_1/(|s_1| + \epsilon_1)` and
 singularity: no square root, no division by a current, any torque demand is reached through :math:`i_q`.
 With :math:`i_d^* = 0` (the default) every ampere makes torque, and the copper loss is that of the torque the
 move needs. The gains are :class:`~flatstep.control.smc.SMCGains`, from the same
-:func:`~flatstep.control.design.design_gains` (``W1``, ``eps1`` act on :math:`s_1` in amperes as they do on
+:func:`~flatstep.loop.design.design_gains` (``W1``, ``eps1`` act on :math:`s_1` in amperes as they do on
 :math:`\rho`); the detent hold (``hold_damping``) belongs to the paper's law and is refused here.
 
 Integral action on :math:`s_2` (:class:`DQIntegral`, off by default) adds :math:`-k_i z`, :math:`\dot z = s_2`, to

@@ -24,7 +24,7 @@ lags :math:`\theta^*` by the load angle :math:`\arcsin(T/(K_m\rho^*))/N_r` for a
 rings at the stiffness :math:`\sqrt{K_m N_r\rho^*/J}` with only the motor's own damping.
 
 **Tuning.** :math:`\omega_c = \lambda = 0.3/T_s`, the bandwidth of the sliding controller's current-norm loop
-(:func:`flatstep.control.design.design_gains`); the run current is the plan's, the same current norm the sliding
+(:func:`flatstep.loop.design.design_gains`); the run current is the plan's, the same current norm the sliding
 controller holds. Anti-windup: the integrators hold while the bus limits.
 """
 from __future__ import annotations

@@ -1,6 +1,6 @@
 r"""Every controller built for one drive: the sliding controller with its gains, the baselines tuned by rule.
 
-The baselines take their bandwidths from the same design quantities :func:`flatstep.control.design.design_gains`
+The baselines take their bandwidths from the same design quantities :func:`flatstep.loop.design.design_gains`
 uses for the sliding controller on that drive, so that none is faster or slower by choice:
 
 * inner (current) bandwidth :math:`\lambda = 0.3/T_s` (0.15/T_s with a computation delay), the sliding
@@ -25,7 +25,6 @@ from ..plan.loss_aware import LossAwareRho
 from ..plan.protocol import Plan
 from ..validate import check_positive
 from .cascade import CascadeFOC, CascadeGains
-from .design import LAMBDA_TS, LAMBDA_TS_DELAYED, WN_OVER_LAMBDA, XI
 from .dq_smc import DQFlatnessSMC, DQIntegral, DQKmAdaptation
 from .exact_linearization import ExactLinearization, LinearizationGains
 from .microstep import MicrostepGains, Microstepping
@@ -51,6 +50,14 @@ SMC_TYPES = tuple(k for k, s in ALIASES.items() if s.sliding)
 CONTINUOUS_TYPES = tuple(k for k, s in ALIASES.items() if s.continuous)
 #: The types that need a torque model.
 FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
+#: The design rules of flatstep.loop.design (docs/drive.md): the boundary layer's bandwidth times the control period
+#: (halved with a computation delay), the error dynamics' natural frequency over it and their damping, the margin
+#: of the reaching gains over the disturbance bound.
+LAMBDA_TS = 0.3
+LAMBDA_TS_DELAYED = 0.15
+WN_OVER_LAMBDA = 0.25
+XI = 0.9
+W_MARGIN = 2.0
 #: The damping ratio of the ``smc_ff_hold`` type's detent hold when the scenario's gains give none: critical
 #: damping of the magnetic spring (docs/comparison.md, "At rest on the paper's move").
 REST_HOLD_DAMPING = 1.0

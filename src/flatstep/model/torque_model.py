@@ -24,9 +24,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..plan.rest_to_rest import psi
 from ..validate import check_finite, check_integer, check_nonnegative, check_positive
 from .plant import Plant
+from .psi import psi
 
 Array = NDArray[np.float64]
 

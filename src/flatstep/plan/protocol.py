@@ -32,6 +32,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.flat import FlatFlag
+from ..validate import InputError
+from ..validate.checks import short_repr
 
 if TYPE_CHECKING:  # the table is built where a conversion needs it
     from .piecewise import PiecewisePlan
@@ -105,9 +107,9 @@ def check_plan(plan: object) -> None:
     """Raise a ValueError unless ``plan`` satisfies :class:`Plan` (a move every controller can track)."""
     if not isinstance(plan, Plan):
         missing = [name for name in _MEMBERS if not hasattr(plan, name)]
-        raise ValueError(f"plan={plan!r} is not a flatstep plan: it lacks {missing} (a RestToRest from "
-                         "point_to_point, a PiecewisePlan from plan_waypoints or time_optimal, or any object with "
-                         "the members of flatstep.plan.protocol.Plan)")
+        raise InputError("plan", plan, f"plan={short_repr(plan)} is not a flatstep plan: it lacks {missing} (a "
+                         "RestToRest from point_to_point, a PiecewisePlan from plan_waypoints or time_optimal, or any "
+                         "object with the members of flatstep.plan.protocol.Plan)")
 
 
 #: The members of :class:`Plan`, named in :func:`check_plan`'s message.

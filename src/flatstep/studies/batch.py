@@ -258,11 +258,12 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     with ExitStack() as stack:
         sink = None
         if out is not None:
-            from .. import __version__
+            from .. import _version
 
-            fingerprints = [fingerprint(s, engine, keep, __version__) for s in scenarios]
+            version = _version.__version__
+            fingerprints = [fingerprint(s, engine, keep, version) for s in scenarios]
             sink, done = open_batch_file(Path(out), fingerprints, [s.name for s in scenarios], engine, keep,
-                                         __version__, fresh, stack)
+                                         version, fresh, stack)
             rows.update(done)
         todo = [(i, s) for i, s in enumerate(scenarios) if i not in rows]
         given = as_executor(executor) if executor is not None else None

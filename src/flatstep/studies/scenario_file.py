@@ -12,9 +12,9 @@ from functools import partial
 from pathlib import Path
 from typing import Any, Optional, Union
 
-from ..control.design import design_gains
 from ..control.smc import MEASUREMENTS, SMCGains
 from ..control.tuning import CONTROLLER_TYPES
+from ..loop.design import design_gains
 from ..loop.drive import Drive
 from ..loop.observers import Observer
 from ..loop.reference import DriveLoop

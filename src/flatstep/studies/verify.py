@@ -12,7 +12,7 @@ or faulted names the limit that binds where it went wrong (:func:`binding`).
 plan re-planned, at most :data:`ROUNDS` times; then it refuses, naming the limit and what to change.
 
 The controller, when none is given, is :func:`drive_controller`: the flatness + sliding-mode law with the gains and
-the observer of :func:`~flatstep.control.design.design_gains` for the drive. It is the law measured here to track
+the observer of :func:`~flatstep.loop.design.design_gains` for the drive. It is the law measured here to track
 a segment table on the C engine; the other laws refuse a :class:`~flatstep.plan.piecewise.PiecewisePlan` there.
 """
 from __future__ import annotations
@@ -27,11 +27,11 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
-from ..control.design import design_gains
 from ..control.protocol import Controller
 from ..control.smc import FlatnessSMC
 from ..engine.simulate import simulate
 from ..errors import RunError
+from ..loop.design import design_gains
 from ..loop.drive import Drive
 from ..loop.reference import DriveLoop
 from ..loop.sensors import Sensors
@@ -137,7 +137,7 @@ def drive_controller(motor: MotorParams, plan: PiecewisePlan, loop: DriveLoop,
                      uncertainty: float = 0.1) -> tuple[Controller, DriveLoop]:
     """The flatness + sliding-mode law with gains and observer designed for this drive, and the loop with it.
 
-    :func:`~flatstep.control.design.design_gains` for the loop's control period, bus, encoder and ADC step and
+    :func:`~flatstep.loop.design.design_gains` for the loop's control period, bus, encoder and ADC step and
     the uncertainty; the controller measures through the designed observer (the loop's own observer, if it has
     one, is kept).
     """

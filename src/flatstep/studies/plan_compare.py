@@ -8,9 +8,9 @@ what the torque angle's cap asks for, :meth:`~flatstep.plan.limits.MotorLimits.a
 ``v_use`` = :data:`V_USE` of the bus (the headroom the drive's feedback needs at speed: at 20 kHz it carries up to
 0.06 A more than planned, whose reactance takes about 2 V at the top speed; docs/planning.md). Every plan is
 tracked on the 20 kHz drive (bus, 14-bit encoder, 12-bit current ADC, observer, gains of
-:func:`~flatstep.control.design.design_gains`). Run::
+:func:`~flatstep.loop.design.design_gains`). Run::
 
-    python -m flatstep.plan.compare --out docs/figures
+    python -m flatstep.studies.plan_compare --out docs/figures
 
 It prints the tables of docs/planning.md and writes ``planning_compare.png`` and ``planning_compare.json``.
 """
@@ -26,10 +26,10 @@ from typing import Any, Optional, Sequence, cast
 import numpy as np
 
 from ..model.motor import PRESETS, MotorParams
-from .baselines import KINDS, best_baseline, ruckig_duration
-from .limits import MotorLimits, plan_margins
-from .piecewise import PiecewisePlan
-from .time_optimal import bang_bang_time, time_optimal
+from ..plan.baselines import KINDS, best_baseline, ruckig_duration
+from ..plan.limits import MotorLimits, plan_margins
+from ..plan.piecewise import PiecewisePlan
+from ..plan.time_optimal import bang_bang_time, time_optimal
 
 DISTANCES = (0.1, 0.3, 1.0, 2.0, 5.0, 10.0, 20.0)
 SEQUENCE = (0.0, 2.0, 5.0, 4.0, 10.0, 0.5, 1.0, -3.0, 6.0, 6.5)
@@ -46,9 +46,9 @@ BASELINE_TORQUE_ANGLE = 1.2
 
 def track(plan: PiecewisePlan, motor: MotorParams, v_bus: float) -> dict[str, float]:
     """The plan on the 20 kHz drive: max |theta - theta*|, peak phase voltage, share of saturated periods, loss."""
-    from ..control.design import design_gains
     from ..control.smc import FlatnessSMC
     from ..engine.simulate import simulate
+    from ..loop.design import design_gains
     from ..loop.drive import Drive
     from ..loop.reference import DriveLoop
     from ..loop.sensors import Sensors
@@ -170,7 +170,7 @@ def plot(results: dict[str, list[dict[str, Any]]], path: Path) -> None:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Run the comparison (module docstring)."""
-    parser = argparse.ArgumentParser(prog="python -m flatstep.plan.compare", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m flatstep.studies.plan_compare", description=__doc__.split("\n")[0])
     parser.add_argument("--out", default="docs/figures", help="where the figure and the JSON go")
     parser.add_argument("--i-run", type=float, default=I_RUN,
                         help=f"flatstep's across-axis current at speed [A] (default {I_RUN:g})")

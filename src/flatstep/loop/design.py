@@ -31,18 +31,13 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ..loop.observers import Observer
+from ..control.smc import SMCGains
+from ..control.tuning import LAMBDA_TS, LAMBDA_TS_DELAYED, W_MARGIN, WN_OVER_LAMBDA, XI
 from ..model.motor import MotorParams
 from ..plan.feasibility import check_feasibility
 from ..plan.protocol import Plan
 from ..validate import check_bool, check_count, check_quantity
-from .smc import SMCGains
-
-LAMBDA_TS = 0.3
-LAMBDA_TS_DELAYED = 0.15
-WN_OVER_LAMBDA = 0.25
-XI = 0.9
-W_MARGIN = 2.0
+from .observers import Observer
 
 
 @dataclass(frozen=True)
