@@ -108,11 +108,13 @@ size_t to_envelope(const struct motor_params *m, const struct to_limits *lim, fs
     }
     w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);
     w->am[TO_GRID - 1] = fs_min(w->am[TO_GRID - 1], FS_C(1e-12) * w->am[0]);  // and left: braking at B = 0 is 0 there
-    // the floor underflowed (a+(0) below 5e-312 rad/s^2), an acceleration is NaN, speed-up or braking is 0 or less
-    // inside (a low bus fraction with little friction), or the top speed is 0 (a speed cap that underflowed): no
-    // envelope to integrate (its times would divide by 0 or run backwards)
+    // the floor underflowed (a+(0) below 5e-312 rad/s^2), an acceleration is NaN, speed-up or braking is 0 inside
+    // (a low bus fraction with little friction), or the top speed is 0 (a speed cap that underflowed): no envelope
+    // to integrate (its times would divide by 0). A speed-up a little below 0 next to the top speed (the grid
+    // straddling where it crosses 0) is integrated as the reference integrates it; a phase that runs backwards
+    // is refused by to_bang_bang.
     for (i = 0; i < TO_GRID; i++)
-        if (!(w->ap[i] > 0 && w->am[i] < 0))
+        if (!(fs_isfinite(w->ap[i]) && fs_isfinite(w->am[i]) && w->ap[i] != 0 && w->am[i] != 0))
             return 0;
     if (!(w->omega[TO_GRID - 1] > 0))
         return 0;
