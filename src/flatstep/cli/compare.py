@@ -143,6 +143,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         raise ValueError(f"--scales {args.scales!r} sweeps the baselines' bandwidth, and --controllers "
                          f"{args.controllers!r} names none: add one of "
                          f"{[k for k in CONTROLLER_TYPES if k not in SMC_TYPES]}, or drop --scales")
+    scales = _scales(args.scales) if args.scales else []
     try:
         check_calibrate(mode, scenario, kinds)
     except ValueError as exc:
@@ -172,8 +173,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                     for p, u in zip(_plant_names(scenario, study), units, strict=True)],
                                 "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"],
                                               "statuses": v["statuses"]} for k, v in worst.items()}}
-    if args.scales:
-        scales = _scales(args.scales)
+    if scales:
         baselines = [k for k in kinds if k not in SMC_TYPES]
         calibrated = mode if any(k in FEEDFORWARD_TYPES for k in baselines) else None  # cascade_ff, cascade_model
         sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,

@@ -55,8 +55,8 @@ def check_units(rec: Recording) -> None:
         peak = max(float(np.max(np.abs(getattr(rec, a)))), float(np.max(np.abs(getattr(rec, b)))))
         high = QUANTITIES[kind].high
         if peak > high:
-            cols = f"columns {a!r}, {b!r}" if a != b else f"column {a!r}"
-            raise ValueError(f"{rec.source}: {cols} reach {peak:.6g} {unit}, beyond the {high:g} {unit} flatstep "
+            cols = f"columns {a!r}, {b!r} reach" if a != b else f"column {a!r} reaches"
+            raise ValueError(f"{rec.source}: {cols} {peak:.6g} {unit}, beyond the {high:g} {unit} flatstep "
                              f"accepts ({QUANTITIES[kind].why}): {question}")
 
 
@@ -95,8 +95,11 @@ def check_estimates(estimates: Mapping[str, float], intervals: Mapping[str, tupl
             continue  # negative within the noise: clipped to 0 where it is written
         if not q.contains(value):
             side = "above" if value > q.high else "below"
+            why = UNITS_HINT if not (name == "Km" and value < 0) else (
+                "a negative back-emf constant is the angle's zero half an electrical period off (theta = 0 must be "
+                "where phase a's current aligns the rotor) or the phases' polarity reversed")
             raise ValueError(f"{source}: {name} = {value:.6g} {q.unit} is {side} the range flatstep accepts, "
-                             f"{q.describe()} ({q.why}); not a motor this recording can describe: {UNITS_HINT}")
+                             f"{q.describe()} ({q.why}); not a motor this recording can describe: {why}")
 
 
 def check_noise_share(share: Mapping[str, float], source: str) -> None:
