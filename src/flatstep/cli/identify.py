@@ -39,7 +39,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _identify(args: argparse.Namespace, data: Any, truth: Optional[MotorParams] = None) -> int:
-    """Identify ``data``, print the table (or JSON), warn of its flags and write ``--out``."""
+    """Identify ``data``, print the table (or JSON), warn of its flags and write ``--out``; 2 if flagged."""
     from ..studies.identify import identify  # scipy.signal: imported when used, so that other commands start fast
 
     result = identify(data, Nr=args.nr if args.nr is not None else (truth.Nr if truth else 50), **_options(args))
@@ -58,7 +58,7 @@ def _identify(args: argparse.Namespace, data: Any, truth: Optional[MotorParams] 
         Path(args.out).write_text(result.as_toml())
         if not args.json:
             print(f"wrote {args.out}")
-    return 0
+    return EXIT_REFUSED if result.flags else 0  # flagged: printed and written (with the flags), but not fine
 
 
 def _accuracy(args: argparse.Namespace) -> int:

@@ -21,7 +21,9 @@ of :mod:`flatstep.studies.identify`), which averages out the encoder's quantizat
 are those where the filtered speed exceeds :data:`MOVING_FRACTION` of the peak. :math:`K_m` itself, which turns
 the current coefficients into torques, comes from the electrical equations of the same recording (the back EMF,
 :func:`flatstep.studies.identify`'s electrical fit), not from the controller's nominal model, so that the table
-holds torques in N m that stay true when the nominal :math:`K_m` is off.
+holds torques in N m that stay true when the nominal :math:`K_m` is off. A fit the recording cannot support is
+refused (:mod:`.identify_checks`: the current noise's share, the estimates' ranges), and so is a back-EMF
+:math:`K_m` more than :data:`KM_MODEL_FACTOR` from the model's, with which the move ran as planned.
 
 **The result** is a :class:`~flatstep.model.torque_model.TorqueModel`, written as the scenario file's
 ``[feedforward]`` table (:meth:`Calibration.as_toml`, :func:`merged_scenario`), which the ``_ff`` controller types

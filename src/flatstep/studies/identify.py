@@ -38,6 +38,11 @@ estimated from the high-pass part of the raw equations' residual in the periods 
 absolute deviation), in :data:`NOISE_ITERATIONS` rounds. In closed loop the controller's feedback also correlates
 the noise with the true currents, which this does not model: docs/identification.md shows what it gains and where
 it over-corrects.
+
+**What the data cannot support** is refused, and what is atypical of a stepping motor flagged
+(:mod:`.identify_checks`): values beyond any motor's in the recording's units (before the fit), the current
+noise's share of the R and L regressors, estimates outside their ranges, a fitted R far from the raw
+``sum(v i) / sum(i^2)``.
 """
 from __future__ import annotations
 
