@@ -12,13 +12,13 @@ from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, LABELS, SMC_TY
 from ..json_out import strict_json
 from ..studies.calibrate import calibration_horizon
 from ..studies.compare import bandwidth_sweep, check_calibrate, compare, compare_worst, default_band, scenario_kinds
-from ..studies.robustness import encoder_count, plant_errors
+from ..studies.robustness import encoder_count, perturbed, plant_errors
 from ..studies.scenario import Scenario
 from ..studies.scenario_file import Robustness, load_scenario
-from ..validate import check_quantity
+from ..validate import InputError, check_quantity
 from ..validate.limits import check_study, estimate
 from .flags import count, out_dir, quantity
-from .status import exit_code, warn
+from .status import EXIT_STOPPED, exit_code, warn
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)
 COLUMNS: tuple[tuple[str, str, float | Literal["angle"]], ...] = (
@@ -113,6 +113,11 @@ def _check_work(scenario: Scenario, study: Optional[Robustness], kinds: Sequence
                 + (" with each calibrated" if args.calibrate_each else ""))
 
 
+def _plant_names(scenario: Scenario, study: Robustness) -> list[str]:
+    """The name of each plant of the study's calibrations, in order (those of :func:`compare_worst`)."""
+    return [p.name for p in perturbed(scenario, plant_errors(study), "/calibration")]
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
     scenario, study = load_scenario(args.scenario)
@@ -120,6 +125,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
         scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None)
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
+    if args.samples is not None and (study is None or args.no_robustness):
+        why = "--no-robustness skips it" if args.no_robustness else f"{args.scenario} has no [robustness] table"
+        raise InputError("--samples", args.samples, f"--samples {args.samples} sets the plants of the [robustness] "
+                         f"study, and {why}: drop --samples")
     mode = "each" if args.calibrate_each else None
     every = CONTROLLER_TYPES if mode == "each" else scenario_kinds(scenario)  # each unit brings its own table
     kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else every
@@ -134,6 +143,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         raise ValueError(f"--scales {args.scales!r} sweeps the baselines' bandwidth, and --controllers "
                          f"{args.controllers!r} names none: add one of "
                          f"{[k for k in CONTROLLER_TYPES if k not in SMC_TYPES]}, or drop --scales")
+    scales = _scales(args.scales) if args.scales else []
     try:
         check_calibrate(mode, scenario, kinds)
     except ValueError as exc:
@@ -145,9 +155,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     log(f"{len(nominal)} controllers on the scenario's plant{', calibrated on its drive' if mode else ''}")
     report: dict[str, Any] = {"scenario": scenario.name, "band_rad": band, "count_rad": count, "calibrate": mode,
                               "controllers": {k: {"label": LABELS[k], "metrics": v["metrics"], "faults": v["faults"],
-                                                  "status": v["status"], "lost_at": v["lost_at"],
-                                                  "gains": v["result"].meta["gains"],
-                                                  "engine": v["result"].meta["engine"]} for k, v in nominal.items()}}
+                                                  "status": v["status"], "lost_at": v["lost_at"], "error": v["error"],
+                                                  "gains": v["result"].meta["gains"] if v["result"] else None,
+                                                  "engine": v["result"].meta["engine"] if v["result"] else None}
+                                              for k, v in nominal.items()}}
     worst = None
     if study is not None and not args.no_robustness:
         study = replace(study, samples=args.samples) if args.samples is not None else study
@@ -158,11 +169,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                 "plants": len(next(iter(worst.values()))["rows"]), "calibrate": mode,
                                 "calibrations": None if units is None else [
                                     {"plant": u.source, "feedforward": u.torques.as_dict(), "Km": u.estimates["Km"]}
-                                    for u in units],
+                                    if not isinstance(u, str) else {"plant": p, "error": u}
+                                    for p, u in zip(_plant_names(scenario, study), units, strict=True)],
                                 "worst": {k: {"metrics": v["worst"], "failed": v["failed"], "failures": v["failures"],
                                               "statuses": v["statuses"]} for k, v in worst.items()}}
-    if args.scales:
-        scales = _scales(args.scales)
+    if scales:
         baselines = [k for k in kinds if k not in SMC_TYPES]
         calibrated = mode if any(k in FEEDFORWARD_TYPES for k in baselines) else None  # cascade_ff, cascade_model
         sweep = bandwidth_sweep(scenario, baselines, scales, study=study if worst is not None else None, band=band,
@@ -172,7 +183,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         from .plots_compare import plot_overlay, plot_plants
 
         out = out_dir(args.out)
-        plot_overlay({LABELS[k]: v["result"] for k, v in nominal.items()}, scenario.plan, count,
+        plot_overlay({LABELS[k]: v["result"] for k, v in nominal.items() if v["result"] is not None}, scenario.plan,
+                     count,
                      title=f"{scenario.name}: every controller on the scenario's plant", path=out / "overlay.png")
         if worst is not None:
             plot_plants(worst, LABELS, scenario.plan, count, path=out / "plants.png",
@@ -182,17 +194,22 @@ def cmd_compare(args: argparse.Namespace) -> int:
     statuses = [v["status"] for v in nominal.values()]
     if worst is not None:
         statuses += [s for v in worst.values() for s, n in v["statuses"].items() for _ in range(n)]
-    code = exit_code(statuses)
+    failed = sum(v["error"] is not None for v in nominal.values()) + (
+        sum(v["failed"] for v in worst.values()) if worst is not None else 0)
+    code = EXIT_STOPPED if failed else exit_code(statuses)  # a row without a result is the worst outcome
     if args.json:
         print(strict_json(report, indent=2))
         return code
     print(f"{scenario.name}: the scenario's plant (settling band {band:.3g} rad)"
           + (", calibrated on its own drive" if mode else ""))
-    rows = {k: v["metrics"] for k, v in nominal.items()}
+    rows = {k: v["metrics"] for k, v in nominal.items() if v["metrics"] is not None}
     print(table(rows, count))
     print("status: " + ", ".join(f"{LABELS[k]} {v['status']}" for k, v in nominal.items()))
     for kind, v in nominal.items():
-        warn(LABELS[kind], {"status": v["status"], "lost_at": v["lost_at"], "controller_faults": v["faults"]})
+        if v["error"] is not None:
+            print(f"flatstep: warning: {LABELS[kind]}: did not run: {v['error']}", file=sys.stderr)
+        else:
+            warn(LABELS[kind], {"status": v["status"], "lost_at": v["lost_at"], "controller_faults": v["faults"]})
     line = _target_line(rows, count)
     if worst is not None:
         r = report["robustness"]
@@ -202,10 +219,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(table(rows, count))
         print("status over the plants: " + ", ".join(
             f"{LABELS[k]} {v['statuses']['ok']} ok/{v['statuses']['lost']} lost/{v['statuses']['fault']} faulted"
-            for k, v in worst.items()))
+            + (f"/{v['failed']} failed" if v["failed"] else "") for k, v in worst.items()))
         for kind, v in worst.items():
             if v["failed"]:
-                print(f"warning: {LABELS[kind]}: {v['failed']} of {v['runs']} runs failed: {v['failures'][0]}")
+                print(f"flatstep: warning: {LABELS[kind]}: {v['failed']} of {v['runs']} plants have no result: "
+                      f"{v['failures'][0]}", file=sys.stderr)
             if v["statuses"]["lost"] or v["statuses"]["fault"]:
                 print(f"flatstep: warning: {LABELS[kind]}: {v['statuses']['lost']} of {v['runs']} plants lost the "
                       f"move, {v['statuses']['fault']} faulted", file=sys.stderr)
@@ -215,7 +233,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(f"\nbaselines with every bandwidth scaled ({where}): max error during the move, peak voltage")
         for s, res in report["bandwidth_sweep"].items():
             print(f"  x{float(s):<5g}" + "".join(f"{LABELS[k]:>24}: {_cell(m['move_max'], 'angle', count).strip():>8}"
-                                                 f" {m['peak_voltage']:6.3g} V" for k, m in res.items()))
+                                                 f" {m['peak_voltage']:6.3g} V" if m else f"{LABELS[k]:>24}: no result"
+                                                 for k, m in res.items()))
     if line:
         print("\n" + line)
     return code

@@ -90,7 +90,8 @@ def plot_plants(study: dict[str, dict[str, Any]], labels: dict[str, str], plan: 
         worst = s["worst"].get("move_max", np.nan) if s["worst"] else np.nan
         st = s["statuses"]
         ax.set_title(f"{labels.get(kind, kind)}: {st['ok']}/{s['runs']} runs ok, {st['lost']} lost their move, "
-                     f"{st['fault']} faulted; worst max error during the move {worst / scale:.3g} {unit}", fontsize=10)
+                     f"{st['fault']} faulted" + (f", {s['failed']} without a result" if s["failed"] else "")
+                     + f"; worst max error during the move {worst / scale:.3g} {unit}", fontsize=10)
         ax.set_ylabel(rf"$\theta - \theta^*$ [{unit}]")
         ax.grid(True, alpha=0.3)
     if count:

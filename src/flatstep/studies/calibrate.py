@@ -21,7 +21,9 @@ of :mod:`flatstep.studies.identify`), which averages out the encoder's quantizat
 are those where the filtered speed exceeds :data:`MOVING_FRACTION` of the peak. :math:`K_m` itself, which turns
 the current coefficients into torques, comes from the electrical equations of the same recording (the back EMF,
 :func:`flatstep.studies.identify`'s electrical fit), not from the controller's nominal model, so that the table
-holds torques in N m that stay true when the nominal :math:`K_m` is off.
+holds torques in N m that stay true when the nominal :math:`K_m` is off. A fit the recording cannot support is
+refused (:mod:`.identify_checks`: the current noise's share, the estimates' ranges), and so is a back-EMF
+:math:`K_m` more than :data:`KM_MODEL_FACTOR` from the model's, with which the move ran as planned.
 
 **The result** is a :class:`~flatstep.model.torque_model.TorqueModel`, written as the scenario file's
 ``[feedforward]`` table (:meth:`Calibration.as_toml`, :func:`merged_scenario`), which the ``_ff`` controller types
@@ -30,19 +32,31 @@ and the cascade's anti-cogging read.
 from __future__ import annotations
 
 import math
-import re
+import sys
 from dataclasses import dataclass, replace
+from statistics import NormalDist
 from typing import Any
 
 import numpy as np
+import tomlkit
+import tomlkit.exceptions
+import tomlkit.items
 from scipy.signal import butter, sosfiltfilt
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, bandwidths
 from ..engine.simulate import simulate
 from ..model.torque_model import TorqueModel
 from ..plan.rest_to_rest import RestToRest, psi
-from ..validate import check_count, check_integer, check_nonnegative, check_positive
+from ..validate import InputError, check_count, check_integer, check_nonnegative, check_positive
+from ..validate.limits import MIN_PERIODS_PER_MOVE
+from ..validate.ranges import QUANTITIES
 from .identify import _electrical
+from .identify_checks import check_estimates, check_noise_share
 from .identify_ls import Fit, fit
 from .record import Recording, recording_from_result
 from .scenario import Scenario
@@ -55,6 +69,8 @@ DETENT_FRACTION_OF_WN = 0.25
 CUTOFF_OVER_DETENT = 4.0
 #: The electrical fit's cutoff [Hz] (that of :func:`flatstep.studies.identify.identify`).
 ELECTRICAL_CUTOFF = 200.0
+#: How far the back-EMF Km may be from the model's that ran the move (a factor either way).
+KM_MODEL_FACTOR = 2.0
 #: Rest before and after each move [s].
 REST = 0.05
 #: The controller types a calibration may run: any that needs no torque model.
@@ -132,7 +148,16 @@ def _move(scenario: Scenario, periods: int, peak_speed: float | None, h: int) ->
         peak_speed = DETENT_FRACTION_OF_WN * wn / (h * motor.Nr)
     peak_speed = check_positive("peak_speed", peak_speed, unit=" rad/s")
     distance = periods * 2.0 * math.pi / (h * motor.Nr)
-    return peak_speed, distance, _PSI_PEAK * distance / peak_speed
+    duration = _PSI_PEAK * distance / peak_speed
+    shortest = MIN_PERIODS_PER_MOVE * loop.control_period
+    longest = QUANTITIES["time"].high / 4.0  # both moves with their rests within the time range
+    if not shortest <= duration <= longest:
+        raise InputError("peak_speed", peak_speed, f"peak_speed={peak_speed!r} rad/s makes the calibration move "
+                         f"({periods} detent periods, {distance:.4g} rad) last {duration:.4g} s; it must last from "
+                         f"{shortest:.4g} s ({MIN_PERIODS_PER_MOVE} control periods) to {longest:.4g} s: give a peak "
+                         f"speed from {_PSI_PEAK * distance / longest:.4g} to {_PSI_PEAK * distance / shortest:.4g} "
+                         "rad/s, or leave the default")
+    return peak_speed, distance, duration
 
 
 def calibration_horizon(scenario: Scenario, *, periods: int = 16, peak_speed: float | None = None,
@@ -250,11 +275,18 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
                                   detent_harmonic=detent_harmonic, current_noise=current_noise)
     Nr, h = scenario.motor.Nr, int(detent_harmonic)
     mech, fc = _torque_fit(rec, Nr, h, peak)
-    elec = _electrical(rec, Nr, ELECTRICAL_CUTOFF, True, True)
+    elec, share = _electrical(rec, Nr, ELECTRICAL_CUTOFF, True, True)
+    check_noise_share(share, rec.source)
     km, var_km = float(elec.values[2]), float(elec.covariance[2, 2])
     if not km > 0:
         raise ValueError(f"{rec.source}: the back EMF gives Km = {km!r} V s/rad; a calibration needs Km > 0 (does the "
                          "rotor move? raise peak_speed)")
+    model = scenario.motor.Km
+    if not 1.0 / KM_MODEL_FACTOR <= km / model <= KM_MODEL_FACTOR:
+        raise ValueError(f"{rec.source}: the back EMF gives Km = {km:.6g} V s/rad, {km / model:.3g} times the "
+                         f"model's {model:.6g} V s/rad with which the move ran as planned (at most a factor "
+                         f"{KM_MODEL_FACTOR:g} either way): the recording contradicts the model; check the current "
+                         "sensing (noise, range) and Nr")
     p = km * mech.values
     cov = km**2 * mech.covariance + np.outer(mech.values, mech.values) * var_km  # Km's variance too (delta method)
     v = dict(zip(mech.names, p, strict=True))
@@ -267,6 +299,9 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     std = {k: math.sqrt(max(float(cov[i, i]), 0.0)) for i, k in enumerate(mech.names) if not k.startswith("detent")}
     std.update(Km=math.sqrt(max(var_km, 0.0)), detent_torque=math.sqrt(max(float(g_amp @ sub @ g_amp), 0.0)),
                detent_phase=math.sqrt(max(float(g_phase @ sub @ g_phase), 0.0)))
+    z = NormalDist().inv_cdf(0.975)
+    check_estimates({k: v for k, v in estimates.items() if k != "detent_phase"},
+                    {k: (estimates[k] - z * std[k], estimates[k] + z * std[k]) for k in estimates}, rec.source, 0.95)
     torques = TorqueModel(detent_torque=amp, detent_harmonic=h, detent_phase=estimates["detent_phase"],
                           coulomb_torque=max(estimates["coulomb_torque"], 0.0), coulomb_speed=coulomb_speed,
                           load=estimates["load"])
@@ -275,21 +310,61 @@ def calibrate(scenario: Scenario, *, controller: str = "cascade", periods: int =
     return Calibration(torques=torques, estimates=estimates, std=std, settings=settings, source=scenario.name)
 
 
+def _trailing_comments(body: list[tuple[Any, Any]]) -> None:
+    """Drop the comment lines at the end of a TOML container's ``body`` (those right above the next table).
+
+    A table's last items hold the comments written above the table that follows it; a nested table or an array of
+    tables at the end holds them in its own last table.
+    """
+    while body:
+        key, item = body[-1]
+        if isinstance(item, tomlkit.items.Table) and not (key is not None and key.is_dotted()):
+            body = item.value.body
+        elif isinstance(item, tomlkit.items.AoT) and item.body:
+            body = item.body[-1].value.body
+        else:
+            break
+    while body and body[-1][0] is None and isinstance(body[-1][1], tomlkit.items.Comment):
+        body.pop()
+
+
 def merged_scenario(text: str, calibration: Calibration) -> str:
     """A scenario file's ``text`` with its ``[feedforward]`` table replaced by the calibrated one (or it appended).
 
-    The comment lines right above the old table go with it (they described it).
+    The file is edited as TOML (:mod:`tomlkit`, which keeps every other key, comment and blank line as written),
+    whichever way the old table is spelled: a table ``[feedforward]`` (or ``[ feedforward ]``), an inline table
+    ``feedforward = {...}``, or dotted keys ``feedforward.load = ...``. Its keys and the comments inside it go; so do
+    the comment lines right above a ``[feedforward]`` header (they described it), while the comment lines at its
+    end, above the next table, stay with that table. The calibrated table is appended at the end of the file.
+
+    Raises
+    ------
+    ValueError
+        ``text`` is not TOML (the message names the line), or the result would not read back with the calibrated
+        table (which would be a flaw of this function: nothing is written then).
     """
-    lines = text.splitlines()
-    heads = [i for i, line in enumerate(lines) if re.match(r"\s*\[[^\]]+\]\s*(#.*)?$", line)]
-    ff = [i for i in heads if lines[i].strip().startswith("[feedforward]")]
-    if ff:
-        start = ff[0]
-        while start > 0 and lines[start - 1].lstrip().startswith("#"):
-            start -= 1
-        end = next((i for i in heads if i > ff[0]), len(lines))
-        while end > ff[0] + 1 and lines[end - 1].lstrip().startswith("#"):  # the next table's own comment
-            end -= 1
-        lines = lines[:start] + lines[end:]
-    kept = "\n".join(lines).rstrip("\n")
-    return f"{kept}\n\n{calibration.as_toml()}"
+    try:
+        doc = tomlkit.parse(text)
+    except tomlkit.exceptions.ParseError as exc:
+        raise ValueError(f"the scenario file is not TOML: {exc}") from None
+    kept: list[tuple[Any, Any]] = []
+    for key, item in doc.body:
+        if key is None or key.key != "feedforward":
+            kept.append((key, item))
+            continue
+        if isinstance(item, tomlkit.items.Table) and not key.is_dotted():  # a [feedforward] header
+            _trailing_comments(kept)
+            body = item.value.body
+            cut = len(body)
+            while cut > 0 and body[cut - 1][0] is None and isinstance(
+                    body[cut - 1][1], (tomlkit.items.Comment, tomlkit.items.Whitespace)):
+                cut -= 1
+            while cut < len(body) and isinstance(body[cut][1], tomlkit.items.Whitespace):
+                cut += 1  # the blank line above the old table's header stays, this one would double it
+            kept += body[cut:]  # the next table's own comments
+    doc.body[:] = kept
+    merged = f"{doc.as_string().rstrip()}\n\n{calibration.as_toml()}"
+    read = tomllib.loads(merged).get("feedforward")
+    if read != tomllib.loads(calibration.as_toml())["feedforward"]:
+        raise ValueError(f"merging the calibrated [feedforward] table gave {read!r}, not the calibrated table")
+    return merged

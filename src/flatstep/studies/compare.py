@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SMC_TYPES
 from ..engine.result import STATUSES, SimResult
+from ..errors import RunError
 from ..plan.protocol import Plan
 from .batch import run_batch
 from .calibrate import Calibration, check_drive
@@ -43,6 +44,8 @@ KEEP = ("t", "theta_error", "ia", "ib", "va", "vb")
 #: scenario's ``[feedforward]`` table and nominal model on every plant; ``"each"``, each plant calibrated on its
 #: own drive (:func:`unit_scenario`).
 CALIBRATE_MODES = (None, "each")
+#: The status of a row that did not run because its plant's calibration failed (``calibrate="each"``).
+CALIBRATION_FAILED = "calibration_failed"
 
 
 def _trapezoid(f: NDArray[np.float64], t: NDArray[np.float64]) -> float:
@@ -130,23 +133,38 @@ def check_calibrate(calibrate: Optional[str], scenario: Scenario, kinds: Sequenc
     return calibrate
 
 
-def unit_scenario(scenario: Scenario, calibration: Calibration) -> Scenario:
+def unit_scenario(scenario: Scenario, calibration: Calibration, **changes: Any) -> Scenario:
     """``scenario`` run by a drive that calibrated its own motor (its table and back-EMF ``Km``).
 
     The calibrated ``[feedforward]`` table replaces the scenario's, and the calibration's back-EMF ``Km`` the
     model's (the law's maps, the observer's model, the cascade's q current and back EMF). The plant is unchanged; so
-    are the scenario's SMC gains (designed for the model's uncertainty, not its values).
+    are the scenario's SMC gains (designed for the model's uncertainty, not its values). ``changes`` are further
+    fields set in the same step (``controller_type``: a type that reads a calibration may be set here on a scenario
+    that has no ``[feedforward]`` of its own).
     """
     return replace(scenario, torques=calibration.torques,
-                   motor=scenario.motor.replace(Km=calibration.estimates["Km"]))
+                   motor=scenario.motor.replace(Km=calibration.estimates["Km"]), **changes)
 
 
-def calibrate_units(scenarios: Sequence[Scenario]) -> list[Calibration]:
+def calibrate_units(scenarios: Sequence[Scenario]) -> list[Calibration | str]:
     """Each scenario's plant calibrated on its own drive (the nominal model running the move).
 
-    One :func:`~flatstep.studies.calibrate.calibrate` per scenario, in order.
+    One :func:`~flatstep.studies.calibrate.calibrate` per scenario, in order; a calibration that fails (its move
+    lost or faulted, its fit refused, its run stopped) gives the reason instead, so that the other plants go on.
     """
-    return [calibrate_unit(sc) for sc in scenarios]
+    out: list[Calibration | str] = []
+    for sc in scenarios:
+        try:
+            out.append(calibrate_unit(sc))
+        except (ValueError, RunError) as exc:
+            out.append(f"calibration failed: {exc}")
+    return out
+
+
+def _uncalibrated(scenario: Scenario, reason: str) -> dict[str, Any]:
+    """A batch row for a run that did not happen because its plant's calibration failed (status and error)."""
+    return {"name": scenario.name, "status": CALIBRATION_FAILED, "error": reason, "lost_at": None,
+            "controller_faults": 0}
 
 
 def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band: Optional[float] = None,
@@ -155,8 +173,9 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
     """Run each controller type on the scenario (its plant, drive, sensors, observer, load and effects).
 
     With ``calibrate="each"`` the types that read a calibration run with the scenario's plant calibrated on its
-    drive (:func:`unit_scenario`). Returns ``{kind: {"metrics": ..., "result": SimResult, "faults": n,
-    "status": ..., "lost_at": ...}}``.
+    drive (:func:`unit_scenario`; the scenario needs no ``[feedforward]`` of its own). Returns ``{kind: {"metrics":
+    ..., "result": SimResult, "faults": n, "status": ..., "lost_at": ..., "error": None}}``; if the calibration
+    fails, those types get ``"status": CALIBRATION_FAILED``, the reason in ``"error"``, and no metrics or result.
     """
     band = default_band(scenario) if band is None else band
     kinds = _check_kinds(kinds)
@@ -164,13 +183,19 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
     unit = calibrate_units([scenario])[0] if mode == "each" else None
     out: dict[str, dict[str, Any]] = {}
     for kind in kinds:
-        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind not in SMC_TYPES else 1.0)
+        scale = bandwidth_scale if kind not in SMC_TYPES else 1.0
         if unit is not None and kind in FEEDFORWARD_TYPES:
-            sc = unit_scenario(sc, unit)
+            if isinstance(unit, str):
+                out[kind] = {"metrics": None, "result": None, "faults": 0, "status": CALIBRATION_FAILED,
+                             "lost_at": None, "error": unit}
+                continue
+            sc = unit_scenario(scenario, unit, controller_type=kind, bandwidth_scale=scale)
+        else:
+            sc = replace(scenario, controller_type=kind, bandwidth_scale=scale)
         r = sc.run(engine)
         out[kind] = {"metrics": result_metrics(r, scenario.plan, band=band, R=scenario.simulated_plant.motor.R),
                      "result": r, "faults": int(r.meta.get("controller_faults", 0)), "status": r.status,
-                     "lost_at": r.lost_at}
+                     "lost_at": r.lost_at, "error": None}
     return out
 
 
@@ -196,26 +221,38 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
 
     Returns per kind the worst of each metric over the plants (``"worst"``), the failed runs, the rows with
     the series of :data:`KEEP` for figures, and ``"calibrations"`` (one per plant, or ``None`` for a type that
-    read none). ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch` (``engine``, ``workers``,
-    ...); ``log`` is told when the calibrations and each controller's batch are done.
+    read none). A plant whose calibration failed gives the types that read it a row with status
+    :data:`CALIBRATION_FAILED` and the reason in ``error`` (counted in ``failed``, and in ``statuses``); its
+    calibration is the reason (a ``str``) in ``"calibrations"``. ``batch_options`` go to
+    :func:`~flatstep.studies.batch.run_batch` (``engine``, ``workers``, ...); ``log`` is told when the calibrations
+    and each controller's batch are done.
     """
     band = default_band(scenario) if band is None else band
     kinds = _check_kinds(kinds)
     mode = check_calibrate(calibrate, scenario, kinds)
     errors = plant_errors(study)
-    units: Optional[list[Calibration]] = None
+    units: Optional[list[Calibration | str]] = None
     out: dict[str, dict[str, Any]] = {}
     for kind in kinds:
-        sc = replace(scenario, controller_type=kind, bandwidth_scale=bandwidth_scale if kind not in SMC_TYPES else 1.0)
-        runs = perturbed(sc, errors, f"/{kind}")
+        scale = bandwidth_scale if kind not in SMC_TYPES else 1.0
         calibrated = mode == "each" and kind in FEEDFORWARD_TYPES
         if calibrated:
             if units is None:
                 units = calibrate_units(perturbed(scenario, errors, "/calibration"))
                 if log is not None:
-                    log(f"{len(units)} plants calibrated, each on its own drive")
-            runs = [unit_scenario(run, unit) for run, unit in zip(runs, units, strict=True)]
-        rows = run_batch(runs, keep=KEEP, **batch_options)
+                    lost = sum(isinstance(u, str) for u in units)
+                    log(f"{len(units)} plants calibrated, each on its own drive"
+                        + (f"; {lost} calibrations failed" if lost else ""))
+            plants = perturbed(scenario, errors, f"/{kind}")  # the type is set with the table it needs
+            runs = [p if isinstance(u, str) else unit_scenario(p, u, controller_type=kind, bandwidth_scale=scale)
+                    for p, u in zip(plants, units, strict=True)]
+            todo = [r for r, u in zip(runs, units, strict=True) if not isinstance(u, str)]
+            done = iter(run_batch(todo, keep=KEEP, **batch_options) if todo else [])
+            rows = [_uncalibrated(r, u) if isinstance(u, str) else next(done)
+                    for r, u in zip(runs, units, strict=True)]
+        else:
+            runs = perturbed(replace(scenario, controller_type=kind, bandwidth_scale=scale), errors, f"/{kind}")
+            rows = run_batch(runs, keep=KEEP, **batch_options)
         worst: dict[str, Optional[float]] = {}
         for row, run in zip(rows, runs, strict=True):  # run_batch returns one row per run
             if row["error"] is not None:
@@ -226,6 +263,7 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
             worst = m if not worst else {k: _worse(worst[k], m[k]) for k in METRICS}
         failed = [r["error"] for r in rows if r["error"] is not None]
         statuses = {s: sum(r.get("status") == s for r in rows if r["error"] is None) for s in STATUSES}
+        statuses[CALIBRATION_FAILED] = sum(r.get("status") == CALIBRATION_FAILED for r in rows)
         out[kind] = {"worst": worst, "runs": len(rows), "failed": len(failed), "failures": failed,
                      "statuses": statuses, "rows": rows, "calibrations": units if calibrated else None}
         if log is not None:

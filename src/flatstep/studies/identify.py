@@ -38,10 +38,16 @@ estimated from the high-pass part of the raw equations' residual in the periods 
 absolute deviation), in :data:`NOISE_ITERATIONS` rounds. In closed loop the controller's feedback also correlates
 the noise with the true currents, which this does not model: docs/identification.md shows what it gains and where
 it over-corrects.
+
+**What the data cannot support** is refused, and what is atypical of a stepping motor flagged
+(:mod:`.identify_checks`): values beyond any motor's in the recording's units (before the fit), the current
+noise's share of the R and L regressors, estimates outside their ranges, a fitted R far from the raw
+``sum(v i) / sum(i^2)``.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from statistics import NormalDist
 from typing import Union
@@ -49,7 +55,8 @@ from typing import Union
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-from ..validate import check_integer, check_positive
+from ..validate import InputError, check_integer, check_positive, check_quantity
+from .identify_checks import atypical, check_estimates, check_noise_share, check_resistance, check_units
 from .identify_ls import Fit, fit
 from .identify_result import Identification
 from .record import Recording, read_recording
@@ -89,8 +96,12 @@ def _unit_noise_gram(sos: np.ndarray, Ts: float, cut: int) -> np.ndarray:
     return g @ g.T
 
 
-def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool) -> Fit:
-    """The electrical fit of (R, L, Km[, va_offset, vb_offset]) (module docstring), with the noise bias removed."""
+def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool) -> tuple[Fit, dict[str, float]]:
+    """The electrical fit of (R, L, Km[, va_offset, vb_offset]) (module docstring), with the noise bias removed.
+
+    Also returns the current noise's share of the power of the filtered R and L regressors
+    (:func:`~flatstep.studies.identify_checks.check_noise_share`), estimated whether or not it is compensated.
+    """
     sos, rows = _filtered(rec, fc)
     Ts, blocks, raw = rec.period, [], []
     for i, c, v in ((rec.ia, np.cos(Nr * rec.theta), rec.va), (rec.ib, np.sin(Nr * rec.theta), rec.vb)):
@@ -106,7 +117,10 @@ def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: b
     result = fit(blocks, names, lags=8, source=rec.source, hint=HINT)
     unit = _unit_noise_gram(sos, Ts, rows.start)
     still = np.diff(rec.theta) == 0  # periods without an encoder step: no quantization step in the back-emf term
-    for _ in range(NOISE_ITERATIONS if compensate else 0):
+    X = np.concatenate([b[0] for b in blocks])
+    power = np.einsum("ij,ij->j", X[:, :2], X[:, :2])
+    share: dict[str, float] = {}
+    for _ in range(NOISE_ITERATIONS if compensate else 1):
         R, L, Km = result.values[:3]
         gram = np.zeros((len(names), len(names)))
         for k, terms in enumerate(raw):
@@ -114,9 +128,15 @@ def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: b
             r = terms[3] - R * terms[0] - L * terms[1] - Km * terms[2] - offset  # the raw equation's residual
             r = (r - sosfiltfilt(sos, r))[still if np.count_nonzero(still) > 100 else slice(None)]  # noise alone
             mad = 1.4826 * float(np.median(np.abs(r - np.median(r))))  # robust to what is left of the rest
-            gram[:2, :2] += blocks[k][1].size * mad**2 / (2.0 * L**2 / Ts**2 + 0.5 * R**2) * unit
-        result = fit(blocks, names, lags=8, source=rec.source, hint=HINT, noise_gram=gram)
-    return result
+            gain = 2.0 * L**2 / Ts**2 + 0.5 * R**2  # the raw residual's variance per unit current noise variance
+            gram[:2, :2] += blocks[k][1].size * mad**2 / gain * unit if gain > 0 else np.inf
+        share = {n: float(g / p) if p > 0 else math.inf for n, g, p in zip(("R", "L"), np.diag(gram)[:2], power,
+                                                                           strict=True)}
+        if compensate and share["L"] <= 1.0 and share["R"] <= 1.0:  # beyond 1 the compensated X^T X is not a Gram
+            result = fit(blocks, names, lags=8, source=rec.source, hint=HINT, noise_gram=gram)
+        elif compensate:
+            break
+    return result, share
 
 
 def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool, harmonic: int,
@@ -186,12 +206,14 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
     Nr = check_integer("Nr", Nr, why="the number of rotor teeth")
     harmonic = check_integer("detent_harmonic", detent_harmonic)
     coulomb_speed = check_positive("coulomb_speed", coulomb_speed, unit=" rad/s")
-    if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence={confidence!r} must be in (0, 1), e.g. 0.95")
+    confidence = check_quantity("confidence", confidence)
     if len(bandwidth) != 2:
-        raise ValueError(f"bandwidth={bandwidth!r} must be two cutoffs [Hz]: (electrical, mechanical)")
-    fc_e, fc_m = (check_positive("bandwidth", b, unit=" Hz") for b in bandwidth)
-    elec = _electrical(rec, Nr, fc_e, offsets, noise_compensation)
+        raise InputError("bandwidth", bandwidth, f"bandwidth={bandwidth!r} must be two cutoffs [Hz]: (electrical, "
+                         "mechanical)")
+    fc_e, fc_m = (check_quantity("rate", b, as_name="bandwidth") for b in bandwidth)
+    check_units(rec)
+    elec, share = _electrical(rec, Nr, fc_e, offsets, noise_compensation)
+    check_noise_share(share, rec.source)
     mech = _mechanical(rec, Nr, fc_m, detent, coulomb, harmonic, coulomb_speed)
     km, var_km = elec.values[2], elec.covariance[2, 2]
     values = dict(zip(elec.names, elec.values, strict=True))
@@ -212,15 +234,18 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
     z = NormalDist().inv_cdf(0.5 + 0.5 * confidence)
     std = {k: math.sqrt(max(v, 0.0)) for k, v in var.items()}
     result = Identification(estimates={k: float(v) for k, v in values.items()}, std=std, z=z, confidence=confidence,
-                            Nr=Nr, residual_rms={"electrical": elec.residual_rms, "mechanical": km * mech.residual_rms},
+                            Nr=Nr, residual_rms={"electrical": elec.residual_rms,
+                                                 "mechanical": abs(km) * mech.residual_rms},
                             condition={"electrical": elec.condition, "mechanical": mech.condition}, source=rec.source,
                             settings={"bandwidth": [fc_e, fc_m], "offsets": offsets,
                                       "noise_compensation": noise_compensation, "detent_harmonic": harmonic,
                                       "coulomb_speed": coulomb_speed, "samples": int(rec.t.size),
-                                      "period": rec.period})
+                                      "period": rec.period, "noise_share": share})
     wide = {k: result.relative_half_width(k) for k in CORE if not result.relative_half_width(k) <= MAX_REL_HALF_WIDTH}
     if wide:
         shown = ", ".join(f"{k} +-{w:.0%}" for k, w in wide.items())
         raise ValueError(f"{rec.source}: not exciting enough: the {confidence:.0%} intervals are {shown} (at most "
                          f"+-{MAX_REL_HALF_WIDTH:.0%} accepted); {HINT}")
-    return result
+    check_estimates(result.estimates, {k: result.interval(k) for k in result.estimates}, rec.source, confidence)
+    check_resistance(rec, result.estimates["R"])
+    return replace(result, flags=atypical(result.estimates))

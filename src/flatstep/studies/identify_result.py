@@ -36,7 +36,10 @@ class Identification:
     source : str
         The recording's name.
     settings : dict
-        The identification's settings (bandwidths, switches, samples, sampling period).
+        The identification's settings (bandwidths, switches, samples, sampling period, the current noise's share).
+    flags : tuple of str
+        What is atypical of a stepping motor (:func:`~flatstep.studies.identify_checks.atypical`); empty when
+        nothing is.
     """
 
     estimates: dict[str, float]
@@ -48,6 +51,7 @@ class Identification:
     condition: dict[str, float]
     source: str
     settings: dict[str, Any]
+    flags: tuple[str, ...] = ()
 
     def interval(self, name: str) -> tuple[float, float]:
         """The confidence interval of ``name``."""
@@ -87,7 +91,8 @@ class Identification:
 
     def as_toml(self) -> str:
         """A ``[motor]`` table for a scenario file, the intervals as comments (and the effects as a comment)."""
-        lines = [f"# identified from {self.source} ({self.confidence:.0%} intervals in the comments)", "[motor]"]
+        lines = [f"# identified from {self.source} ({self.confidence:.0%} intervals in the comments)"]
+        lines += [f"# flagged: {flag}" for flag in self.flags] + ["[motor]"]
         for name in MOTOR_KEYS:
             value = self.estimates[name]
             note = f"  # [{self.interval(name)[0]:.6g}, {self.interval(name)[1]:.6g}] {UNITS[name]}"
@@ -108,4 +113,4 @@ class Identification:
                 "intervals": {k: list(self.interval(k)) for k in self.estimates},
                 "relative_half_width": {k: self.relative_half_width(k) for k in self.estimates},
                 "units": {k: UNITS[k] for k in self.estimates}, "residual_rms": self.residual_rms,
-                "condition": self.condition, "settings": self.settings}
+                "condition": self.condition, "settings": self.settings, "flags": list(self.flags)}

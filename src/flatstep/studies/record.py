@@ -14,8 +14,8 @@ column    unit   what it is
 ``theta`` rad    rotor angle as the encoder reads it at :math:`t_k` (the centre of its count), multi-turn
 ========  =====  ===========================================================================================
 
-The first line is the header; columns may come in any order and other columns are ignored. Times must be
-strictly increasing with a constant step (to 1e-6 of it).
+The first line is the header; columns may come in any order, each named once, and other columns are ignored.
+Times must be strictly increasing with a constant step (to 1e-6 of it).
 """
 from __future__ import annotations
 
@@ -149,6 +149,10 @@ def read_recording(path: str | Path) -> Recording:
         raise ValueError(f"{where}: no such recording file") from None
     except (UnicodeDecodeError, csv.Error, ValueError) as exc:
         raise ValueError(f"{where}: not a CSV file of numbers under one header line: {exc}") from None
+    twice = sorted({c for c in header if header.count(c) > 1})
+    if twice:
+        raise ValueError(f"{where}: column(s) {twice} appear more than once in the header {header}; each column "
+                         "must be named once (which one holds the data would be a guess)")
     missing = [c for c in COLUMNS if c not in header]
     if missing:
         raise ValueError(f"{where}: missing column(s) {missing} in the header {header}; a recording has the columns "
