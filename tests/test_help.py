@@ -38,3 +38,16 @@ def test_simulate_help_explains_every_measurement_mode(capsys):
     text = " ".join(capsys.readouterr().out.split())
     for mode in MEASUREMENTS:
         assert re.search(rf"\b{mode}: ", text), mode
+
+
+def test_help_starts_without_scipy_signal():
+    """`flatstep --help` and `flatstep plan --help` do not import scipy.signal (a second of start-up)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from flatstep.cli.main import main\n"
+            "for argv in (['--help'], ['plan', '--help'], ['simulate', '--help']):\n"
+            "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
+            "print('scipy.signal' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and out.stdout.strip().splitlines()[-1] == "False", out.stderr

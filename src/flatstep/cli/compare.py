@@ -14,7 +14,8 @@ from ..studies.calibrate import calibration_horizon
 from ..studies.compare import bandwidth_sweep, check_calibrate, compare, compare_worst, default_band, scenario_kinds
 from ..studies.robustness import encoder_count, perturbed, plant_errors
 from ..studies.scenario import Scenario
-from ..studies.scenario_file import Robustness, load_scenario
+from ..studies.scenario_file import Robustness, read_scenario_file
+from ..studies.verify import scenario_on_drive
 from ..validate import InputError, check_quantity
 from ..validate.limits import check_study, estimate
 from .flags import count, out_dir, quantity
@@ -120,7 +121,8 @@ def _plant_names(scenario: Scenario, study: Robustness) -> list[str]:
 
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
-    scenario, study = load_scenario(args.scenario)
+    sf = read_scenario_file(args.scenario)
+    scenario, study = scenario_on_drive(sf, skip=args.no_verify), sf.robustness
     if args.clean:  # the plant equal to the model: no load, no effects, so nothing to feed forward
         scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None)
     if scenario.control_period is None:
@@ -267,6 +269,9 @@ def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]
     cmp_.add_argument("--engine", choices=("c", "python"), default="c",
                       help="who runs the loops: the C core (default) or the Python reference loop (slow)")
     cmp_.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    cmp_.add_argument("--no-verify", action="store_true", help="run a plan made against [limits] as the file gives "
+                     "it, without the check on the drive 'flatstep plan' runs (by default the plan plan reports "
+                     "feasible: backed off if the drive would lose it, refused if no back-off keeps it)")
     cmp_.add_argument("--out", default=None, help="write overlay.png, plants.png and compare.json here")
     cmp_.add_argument("--json", action="store_true", help="print the report as JSON")
     cmp_.set_defaults(func=cmd_compare)

@@ -27,6 +27,7 @@ from ..plan.feasibility import InfeasiblePlanError
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..studies.scenario import PAPER_SCENARIOS, Scenario
 from ..studies.scenario_file import read_scenario_file
+from ..studies.verify import scenario_on_drive
 from ..validate import InputError
 from ..validate.paths import CSV_MARK, PNG_MARK, check_distinct, check_output, check_output_dir, json_marks
 from .calibrate import add_calibrate_command
@@ -112,30 +113,6 @@ def _check_outputs(args: argparse.Namespace) -> None:
         check_output(args.record, "--record", inputs=[args.scenario], force=args.force, marks=CSV_MARK)
 
 
-def _checked_on_drive(sf: Any, skip: bool) -> Scenario:
-    """The file's scenario with the plan ``flatstep plan`` reports feasible: checked on the drive, backed off.
-
-    A plan made against ``[limits]`` runs only once the check of :func:`flatstep.studies.verify.check_plan_file`
-    keeps it on the nominal and +-10 % plants (a time-optimal plan backed off as ``flatstep plan`` backs it off);
-    a plan the drive would lose is refused with what binds. ``skip`` (``--no-verify``) runs the file's plan as it is.
-    """
-    if skip or sf.limits is None:
-        return sf.scenario
-    from ..studies.verify import check_plan_file as check_on_drive
-
-    checked, info = check_on_drive(sf, sf.planner)
-    if not info["verified"]:
-        raise ValueError(f"{sf.path}: the plan is not kept on the drive ({len(info['cases'])} plants: nominal and "
-                         f"+-10 % on R, L, Km, J; worst |theta - theta*| {info['worst_error']:.3g} rad): "
-                         f"{info['binds']} binds: {info['advice']}; 'flatstep plan' shows the check, --no-verify "
-                         "runs the plan anyway")
-    if info["backed_off"]:
-        print(f"flatstep: {sf.name}: the plan within [limits] is not kept on every plant; running the backed-off "
-              f"plan ({checked.plan.tf - checked.plan.t0:.6g} s instead of "
-              f"{sf.plan.tf - sf.plan.t0:.6g} s), as 'flatstep plan' reports it", file=sys.stderr)
-    return checked.scenario
-
-
 def cmd_simulate(args: argparse.Namespace) -> int:
     """``flatstep simulate``: one closed-loop move from a scenario file or the flags; prints its summary."""
     _check_outputs(args)
@@ -143,7 +120,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         given = [f"--{k.replace('_', '-')}" for k in SIM_FLAGS if getattr(args, k) is not None]
         if given:
             raise ValueError(f"{given} cannot be combined with a scenario file: set them in {args.scenario}")
-        scenario = _checked_on_drive(check_plan_file(read_scenario_file(args.scenario), show_steps=not args.json),
+        scenario = scenario_on_drive(check_plan_file(read_scenario_file(args.scenario), show_steps=not args.json),
                                      skip=args.no_verify)
     else:
         scenario = _scenario_from_flags(args)

@@ -8,7 +8,8 @@ from typing import Any
 
 from ..json_out import strict_json
 from ..studies.robustness import REST_AFTER, encoder_count, plant_errors, run_study
-from ..studies.scenario_file import Robustness, load_scenario
+from ..studies.scenario_file import Robustness, read_scenario_file
+from ..studies.verify import scenario_on_drive
 from ..validate.limits import check_study, estimate
 from ..validate.paths import PNG_MARK, check_output_dir, json_marks
 from .flags import add_force, count, out_dir
@@ -22,7 +23,8 @@ def cmd_robustness(args: argparse.Namespace) -> int:
     """``flatstep robustness``: the scenario on every plant of its study, worst errors per gain set."""
     if args.out:  # before any work
         check_output_dir(args.out, "--out", ROBUSTNESS_FILES, inputs=[args.scenario], force=args.force)
-    scenario, study = load_scenario(args.scenario)
+    sf = read_scenario_file(args.scenario)
+    scenario, study = scenario_on_drive(sf, skip=args.no_verify), sf.robustness
     study = study or Robustness()
     if args.samples is not None:
         study = replace(study, samples=args.samples)
@@ -77,6 +79,9 @@ def add_robustness_command(sub: argparse._SubParsersAction[argparse.ArgumentPars
                      help="random plants instead of all sign combinations")
     rob.add_argument("--no-paper-gains", action="store_true", help="skip the paper's gains on the same drive")
     rob.add_argument("--progress", action="store_true", default=None, help="draw a progress bar")
+    rob.add_argument("--no-verify", action="store_true", help="run a plan made against [limits] as the file gives "
+                     "it, without the check on the drive 'flatstep plan' runs (by default the plan plan reports "
+                     "feasible: backed off if the drive would lose it, refused if no back-off keeps it)")
     rob.add_argument("--out", default=None, help="write robustness.png and robustness.json here")
     rob.add_argument("--json", action="store_true", help="print the report as JSON")
     add_force(rob)

@@ -41,7 +41,6 @@ import numpy as np
 import tomlkit
 import tomlkit.exceptions
 import tomlkit.items
-from scipy.signal import butter, sosfiltfilt
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -235,6 +234,8 @@ def _torque_fit(rec: Recording, Nr: int, h: int, peak_speed: float) -> tuple[Fit
     """The shaft equation's fit in units of Km (module docstring), and the filter's cutoff [Hz]."""
     fs = 1.0 / rec.period
     fc = min(CUTOFF_OVER_DETENT * h * Nr * peak_speed / (2.0 * math.pi), 0.2 * fs)
+    from scipy.signal import butter, sosfiltfilt  # here: scipy.signal takes a second to import, on every command
+
     sos = butter(4, fc, fs=fs, output="sos")
     th = rec.theta
     omega = np.gradient(sosfiltfilt(sos, th), rec.period)

@@ -53,7 +53,6 @@ from statistics import NormalDist
 from typing import Union
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
 
 from ..validate import InputError, check_integer, check_positive, check_quantity
 from .identify_checks import atypical, check_estimates, check_noise_share, check_resistance, check_units
@@ -74,6 +73,13 @@ HINT = ("record a run that moves the rotor back and forth and changes the curren
         "of 'flatstep identify --excite SCENARIO --record DATA.csv' (docs/identification.md)")
 
 
+def sosfiltfilt(sos: np.ndarray, x: np.ndarray, axis: int = -1) -> np.ndarray:
+    """:func:`scipy.signal.sosfiltfilt`, imported when first used (scipy.signal takes a second to import)."""
+    from scipy.signal import sosfiltfilt as filtfilt
+
+    return filtfilt(sos, x, axis=axis)
+
+
 def _filtered(rec: Recording, fc: float) -> tuple[np.ndarray, slice]:
     """The filter's ``sos`` at ``fc`` and the rows kept: the start-up cut off, four rows per cutoff period."""
     fs = 1.0 / rec.period
@@ -85,6 +91,8 @@ def _filtered(rec: Recording, fc: float) -> tuple[np.ndarray, slice]:
     if rec.t.size < need:
         raise ValueError(f"{rec.source}: {rec.duration:.4g} s ({rec.t.size} rows) is too short for a {fc:g} Hz "
                          f"bandwidth: at least {need * rec.period:.4g} s ({need} rows) at this sampling rate")
+    from scipy.signal import butter
+
     return butter(4, fc, fs=fs, output="sos"), slice(cut, rec.t.size - 1 - cut, step)
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
@@ -429,3 +430,25 @@ def verify_on_drive(pf: Any, report: dict[str, Any], skip: bool = False) -> Any:
                   ", ".join(f"{k} = {lim[k]:.4g}" for k in ("i_hold", "speed_corner", "torque_angle_max", "v_use",
                                                            "speed_max")))
     return pf
+
+
+def scenario_on_drive(sf: Any, skip: bool = False) -> Any:
+    """The file's scenario with the plan ``flatstep plan`` reports feasible: checked on the drive, backed off.
+
+    A plan made against ``[limits]`` runs only once the check of :func:`flatstep.studies.verify.check_plan_file`
+    keeps it on the nominal and +-10 % plants (a time-optimal plan backed off as ``flatstep plan`` backs it off);
+    a plan the drive would lose is refused with what binds. ``skip`` (``--no-verify``) runs the file's plan as it is.
+    """
+    if skip or sf.limits is None:
+        return sf.scenario
+    checked, info = check_plan_file(sf, sf.planner)
+    if not info["verified"]:
+        raise ValueError(f"{sf.path}: the plan is not kept on the drive ({len(info['cases'])} plants: nominal and "
+                         f"+-10 % on R, L, Km, J; worst |theta - theta*| {info['worst_error']:.3g} rad): "
+                         f"{info['binds']} binds: {info['advice']}; 'flatstep plan' shows the check, --no-verify "
+                         "runs the plan anyway")
+    if info["backed_off"]:
+        print(f"flatstep: {sf.name}: the plan within [limits] is not kept on every plant; running the backed-off "
+              f"plan ({checked.plan.tf - checked.plan.t0:.6g} s instead of "
+              f"{sf.plan.tf - sf.plan.t0:.6g} s), as 'flatstep plan' reports it", file=sys.stderr)
+    return checked.scenario
