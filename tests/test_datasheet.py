@@ -242,7 +242,7 @@ def test_cli_model_keys_and_refusals(cli, tmp_path):
                         ("bad.toml", "bad.toml:motor.resistance: resistance=-1.65 ohm is out of range"),
                         ("none.toml", "none.toml: no [motor] table"),
                         ("part.toml", "part.toml:motor: ['L', 'Km', 'J', 'B', 'Nr'] missing"),
-                        ("missing.toml", "missing.toml: no such file")]:
+                        ("missing.toml", "missing.toml: no such scenario file")]:
         run = cli(["motor", name], cwd=tmp_path)
         assert run.returncode == 2 and match in run.stderr and "Traceback" not in run.stderr, (name, run.stderr)
         assert run.stdout == ""

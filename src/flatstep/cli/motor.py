@@ -18,13 +18,14 @@ from typing import Any, Optional
 from ..json_out import strict_json
 from ..model.datasheet import MODEL_KEYS, Assumption, MotorModel, motor_from_table, uses_datasheet
 from ..model.motor import PRESETS, MotorParams
+from ..studies.file_values import read_toml
 from ..validate import InputError
 from .flags import quantity
 
 if sys.version_info >= (3, 11):
-    import tomllib
+    pass
 else:  # pragma: no cover - Python 3.10
-    import tomli as tomllib
+    pass
 
 #: The model's parameters: unit and meaning.
 PARAMS = {"R": ("ohm", "winding resistance per phase"), "L": ("H", "winding inductance per phase"),
@@ -35,16 +36,7 @@ PARAMS = {"R": ("ohm", "winding resistance per phase"), "L": ("H", "winding indu
 def _table(path: Path) -> dict[str, Any]:
     """The ``[motor]`` table of the TOML file at ``path``; a ValueError names the file and why."""
     where = str(path)
-    try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ValueError(f"{where}: no such file") from None
-    except IsADirectoryError:
-        raise ValueError(f"{where}: is a directory, not a TOML file") from None
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{where}: not a text file (UTF-8): {exc.reason} at byte {exc.start}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{where}: not valid TOML: {exc}") from None
+    doc = read_toml(path)
     table = doc.get("motor")
     if not isinstance(table, dict) or not table:
         raise ValueError(f"{where}: no [motor] table: give the motor by its datasheet keys (docs/motors.md) or by "
