@@ -243,3 +243,15 @@ def test_a_png_is_flatsteps_only_when_matplotlib_drew_it(tmp_path):
     assert check_output(figure, "--out", marks=PNG_MARK) == figure
     with pytest.raises(ValueError, match="not a file flatstep wrote"):
         check_output(figure, "--record", marks=(b"t,",))  # a figure is no recording
+
+
+def test_reproduce_checks_its_outputs_before_running(cli, tmp_path):
+    """reproduce --out: a user's fig1.png needs --force, refused before the two runs; its own files are rewritten."""
+    (tmp_path / "fig1.png").write_text("my photo\n")
+    run = cli(["reproduce", "--out", "."], cwd=tmp_path)
+    assert run.returncode == 2 and "fig1.png: exists and is not a file flatstep wrote" in run.stderr
+    assert run.stdout == "" and (tmp_path / "fig1.png").read_text() == "my photo\n"
+    assert not (tmp_path / "summary.json").exists()
+    (tmp_path / "out").write_text("a file\n")
+    run = cli(["reproduce"], cwd=tmp_path)  # the default --out names a file
+    assert run.returncode == 2 and "out" in run.stderr and (tmp_path / "out").read_text() == "a file\n"

@@ -61,8 +61,14 @@ def _write(out: Path, name: str, result: SimResult, title: str) -> None:
     result.to_csv(out / f"{name}.csv")
 
 
+#: The files ``flatstep reproduce --out`` writes, and the first bytes that make an existing one flatstep's.
+REPRODUCE_FILES = {"fig1.png": PNG_MARK, "fig2.png": PNG_MARK, "fig1.csv": CSV_MARK, "fig2.csv": CSV_MARK,
+                   "summary.json": json_marks("fig1")}
+
+
 def cmd_reproduce(args: argparse.Namespace) -> int:
     """``flatstep reproduce``: the paper's Fig. 1 and Fig. 2 runs, their figures, series and summaries."""
+    check_output_dir(args.out, "--out", REPRODUCE_FILES, force=args.force)  # before any work
     out = out_dir(args.out)
     titles = {"fig1": "Fig. 1: ideal closed loop, no load (W1 = W2 = 100)",
               "fig2": "Fig. 2: constant load torque 1e-5 N m (W1 = W2 = 300)"}
@@ -196,6 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "load 1e-5 N m, W1 = W2 = 300) with continuous control; write fig1.png, fig2.png, their "
                          "series (CSV) and summary.json, and print the summary table.")
     rep.add_argument("--out", default="out", help="output directory (default: out)")
+    add_force(rep)
     rep.set_defaults(func=cmd_reproduce)
 
     sim = sub.add_parser("simulate", help="simulate one closed-loop move (defaults: the paper's Fig. 1)",
