@@ -13,7 +13,7 @@ from ..studies.verify import scenario_on_drive
 from ..validate.limits import check_study, estimate
 from ..validate.paths import PNG_MARK, check_output_dir, json_marks
 from .flags import add_force, count, out_dir
-from .status import exit_code
+from .status import EXIT_STOPPED, exit_code
 
 #: The files ``flatstep robustness --out`` writes, and the first bytes that make an existing one flatstep's.
 ROBUSTNESS_FILES = {"robustness.png": PNG_MARK, "robustness.json": json_marks("scenario")}
@@ -48,6 +48,8 @@ def cmd_robustness(args: argparse.Namespace) -> int:
         (out / "robustness.json").write_text(strict_json(report, indent=2) + "\n")
     own = report["sets"]["scenario"]
     code = exit_code(["lost"] * own["statuses"]["lost"] + ["fault"] * own["statuses"]["fault"])
+    if own["failed"]:  # a plant whose run stopped before its end (non-finite state, ...): no result to trust
+        code = EXIT_STOPPED
     if args.json:
         print(strict_json(report, indent=2))
         return code
