@@ -78,3 +78,33 @@ def test_every_law_has_a_default_spec_and_options_listed():
     for law in LAWS:
         assert ControllerSpec.parse(law).law == law
     assert ControllerSpec.options_of("dq_smc") == ["feedforward", "integral", "km_estimate"]
+
+
+DRIVE = "[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n[sensors]\nencoder_counts = 16384\n[controller]\ndesign = true\n"
+
+
+@pytest.mark.parametrize("keys, name", [('law = "dq_smc"\nintegral = true\n', "dq_smc_i"),
+                                        ('law = "smc"\nhold = true\n', "smc+hold"),
+                                        ('type = "smc+hold"\n', "smc+hold"),
+                                        ('type = "cascade_model"\n', "cascade_model")])
+def test_a_scenario_file_names_its_controller_by_type_or_by_law_and_options(tmp_path, keys, name):
+    from flatstep.studies.scenario_file import load_scenario
+
+    path = tmp_path / "s.toml"
+    path.write_text(DRIVE + keys + ("[feedforward]\nload = 0.0\n" if name == "cascade_model" else ""))
+    assert load_scenario(path)[0].controller_type == name
+
+
+@pytest.mark.parametrize("keys, match", [
+    ('law = "smc"\ntype = "smc"\n', r"s.toml:controller: give the controller by type='smc' or by law"),
+    ('law = "dq_smc"\nhold = true\n', r"s.toml:controller: hold=true is not an option of law 'dq_smc'"),
+    ('type = "pid"\n', r"s.toml:controller.type: type='pid' is unknown"),
+    ('law = "pid"\n', r"s.toml:controller: law='pid' is unknown"),
+])
+def test_a_bad_controller_in_a_file_names_its_key(tmp_path, keys, match):
+    from flatstep.studies.scenario_file import load_scenario
+
+    path = tmp_path / "s.toml"
+    path.write_text(DRIVE + keys)
+    with pytest.raises(ValueError, match=match):
+        load_scenario(path)

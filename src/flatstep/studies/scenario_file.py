@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, Optional, Union
 
 from ..control.smc import MEASUREMENTS, SMCGains
+from ..control.spec import OPTION_LAWS, ControllerSpec
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.design import design_gains
 from ..loop.drive import Drive
@@ -197,10 +198,18 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
         {"current_offset": tuple(offset)} if offset is not None else {})}) if sec["sensors"] else None
 
     ctrl = dict(sec["controller"])
-    controller_type = ctrl.pop("type", "smc")
-    if not isinstance(controller_type, str) or controller_type not in CONTROLLER_TYPES:
-        raise InputError("type", controller_type, f"{where}:controller.type: type={controller_type!r} is unknown; "
-                                                  f"valid: {list(CONTROLLER_TYPES)}")
+    spec_keys = {k: ctrl.pop(k) for k in ("law", *OPTION_LAWS) if k in ctrl}
+    if spec_keys and "type" in ctrl:
+        raise InputError("type", ctrl["type"], f"{where}:controller: give the controller by type={ctrl['type']!r} or "
+                         f"by law and options ({sorted(spec_keys)}), not both")
+    if spec_keys:
+        controller_type = ControllerSpec.parse(spec_keys, f"{where}:controller").name()
+    else:
+        given = ctrl.pop("type", "smc")
+        if not isinstance(given, str):
+            raise InputError("type", given, f"{where}:controller.type: type={given!r} is unknown; valid: "
+                             f"{list(CONTROLLER_TYPES)}, or law+option+...")
+        controller_type = ControllerSpec.parse(given, f"{where}:controller.type: type").name()
     bandwidth_scale = ctrl.pop("bandwidth_scale", 1.0)
     design = value(where, "controller", "design", lambda v: check_bool("design", v), ctrl.pop("design", False))
     uncertainty = value(where, "controller", "uncertainty",

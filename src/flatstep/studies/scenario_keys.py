@@ -11,6 +11,7 @@ from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
 from ..control.smc import MEASUREMENTS, SMCGains
+from ..control.spec import LAWS, OPTION_LAWS, RHO_PLANS
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.drive import PWM_MODES, Drive
 from ..loop.observers import Observer
@@ -137,7 +138,17 @@ KEYS: dict[str, dict[str, Key]] = {
     "limits": {k: Key(*_LIMIT_DOCS[k][:2], _fmt(_default(MotorLimits, k)), _LIMIT_DOCS[k][2])
                for k in _LIMIT_DOCS},
     "controller": {
-        "type": Key("", ", ".join(f'"{c}"' for c in CONTROLLER_TYPES), '"smc"', "the control law"),
+        "type": Key("", ", ".join(f'"{c}"' for c in CONTROLLER_TYPES) + ", or law+option+...", '"smc"',
+                    "the controller by name (flatstep.control.spec: each name is a law and its options)"),
+        "law": Key("", ", ".join(f'"{c}"' for c in LAWS), '"smc"',
+                   "the control law, with the options below (instead of type)"),
+        **{k: Key("", "true, false", "false", f"with law: {doc} ({', '.join(OPTION_LAWS[k])})")
+           for k, doc in (("feedforward", "the known torques ([feedforward]) in the law and its observer"),
+                          ("observer_torques", "the cascade's observer knows the torques too"),
+                          ("integral", "integral action on s2"), ("km_estimate", "an online estimate of Km"),
+                          ("hold", "hold the target's detent from tf on"))},
+        "rho_plan": Key("", ", ".join(f'"{r}"' for r in RHO_PLANS), '"plan"',
+                        "with law: the plan's rho*, or rho*(t) from the torque the move needs (smc)"),
         "bandwidth_scale": _q("scale", 1.0, "multiplies every bandwidth of a baseline"),
         "measurement": Key("", ", ".join(f'"{m}"' for m in MEASUREMENTS), "what the drive gives",
                            "where the law's speed and acceleration come from (observer with an observer, model with "
