@@ -255,3 +255,13 @@ def test_reproduce_checks_its_outputs_before_running(cli, tmp_path):
     (tmp_path / "out").write_text("a file\n")
     run = cli(["reproduce"], cwd=tmp_path)  # the default --out names a file
     assert run.returncode == 2 and "out" in run.stderr and (tmp_path / "out").read_text() == "a file\n"
+
+
+def test_compare_and_design_check_out_before_any_run(cli, tmp_path):
+    """A bad --out is refused at once (nothing printed on stdout: no run), not after the study."""
+    (tmp_path / "afile").write_text("x\n")
+    scenario = Path(__file__).resolve().parent.parent / "examples" / "compare-paper-20khz.toml"
+    for argv in (["compare", scenario, "--out", "afile"], ["design", "--out", "afile"]):
+        run = cli(argv, cwd=tmp_path)
+        assert run.returncode == 2 and "--out afile: exists and is not a directory" in run.stderr, run.stderr
+        assert run.stdout == "" and "[compare" not in run.stderr

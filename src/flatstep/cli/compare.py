@@ -18,7 +18,8 @@ from ..studies.scenario_file import Robustness, read_scenario_file
 from ..studies.verify import scenario_on_drive
 from ..validate import InputError, check_quantity
 from ..validate.limits import check_study, estimate
-from .flags import count, out_dir, quantity
+from ..validate.paths import PNG_MARK, check_output_dir, json_marks
+from .flags import add_force, count, out_dir, quantity
 from .status import EXIT_STOPPED, exit_code, warn
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)
@@ -119,8 +120,14 @@ def _plant_names(scenario: Scenario, study: Robustness) -> list[str]:
     return [p.name for p in perturbed(scenario, plant_errors(study), "/calibration")]
 
 
+#: The files ``flatstep compare --out`` writes, and the first bytes that make an existing one flatstep's.
+COMPARE_FILES = {"overlay.png": PNG_MARK, "plants.png": PNG_MARK, "compare.json": json_marks("name", "scenario")}
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
+    if args.out:  # before any work
+        check_output_dir(args.out, "--out", COMPARE_FILES, inputs=[args.scenario], force=args.force)
     sf = read_scenario_file(args.scenario)
     scenario, study = scenario_on_drive(sf, skip=args.no_verify), sf.robustness
     if args.clean:  # the plant equal to the model: no load, no effects, so nothing to feed forward
@@ -273,5 +280,6 @@ def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]
                      "it, without the check on the drive 'flatstep plan' runs (by default the plan plan reports "
                      "feasible: backed off if the drive would lose it, refused if no back-off keeps it)")
     cmp_.add_argument("--out", default=None, help="write overlay.png, plants.png and compare.json here")
+    add_force(cmp_)
     cmp_.add_argument("--json", action="store_true", help="print the report as JSON")
     cmp_.set_defaults(func=cmd_compare)

@@ -15,7 +15,8 @@ from ..model.plant import Plant
 from ..studies.robustness import encoder_count
 from ..studies.scenario import Scenario
 from ..studies.scenario_file import load_scenario
-from .flags import count, out_dir, quantity
+from ..validate.paths import PNG_MARK, check_output_dir, json_marks
+from .flags import add_force, count, out_dir, quantity
 from .status import exit_code, warn
 
 
@@ -35,8 +36,14 @@ def _design_scenario(args: argparse.Namespace) -> Scenario:
                     measurement="observer")
 
 
+#: The files ``flatstep design --out`` writes, and the first bytes that make an existing one flatstep's.
+DESIGN_FILES = {"design.png": PNG_MARK, "design.json": json_marks("gains")}
+
+
 def cmd_design(args: argparse.Namespace) -> int:
     """``flatstep design``: sliding gains and observer for a sampled drive, and optionally runs of both gain sets."""
+    if args.out:  # before any work
+        check_output_dir(args.out, "--out", DESIGN_FILES, inputs=[getattr(args, "scenario", None)], force=args.force)
     base = _design_scenario(args)
     loop, load = base.loop, base.simulated_plant.constant_load
     assert loop is not None  # _design_scenario
@@ -102,6 +109,7 @@ def add_design_command(sub: argparse._SubParsersAction[argparse.ArgumentParser])
     des.add_argument("--uncertainty", type=quantity("relative", "--uncertainty"), default=0.1,
                      help="relative parameter error, in [0, 0.5) (default 0.1)")
     des.add_argument("--compute-delay", action="store_true", help="one period between measuring and applying")
+    add_force(des)
     des.add_argument("--out", default=None, help="also run the paper's and the designed gains on this drive: "
                      "design.png, design.json")
     des.add_argument("--json", action="store_true", help="print the design as JSON")
