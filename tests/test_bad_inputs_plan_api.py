@@ -20,7 +20,8 @@ from flatstep.plan.copper import copper_loss, min_copper_plan
 from flatstep.plan.d_current import DCurrentPlan
 from flatstep.plan.envelope import bang_bang_time
 from flatstep.plan.feasibility import check_feasibility
-from flatstep.plan.limits import MotorLimits, plan_margins
+from flatstep.plan.limits import MotorLimits
+from flatstep.plan.margins import plan_margins
 from flatstep.plan.loss_aware import LossAwareRho
 from flatstep.plan.piecewise import PiecewisePlan
 from flatstep.plan.rest_to_rest import PAPER_PLAN, point_to_point, psi

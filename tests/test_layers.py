@@ -10,8 +10,6 @@ import import_graph  # noqa: E402
 KNOWN_CYCLES = [
     ["flatstep.model.datasheet", "flatstep.model.motor"],
     ["flatstep.plan.feasibility", "flatstep.plan.piecewise", "flatstep.plan.protocol", "flatstep.plan.rest_to_rest"],
-    ["flatstep.plan.arguments", "flatstep.plan.limits"],
-    ["flatstep._core_time_optimal", "flatstep.plan.time_optimal"],
 ]
 
 

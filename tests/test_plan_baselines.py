@@ -7,7 +7,8 @@ from numpy.polynomial import Polynomial
 
 from flatstep.model.motor import PRESETS
 from flatstep.plan.baselines import _ok, _split, baseline_plan, best_baseline, ruckig_duration, trapezoid_rows
-from flatstep.plan.limits import MotorLimits, plan_margins
+from flatstep.plan.limits import MotorLimits
+from flatstep.plan.margins import plan_margins
 from flatstep.plan.segments import scurve_phases
 
 MOTOR = PRESETS["nema17"]

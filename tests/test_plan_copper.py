@@ -6,7 +6,8 @@ from scipy.integrate import trapezoid
 from flatstep.model.motor import PRESETS
 from flatstep.plan.baselines import _split, with_torque_current
 from flatstep.plan.copper import copper_loss, min_copper_plan
-from flatstep.plan.limits import MotorLimits, plan_margins
+from flatstep.plan.limits import MotorLimits
+from flatstep.plan.margins import plan_margins
 from flatstep.plan.rest_to_rest import _PSI_HORNER
 
 MOTOR = PRESETS["nema17"]

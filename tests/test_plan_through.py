@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from flatstep.cli.main import main
-from flatstep.plan.limits import plan_margins
+from flatstep.plan.margins import plan_margins
 from flatstep.plan.sequence import runs
 from flatstep.plan.waypoints import Waypoint
 from flatstep.studies.scenario_file import read_scenario_file

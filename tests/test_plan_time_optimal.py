@@ -12,7 +12,8 @@ from flatstep.loop.drive import Drive
 from flatstep.loop.reference import DriveLoop
 from flatstep.loop.sensors import Sensors
 from flatstep.model.motor import PRESETS
-from flatstep.plan.limits import MotorLimits, plan_margins
+from flatstep.plan.limits import MotorLimits
+from flatstep.plan.margins import plan_margins
 from flatstep.plan.time_optimal import (
     bang_bang_time,
     iq_bounds,

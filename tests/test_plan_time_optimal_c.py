@@ -13,7 +13,8 @@ import pytest
 from flatstep._core_time_optimal import WORK_LEN, plan_raw
 from flatstep._flatstep_core import lib
 from flatstep.model.motor import PRESETS
-from flatstep.plan.limits import MotorLimits, plan_margins
+from flatstep.plan.limits import MotorLimits
+from flatstep.plan.margins import plan_margins
 from flatstep.plan.time_optimal import MAX_SEGMENTS, plan_move, time_optimal, time_optimal_sequence
 from flatstep.validate import InputError
 

@@ -15,8 +15,7 @@ from .model.motor import MotorParams
 from .plan.envelope import envelope
 from .plan.limits import MotorLimits
 from .plan.piecewise import NCOEF
-from .plan.smoothing import MAX_SEGMENTS, Table, timing
-from .plan.time_optimal import DEFAULT_WIDTHS, check_samples, planning_limits
+from .plan.smoothing import DEFAULT_WIDTHS, MAX_SEGMENTS, Table, check_samples, planning_limits, timing
 from .validate import InputError
 from .validate.limits import MAX_PLAN_SAMPLES
 

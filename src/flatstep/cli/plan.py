@@ -11,7 +11,7 @@ import numpy as np
 
 from ..json_out import strict_json
 from ..model.flat import flat_to_state
-from ..plan.limits import plan_margins
+from ..plan.margins import plan_margins
 from ..validate.paths import PNG_MARK, check_output_dir, json_marks
 from .flags import add_force, out_dir
 from .status import EXIT_OK, EXIT_REFUSED, exit_code, warn

@@ -2,7 +2,7 @@ r"""What firmwares and general planners do, at their best on the same motor: a t
 
 Both take constant caps. :func:`best_baseline` searches the caps whose whole move keeps the same limits as
 :func:`~flatstep.plan.time_optimal.time_optimal` (the bus within ``v_use``, the current, the torque angle,
-checked by :func:`~flatstep.plan.limits.plan_margins` through the flat maps), so that each baseline is at its
+checked by :func:`~flatstep.plan.margins.plan_margins` through the flat maps), so that each baseline is at its
 best. The current follows the same rule as the time-optimal plan's, :math:`\rho = \sqrt{i_q^2 + i_{hold}^2}`
 with :math:`i_q = (J\ddot\theta + B\dot\theta)/K_m`, so only the shape of :math:`\theta(t)` differs.
 
@@ -24,7 +24,8 @@ from scipy.special import comb
 from ..model.motor import MotorParams
 from ..validate import InputError, check_choice, check_quantity
 from .arguments import check_angle, check_limits, check_motor, check_t0
-from .limits import MotorLimits, plan_margins
+from .limits import MotorLimits
+from .margins import plan_margins
 from .piecewise import NCOEF, PiecewisePlan, horner
 from .segments import hermite_rows, scurve_rows
 

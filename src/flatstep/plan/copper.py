@@ -22,7 +22,8 @@ from ..model.motor import MotorParams
 from ..validate import InputError, check_quantity
 from .arguments import check_angle, check_limits, check_motor, check_plan_table, check_samples_per_segment, check_t0
 from .baselines import _split, with_torque_current
-from .limits import MotorLimits, plan_margins
+from .limits import MotorLimits
+from .margins import plan_margins
 from .piecewise import NCOEF, PiecewisePlan, horner
 from .rest_to_rest import _PSI_HORNER
 

@@ -14,12 +14,15 @@ theta'', theta''') at its knots (:func:`.segments.hermite_rows`), with :math:`\r
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..model.motor import MotorParams
+from ..validate import InputError
+from ..validate.limits import MAX_PLAN_SAMPLES
 from .envelope import BangBang, Envelope, bang_bang, envelope
 from .limits import MotorLimits
 from .piecewise import NCOEF
@@ -162,7 +165,7 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
 def table_margins(table: Table, motor: MotorParams, limits: MotorLimits, samples: int = _CHECK) -> dict[str, float]:
     r"""The table's worst use of each limit at ``samples`` points per segment (``tau = j / samples``) and its end.
 
-    The same ratios as :func:`~flatstep.plan.limits.plan_margins`, the voltage magnitude from the polar-frame
+    The same ratios as :func:`~flatstep.plan.margins.plan_margins`, the voltage magnitude from the polar-frame
     voltages (the input map is a rotation, so :math:`|v| = \sqrt{X^2 + Y^2}`, no angle needed); ``inf`` where
     rho <= 0 or the torque angle reaches 90 degrees. ``worst`` is the search's :math:`s`: the voltage over
     ``0.998 v_use``, every other ratio over 1, the largest less 1.
@@ -204,3 +207,32 @@ def table_margins(table: Table, motor: MotorParams, limits: MotorLimits, samples
     out["worst"] = max(out["voltage"] / (V_MARGIN * limits.v_use), out["current"], out["torque_angle"],
                        out["speed"], out["acceleration"], out["jerk"]) - 1.0
     return out
+
+
+#: The smoothing widths tried by default, in units of L / R (csrc/time_optimal.c ``DEFAULT_WIDTHS``).
+DEFAULT_WIDTHS = (0.25, 0.5, 1.0, 2.0, 4.0)
+_ANGLE_PLAN = 0.98   # the torque angle cap planned with, of the true one (planning_limits)
+_CAP_PLAN = 0.995    # the speed and acceleration caps planned with, of the true ones (planning_limits)
+
+
+def planning_limits(limits: MotorLimits) -> MotorLimits:
+    """The limits the envelope and rho* are planned with, a little inside the true ones.
+
+    The torque angle cap is ``_ANGLE_PLAN`` times the true one, the speed and acceleration caps ``_CAP_PLAN``
+    times theirs: rho* keeps the torque angle at its cap where the torque current is large, and the envelope
+    keeps a capped speed or acceleration at its cap; the table's fit would otherwise cross them by a little, a
+    margin no bus fraction could buy back.
+    """
+    return replace(limits, torque_angle_max=limits.torque_angle_max * _ANGLE_PLAN,
+                   speed_max=limits.speed_max * _CAP_PLAN if limits.speed_max else None,
+                   accel_max=limits.accel_max * _CAP_PLAN if limits.accel_max else None)
+
+
+def check_samples(distance: float, tm: Timing) -> None:
+    """Raise an InputError naming ``distance`` when its move would be sampled more than ``MAX_PLAN_SAMPLES`` times."""
+    if tm.n > MAX_PLAN_SAMPLES:
+        total = tm.move.t1 + tm.move.cruise + tm.move.t2
+        raise InputError("distance", distance, f"the move of {distance:g} rad takes {total:.4g} s at this motor's "
+                         f"speed limit, which the time-optimal planner would sample {tm.n:.3g} times (every "
+                         f"{tm.dt:.3g} s), above the limit of {MAX_PLAN_SAMPLES:.3g} (flatstep.validate.limits."
+                         "MAX_PLAN_SAMPLES); split it into shorter moves with waypoints, or plan it with a spline")

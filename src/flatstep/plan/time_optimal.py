@@ -19,7 +19,6 @@ table wins.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from typing import Any, NamedTuple, Optional
 
 import numpy as np
@@ -34,19 +33,25 @@ from .arguments import check_angle, check_engine, check_limits, check_motor, che
 from .envelope import Envelope, bang_bang, bang_bang_time, envelope, iq_bounds, voltage_excess
 from .limits import MotorLimits
 from .piecewise import NCOEF, PiecewisePlan
-from .smoothing import MAX_SEGMENTS, V_MARGIN, Table, Timing, smoothed_duration, smoothed_table, table_margins, timing
+from .smoothing import (
+    DEFAULT_WIDTHS,
+    MAX_SEGMENTS,
+    V_MARGIN,
+    Table,
+    check_samples,
+    planning_limits,
+    smoothed_duration,
+    smoothed_table,
+    table_margins,
+    timing,
+)
 
 Array = NDArray[np.float64]
 __all__ = ["DEFAULT_WIDTHS", "MAX_SEGMENTS", "Candidate", "bang_bang_time", "iq_bounds", "plan_move",
            "smoothed_duration", "smoothed_plan", "time_optimal", "time_optimal_sequence"]
-_WIDTHS = (0.25, 0.5, 1.0, 2.0, 4.0)  # smoothing widths tried, in units of L / R
-#: The smoothing widths tried by default, in units of L / R (csrc/time_optimal.c ``DEFAULT_WIDTHS``).
-DEFAULT_WIDTHS = _WIDTHS
 _SEARCH = 6          # tables tried per width on gamma, at most
 _GAMMA_MIN = 0.05    # the least bus fraction a plan may take
 _GAMMA_STEPS = 2.0**16  # gamma is tried on multiples of 1 / _GAMMA_STEPS (csrc/time_optimal.c does the same)
-_ANGLE_PLAN = 0.98   # the torque angle cap planned with, of the true one (planning_limits)
-_CAP_PLAN = 0.995    # the speed and acceleration caps planned with, of the true ones (planning_limits)
 _S_TOL = 0.003       # a feasible table within 0.3 % of the bus target ends a width's search
 _PEAK_OVER_STEADY = 0.994  # a table's peak voltage over the steady one at its move's peak speed (first_gamma)
 
@@ -59,19 +64,6 @@ class Candidate(NamedTuple):
     width: float
     margins: dict[str, float]
     table: Table
-
-
-def planning_limits(limits: MotorLimits) -> MotorLimits:
-    """The limits the envelope and rho* are planned with, a little inside the true ones.
-
-    The torque angle cap is ``_ANGLE_PLAN`` times the true one, the speed and acceleration caps ``_CAP_PLAN``
-    times theirs: rho* keeps the torque angle at its cap where the torque current is large, and the envelope
-    keeps a capped speed or acceleration at its cap; the table's fit would otherwise cross them by a little, a
-    margin no bus fraction could buy back.
-    """
-    return replace(limits, torque_angle_max=limits.torque_angle_max * _ANGLE_PLAN,
-                   speed_max=limits.speed_max * _CAP_PLAN if limits.speed_max else None,
-                   accel_max=limits.accel_max * _CAP_PLAN if limits.accel_max else None)
 
 
 def _try(distance: float, motor: MotorParams, limits: MotorLimits, gamma: float,
@@ -194,16 +186,6 @@ def _plan(table: Table, distance: float, theta1: float, t0: float, from_c: bool 
     return PiecewisePlan(table.breaks + t0, theta, table.rho)
 
 
-def check_samples(distance: float, tm: Timing) -> None:
-    """Raise an InputError naming ``distance`` when its move would be sampled more than ``MAX_PLAN_SAMPLES`` times."""
-    if tm.n > MAX_PLAN_SAMPLES:
-        total = tm.move.t1 + tm.move.cruise + tm.move.t2
-        raise InputError("distance", distance, f"the move of {distance:g} rad takes {total:.4g} s at this motor's "
-                         f"speed limit, which the time-optimal planner would sample {tm.n:.3g} times (every "
-                         f"{tm.dt:.3g} s), above the limit of {MAX_PLAN_SAMPLES:.3g} (flatstep.validate.limits."
-                         "MAX_PLAN_SAMPLES); split it into shorter moves with waypoints, or plan it with a spline")
-
-
 def first_gamma(distance: float, motor: MotorParams, limits: MotorLimits, full: Envelope) -> float:
     """The first bus fraction the search tries: predicted from the steady voltage at the full-bus move's peak speed.
 
@@ -240,7 +222,7 @@ def plan_move(distance: float, motor: MotorParams, limits: MotorLimits,
     check_motor(motor)
     check_limits(limits)
     _check_widths(widths)
-    ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in _WIDTHS))
+    ws = sorted(widths or tuple(k * (motor.L / motor.R) for k in DEFAULT_WIDTHS))
     full = envelope(motor, planning_limits(limits), 1.0)
     best: Optional[Candidate] = None
 

@@ -27,7 +27,8 @@ import numpy as np
 
 from ..model.motor import PRESETS, MotorParams
 from ..plan.baselines import KINDS, best_baseline, ruckig_duration
-from ..plan.limits import MotorLimits, plan_margins
+from ..plan.limits import MotorLimits
+from ..plan.margins import plan_margins
 from ..plan.piecewise import PiecewisePlan
 from ..plan.time_optimal import bang_bang_time, time_optimal
 

@@ -1,6 +1,6 @@
 r"""A plan the drive can follow: run it on the drive, on the nominal plant and on the corners of its uncertainty.
 
-A plan within its limits (:func:`~flatstep.plan.limits.plan_margins`) can still be lost on a sampled drive: the
+A plan within its limits (:func:`~flatstep.plan.margins.plan_margins`) can still be lost on a sampled drive: the
 limits are a model, the drive samples, the encoder quantizes and the plant is not the model. :func:`verify_plan`
 runs the plan on the drive (the C engine, :func:`~flatstep.engine.simulate.simulate` with a
 :class:`~flatstep.loop.reference.DriveLoop`) on the nominal plant and on the :math:`2^4` corners of
