@@ -1,8 +1,8 @@
 r"""The motor's limits on a plan, and a plan's worst margins against them through the flat maps.
 
 A plan of the flat outputs fixes, at every instant, the currents and voltages the motor needs
-(:func:`flatstep.model.flat.flat_to_state`: R i, L di/dt, the back EMF and the reactance). :func:`~flatstep.plan.margins.plan_margins`
-samples a plan and reports how much of each limit it uses:
+(:func:`flatstep.model.flat.flat_to_state`: R i, L di/dt, the back EMF and the reactance).
+:func:`~flatstep.plan.margins.plan_margins` samples a plan and reports how much of each limit it uses:
 
 * ``voltage``: the largest voltage magnitude :math:`\sqrt{v_a^2 + v_b^2}` over the bus voltage: each phase
   voltage reaches it once per electrical turn, so it bounds them at any rotor angle (and does not depend on
