@@ -2,7 +2,8 @@
 
 The layers follow a move through the code (README, "How it fits together"); a module may import its own layer and
 those below it. An import that names a higher layer runs back up; one inside a function (a lazy import) counts the
-same, since it still ties the lower layer to the higher one.
+same, since it still ties the lower layer to the higher one. Imports under ``if TYPE_CHECKING:`` do not count: they
+are for the type checker and never run.
 
     python tools/import_graph.py          # the upward imports and the cycles, one per line; exit 1 if any cycle
 
@@ -60,7 +61,12 @@ def imports(path: Path) -> list[str]:
     name = module_name(path)
     package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
     found: list[str] = []
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    tree = ast.parse(path.read_text(), str(path))
+    typing_only = {id(n) for block in ast.walk(tree) if isinstance(block, ast.If) and _is_type_checking(block.test)
+                   for stmt in block.body for n in ast.walk(stmt)}
+    for node in ast.walk(tree):
+        if id(node) in typing_only:  # under `if TYPE_CHECKING:`: for the type checker, never run
+            continue
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")
@@ -86,6 +92,12 @@ def _known() -> set[str]:
 
 
 _KNOWN: set[str] = set()
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    """Whether an if-test is ``TYPE_CHECKING`` or ``typing.TYPE_CHECKING``."""
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
 
 
 def graph() -> dict[str, set[str]]:

@@ -29,15 +29,17 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.equilibria import equilibrium_currents
 from ..model.flat import FlatFlag
+from ..model.psi import _PSI_HORNER
 from ..validate import InputError, check_integer, check_quantity, short_repr
 from ..validate.checks import is_real
 from ..validate.limits import MAX_FLAG_BOUND
 from ..validate.ranges import QUANTITIES
-from .rest_to_rest import _PSI_HORNER, RestToRest
 from .table_checks import flag_bound, lowest_rho
 
 if TYPE_CHECKING:  # SciPy's interpolate is imported where a conversion needs it, not with the package
     from scipy.interpolate import PPoly
+
+    from .rest_to_rest import RestToRest  # rest_to_rest builds its table here: no import back at run time
 
 Array = NDArray[np.float64]
 #: Coefficients per segment and output (degree 10, the degree of the paper's psi).
