@@ -15,11 +15,11 @@ from ..studies.compare import bandwidth_sweep, check_calibrate, compare, compare
 from ..studies.robustness import encoder_count, perturbed, plant_errors
 from ..studies.scenario import Scenario
 from ..studies.scenario_file import Robustness, read_scenario_file
-from ..studies.verify import scenario_on_drive
 from ..validate import InputError, check_quantity
 from ..validate.limits import check_study, estimate
 from ..validate.paths import PNG_MARK, check_output_dir, json_marks
 from .flags import add_force, count, out_dir, quantity
+from .plan import scenario_on_drive
 from .status import EXIT_STOPPED, exit_code, warn
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)

@@ -27,7 +27,6 @@ from ..plan.feasibility import InfeasiblePlanError
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..studies.scenario import PAPER_SCENARIOS, Scenario
 from ..studies.scenario_file import read_scenario_file
-from ..studies.verify import scenario_on_drive
 from ..validate import InputError
 from ..validate.paths import CSV_MARK, PNG_MARK, check_distinct, check_output, check_output_dir, json_marks
 from .calibrate import add_calibrate_command
@@ -36,7 +35,7 @@ from .design import add_design_command
 from .flags import add_force, count, out_dir, quantity
 from .identify import add_identify_command
 from .motor import add_motor_command
-from .plan import add_plan_command, check_plan_file
+from .plan import add_plan_command, check_plan_file, scenario_on_drive
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
 

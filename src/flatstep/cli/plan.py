@@ -18,6 +18,8 @@ from .status import EXIT_OK, EXIT_REFUSED, exit_code, warn
 
 if TYPE_CHECKING:  # the planners and Matplotlib load when the command runs, not with the command line
     from ..engine.result import SimResult
+    from ..plan.sequence import Step
+    from ..studies.scenario import Scenario
     from ..studies.scenario_file import ScenarioFile
 
 #: The controller types that follow a scenario plan's rho* (the others plan their own currents or ignore it).
@@ -95,8 +97,13 @@ def _print_steps(pf: "ScenarioFile") -> None:
     plan = pf.plan
     print(f"{pf.name}: {_count(len(pf.steps), 'step')} in {_count(plan.n, 'segment')}, {plan.tf - plan.t0:.6g} s "
           f"(t = {plan.t0:g} .. {plan.tf:.6g} s)")
-    width = max([14] + [len(label) for label, _, _ in pf.steps])
-    for label, start, duration in pf.steps:
+    _print_step_rows(pf.steps)
+
+
+def _print_step_rows(steps: "list[Step]") -> None:
+    """One line per move or dwell: its label, start and duration."""
+    width = max([14] + [len(label) for label, _, _ in steps])
+    for label, start, duration in steps:
         print(f"  {label:<{width}} start {start:10.6f} s  duration {duration:10.6f} s")
 
 
@@ -200,8 +207,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
 def _cmd_plan(args: argparse.Namespace) -> int:
     """``flatstep plan FILE.toml``: plan the waypoints, print the steps and margins, write plan.png, plan.json."""
     from ..studies.scenario_file import read_scenario_file
-    from ..studies.verify import verify_on_drive
-
     check_output_dir(args.out, "--out", PLAN_FILES, inputs=[args.file], force=args.force)  # before any work
     pf = read_scenario_file(args.file)
     if pf.limits is None and pf.planner == "rest_to_rest":
@@ -230,6 +235,76 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     (out / "plan.json").write_text(strict_json(report, indent=2) + "\n")
     print(f"  wrote {out / 'plan.png'} and {out / 'plan.json'}")
     return _exit(pf, report)
+
+
+def verify_on_drive(pf: "ScenarioFile", report: dict[str, Any], skip: bool = False) -> "ScenarioFile":
+    """``flatstep plan``'s check: fill plan.json's ``duration`` and ``verify``, print one line, return the plan file.
+
+    A plan within its limits that the drive does not keep on every case is refused (``report["feasible"]`` set
+    to false) with what binds and what to change; a time-optimal sequence is backed off first
+    (:func:`~flatstep.studies.verify.check_on_drive`). ``skip`` (``--no-verify``) says so and leaves the plan
+    unverified.
+    """
+    from ..studies.verify import check_on_drive
+
+    if skip:
+        report.update(duration=pf.plan.tf - pf.plan.t0, verify=dict(skipped=True))
+        print("  not verified on the drive (--no-verify)")
+        return pf
+    planner = pf.planner
+    before = pf.plan.tf - pf.plan.t0
+    pf, info = check_on_drive(pf, str(planner))
+    report.update(duration=pf.plan.tf - pf.plan.t0, verify=info, feasible=bool(info["verified"]),
+                  total_duration=pf.plan.tf - pf.plan.t0, tf=pf.plan.tf, segments=pf.plan.n,
+                  steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps])
+    cases = info["cases"]
+    bad = [c for c in cases if c["status"] != "ok"]
+    where = f"{len(cases)} plants (nominal and +-10 % on R, L, Km, J), {info['seconds']:.2f} s"
+    if info["verified"]:
+        slower = (f"; backed off from {before:.6g} s to {pf.plan.tf - pf.plan.t0:.6g} s"
+                  if info["backed_off"] else "")
+        print(f"  verified on the drive: {where}, every run ok, worst |theta - theta*| "
+              f"{info['worst_error']:.3g} rad{slower}")
+        if info["backed_off"]:
+            lim = info["limits"]
+            print("  the verified plan, within " + ", ".join(f"{k} = {lim[k]:.4g}" for k in
+                                                            ("torque_angle_max", "v_use", "speed_max") if lim[k]))
+            _print_step_rows(pf.steps)
+    else:
+        tried = f" after {len(info['rounds'])} plans" if info["rounds"] else ""
+        print(f"  not verified on the drive: {where}; {len(bad)} ended {', '.join(sorted({c['status'] for c in bad}))} "
+              f"(worst |theta - theta*| {info['worst_error']:.3g} rad){tried}; "
+              f"{info['binds']} binds: {info['advice']}")
+        if "suggested_limits" in info:
+            lim = info["suggested_limits"]
+            print("  limits derived for this drive (MotorLimits.for_drive): " +
+                  ", ".join(f"{k} = {lim[k]:.4g}" for k in ("i_hold", "speed_corner", "torque_angle_max", "v_use",
+                                                           "speed_max")))
+    return pf
+
+
+def scenario_on_drive(sf: "ScenarioFile", skip: bool = False) -> "Scenario":
+    """The file's scenario with the plan ``flatstep plan`` reports feasible: checked on the drive, backed off.
+
+    A plan made against ``[limits]`` runs only once the check of :func:`~flatstep.studies.verify.check_on_drive`
+    keeps it on the nominal and +-10 % plants (a time-optimal plan backed off as ``flatstep plan`` backs it off);
+    a plan the drive would lose is refused with what binds. ``skip`` (``--no-verify``) runs the file's plan as it is.
+    """
+    from ..studies.verify import check_on_drive
+
+    if skip or sf.limits is None:
+        return sf.scenario
+    checked, info = check_on_drive(sf, sf.planner)
+    if not info["verified"]:
+        raise ValueError(f"{sf.path}: the plan is not kept on the drive ({len(info['cases'])} plants: nominal and "
+                         f"+-10 % on R, L, Km, J; worst |theta - theta*| {info['worst_error']:.3g} rad): "
+                         f"{info['binds']} binds: {info['advice']}; 'flatstep plan' shows the check, --no-verify "
+                         "runs the plan anyway")
+    if info["backed_off"]:
+        print(f"flatstep: {sf.name}: the plan within [limits] is not kept on every plant; running the backed-off "
+              f"plan ({checked.plan.tf - checked.plan.t0:.6g} s instead of "
+              f"{sf.plan.tf - sf.plan.t0:.6g} s), as 'flatstep plan' reports it", file=sys.stderr)
+    return checked.scenario
 
 
 def add_plan_command(sub: Any) -> None:

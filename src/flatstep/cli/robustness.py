@@ -9,10 +9,10 @@ from typing import Any
 from ..json_out import strict_json
 from ..studies.robustness import REST_AFTER, encoder_count, plant_errors, run_study
 from ..studies.scenario_file import Robustness, read_scenario_file
-from ..studies.verify import scenario_on_drive
 from ..validate.limits import check_study, estimate
 from ..validate.paths import PNG_MARK, check_output_dir, json_marks
 from .flags import add_force, count, out_dir
+from .plan import scenario_on_drive
 from .status import EXIT_STOPPED, exit_code
 
 #: The files ``flatstep robustness --out`` writes, and the first bytes that make an existing one flatstep's.

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
@@ -347,7 +346,7 @@ def replan_steps(plan: PiecewisePlan, steps: list[tuple[str, float, float]], mot
 DEFAULT_CONTROL_RATE = 20e3
 
 
-def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[Any, dict[str, Any]]:
+def check_on_drive(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[Any, dict[str, Any]]:
     """A plan file's plan checked on its drive, and backed off when it is a time-optimal sequence.
 
     The first plan is the file's; the second is made within the file's limits tightened to those derived for the drive
@@ -386,69 +385,3 @@ def check_plan_file(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[An
     scenario = replace(pf.scenario, plan=plan, t_end=max(pf.scenario.t_end, plan.tf + (pf.scenario.t_end - pf.plan.tf)))
     return replace(pf, scenario=scenario, limits=limits, steps=made["steps"]), info
 
-
-def verify_on_drive(pf: Any, report: dict[str, Any], skip: bool = False) -> Any:
-    """``flatstep plan``'s check: fill plan.json's ``duration`` and ``verify``, print one line, return the plan file.
-
-    A plan within its limits that the drive does not keep on every case is refused (``report["feasible"]`` set
-    to false) with what binds and what to change; a time-optimal sequence is backed off first
-    (:func:`check_plan_file`). ``skip`` (``--no-verify``) says so and leaves the plan unverified.
-    """
-    if skip:
-        report.update(duration=pf.plan.tf - pf.plan.t0, verify=dict(skipped=True))
-        print("  not verified on the drive (--no-verify)")
-        return pf
-    planner = pf.planner
-    before = pf.plan.tf - pf.plan.t0
-    pf, info = check_plan_file(pf, str(planner))
-    report.update(duration=pf.plan.tf - pf.plan.t0, verify=info, feasible=bool(info["verified"]),
-                  total_duration=pf.plan.tf - pf.plan.t0, tf=pf.plan.tf, segments=pf.plan.n,
-                  steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps])
-    cases = info["cases"]
-    bad = [c for c in cases if c["status"] != "ok"]
-    where = f"{len(cases)} plants (nominal and +-10 % on R, L, Km, J), {info['seconds']:.2f} s"
-    if info["verified"]:
-        slower = (f"; backed off from {before:.6g} s to {pf.plan.tf - pf.plan.t0:.6g} s"
-                  if info["backed_off"] else "")
-        print(f"  verified on the drive: {where}, every run ok, worst |theta - theta*| "
-              f"{info['worst_error']:.3g} rad{slower}")
-        if info["backed_off"]:
-            lim = info["limits"]
-            print("  the verified plan, within " + ", ".join(f"{k} = {lim[k]:.4g}" for k in
-                                                            ("torque_angle_max", "v_use", "speed_max") if lim[k]))
-            width = max([14] + [len(label) for label, _, _ in pf.steps])
-            for label, start, duration in pf.steps:
-                print(f"  {label:<{width}} start {start:10.6f} s  duration {duration:10.6f} s")
-    else:
-        tried = f" after {len(info['rounds'])} plans" if info["rounds"] else ""
-        print(f"  not verified on the drive: {where}; {len(bad)} ended {', '.join(sorted({c['status'] for c in bad}))} "
-              f"(worst |theta - theta*| {info['worst_error']:.3g} rad){tried}; "
-              f"{info['binds']} binds: {info['advice']}")
-        if "suggested_limits" in info:
-            lim = info["suggested_limits"]
-            print("  limits derived for this drive (MotorLimits.for_drive): " +
-                  ", ".join(f"{k} = {lim[k]:.4g}" for k in ("i_hold", "speed_corner", "torque_angle_max", "v_use",
-                                                           "speed_max")))
-    return pf
-
-
-def scenario_on_drive(sf: Any, skip: bool = False) -> Any:
-    """The file's scenario with the plan ``flatstep plan`` reports feasible: checked on the drive, backed off.
-
-    A plan made against ``[limits]`` runs only once the check of :func:`flatstep.studies.verify.check_plan_file`
-    keeps it on the nominal and +-10 % plants (a time-optimal plan backed off as ``flatstep plan`` backs it off);
-    a plan the drive would lose is refused with what binds. ``skip`` (``--no-verify``) runs the file's plan as it is.
-    """
-    if skip or sf.limits is None:
-        return sf.scenario
-    checked, info = check_plan_file(sf, sf.planner)
-    if not info["verified"]:
-        raise ValueError(f"{sf.path}: the plan is not kept on the drive ({len(info['cases'])} plants: nominal and "
-                         f"+-10 % on R, L, Km, J; worst |theta - theta*| {info['worst_error']:.3g} rad): "
-                         f"{info['binds']} binds: {info['advice']}; 'flatstep plan' shows the check, --no-verify "
-                         "runs the plan anyway")
-    if info["backed_off"]:
-        print(f"flatstep: {sf.name}: the plan within [limits] is not kept on every plant; running the backed-off "
-              f"plan ({checked.plan.tf - checked.plan.t0:.6g} s instead of "
-              f"{sf.plan.tf - sf.plan.t0:.6g} s), as 'flatstep plan' reports it", file=sys.stderr)
-    return checked.scenario
