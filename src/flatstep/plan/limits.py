@@ -88,6 +88,8 @@ class MotorLimits:
     speed_max, accel_max, jerk_max : float, optional
         Caps [rad/s, rad/s^2, rad/s^3].
 
+    Notes
+    -----
     Every field is a number (not a bool, not a string) in its range of :mod:`flatstep.validate.ranges`:
     ``v_bus`` that of ``v_bus``, the currents that of ``current``, ``speed_corner`` and ``speed_max`` that of
     ``speed``, ``accel_max`` ``acceleration``, ``jerk_max`` ``jerk``, ``torque_angle_max`` ``torque_angle`` and
