@@ -105,7 +105,7 @@ _ADDRESS = re.compile(r" at 0x[0-9a-f]+")
 
 
 def text(s: str) -> str:
-    """reST roles as code (``:class:`~a.b.C``` -> ```C```), in Markdown."""
+    """The reST roles as code (``:class:`~a.b.C``` -> ```C```), in Markdown."""
     def short(m: re.Match[str]) -> str:
         whole = m.group(0)
         name = m.group(1)
@@ -247,7 +247,7 @@ def _home(obj: Any) -> str:
         for m in mods:
             if rel == m or rel.startswith(m + "."):
                 return page
-    for page, mods in PUBLIC.items():  # defined in an internal module, exported by a public package
+    for page in PUBLIC:  # defined in an internal module, exported by a public package
         if rel.split(".")[0] == page:
             return page
     return ""
