@@ -33,7 +33,7 @@ PUBLIC: dict[str, list[str]] = {
               "model.equilibria", "model.psi"],
     "plan": ["plan.protocol", "plan.rest_to_rest", "plan.waypoints", "plan.time_optimal", "plan.sequence",
              "plan.piecewise", "plan.limits", "plan.feasibility", "plan.d_current", "plan.loss_aware",
-             "plan.copper", "plan.baselines"],
+             "plan.copper", "plan.baselines", "plan.export"],
     "control": ["control"],
     "loop": ["loop.drive", "loop.sensors", "loop.observers", "loop.reference", "loop.design"],
     "engine": ["engine.simulate", "engine.settings", "engine.result"],

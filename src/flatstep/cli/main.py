@@ -32,6 +32,7 @@ from ..validate.paths import CSV_MARK, PNG_MARK, check_distinct, check_output, c
 from .calibrate import add_calibrate_command
 from .compare import add_compare_command
 from .design import add_design_command
+from .export import add_export_command
 from .flags import add_force, count, out_dir, quantity
 from .identify import add_identify_command
 from .motor import add_motor_command
@@ -174,7 +175,7 @@ Commands: reproduce (the paper's figures), simulate (one move), design (gains fo
 scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
 from a recording), calibrate (detent, friction and load from the drive's own sensors), plan (the fastest
 moves through waypoints under the motor's limits), motor (a motor from its datasheet, with what was assumed),
-bench (benchmarks). 'flatstep COMMAND --help' lists a command's flags.
+export (a plan as step timestamps or a setpoint stream), bench (benchmarks). 'flatstep COMMAND --help' lists a command's flags.
 
 Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
 move; 4 a controller faulted; 5 a run stopped before its end (non-finite state, or the continuous law
@@ -254,6 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_plan_command(sub)
     add_calibrate_command(sub)
     add_motor_command(sub)
+    add_export_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)",
                          description="Benchmarks side by side in one run: medians and their ratios against each "

@@ -104,6 +104,7 @@ INTEGER_RANGES: dict[str, tuple[int, int]] = {
     "repeat": (1, 100_000),
     "seeds": (1, 50),
     "periods": (1, 256),
+    "microsteps": (1, 1024),
 }
 
 
