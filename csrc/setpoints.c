@@ -4,8 +4,8 @@
 
 int setpoint_at(const struct setpoint_stream *s, double t, int mode, fs_real out[SETPOINT_LEN])
 {
-    if (!s || !out || !s->rows || s->n == 0 || !isfinite(s->rate) || !(s->rate > 0) || !isfinite(s->t0) ||
-        !isfinite(t) || (mode != SETPOINT_HOLD && mode != SETPOINT_LINEAR))
+    if (!s || !out || !s->rows || s->n == 0 || !isfinite(s->rate) || !(s->rate > 0) || !isfinite(s->t0) || !isfinite(t)
+        || (mode != SETPOINT_HOLD && mode != SETPOINT_LINEAR))
         return SETPOINT_EARGS;
     double position = (t - s->t0) * s->rate;  // in rows
     uint32_t last = s->n - 1;
