@@ -23,7 +23,7 @@ solves it.
 * ``field_weakening=False``: :math:`i_d = 0` throughout (field-oriented control without field weakening);
 * rest at both ends: :math:`\theta(0) = 0`, :math:`\theta(t_f) =` ``distance``, :math:`\omega = 0`, the torque
   current that holds the load there, and :math:`i_d =` ``i_hold``, the current across the torque axis that
-  flatstep's plans start and end with (0 without field weakening).
+  the paper's law's plans start and end with (0 without field weakening; ``i_rest`` to choose).
 
 The torque-angle cap of ``limits`` is the paper's law's and is not imposed: the optimum is that of the motor, not
 of one law. A jerk cap is refused (it needs the voltage's derivative).
@@ -32,7 +32,8 @@ of one law. A jerk cap is refused (it needs the voltage's derivative).
 voltages at the ``grid + 1`` nodes, the limits at the nodes, every variable scaled to about 1. Its error falls
 with the square of the interval where the solution is smooth and with the interval at a switch;
 :func:`grid_converged` solves on two grids and reports the change. With ``voltage="phase"`` the limit turns with
-the rotor, so the grid is refined to at least :data:`PHASE_NODES_PER_TURN` nodes per electrical turn of the move.
+the rotor, so the grid is refined to at least :data:`PHASE_NODES_PER_TURN` nodes per electrical turn of the move;
+with a detent torque, to at least :data:`DETENT_NODES_PER_PERIOD` nodes per period of the detent.
 """
 from __future__ import annotations
 
@@ -53,6 +54,8 @@ Array = NDArray[np.float64]
 VOLTAGES = ("vector", "phase")
 #: The least nodes per electrical turn of the move with ``voltage="phase"`` (the limit turns with the rotor).
 PHASE_NODES_PER_TURN = 16
+#: The least nodes per period of the detent torque, when there is one.
+DETENT_NODES_PER_PERIOD = 8
 #: The most intervals of a grid.
 MAX_GRID = 20000
 _IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.max_iter": 3000,
@@ -164,6 +167,15 @@ def _check_grid(grid: Any) -> int:
     return int(grid)
 
 
+def _least_grid(d: float, motor: MotorParams, voltage: str, effects: PlantEffects) -> int:
+    """The fewest intervals that resolve the electrical turns (phase limit) and the detent's periods of the move."""
+    turns = motor.Nr * abs(d) / (2 * math.pi)
+    least = PHASE_NODES_PER_TURN * turns if voltage == "phase" else 0.0
+    if effects.detent_torque > 0:
+        least = max(least, DETENT_NODES_PER_PERIOD * effects.detent_harmonic * turns)
+    return math.ceil(least)
+
+
 def _plant_torque(ca: Any, omega: Any, theta: Any, motor: MotorParams, effects: PlantEffects) -> Any:
     """The torque of ``effects`` on the rotor [N m], symbolic (:meth:`PlantEffects.torque`)."""
     out = -effects.detent_torque * ca.sin(effects.detent_harmonic * motor.Nr * theta)
@@ -193,7 +205,8 @@ def _first_guess(d: float, motor: MotorParams, limits: MotorLimits, v_lim: float
 
 def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, voltage: str = "vector",
                  field_weakening: bool = True, grid: int = 200, load: float = 0.0,
-                 effects: Optional[PlantEffects] = None, initial: Optional[OptimalMove] = None) -> OptimalMove:
+                 effects: Optional[PlantEffects] = None, i_rest: Optional[float] = None,
+                 initial: Optional[OptimalMove] = None) -> OptimalMove:
     """The minimum-time rest-to-rest move over ``distance`` [rad] under ``limits`` (module docstring).
 
     Parameters
@@ -210,11 +223,16 @@ def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     field_weakening : bool
         Whether ``i_d`` is free (it may go negative to cancel back EMF); False holds it at 0.
     grid : int
-        Intervals of the collocation grid, in [4, ``MAX_GRID``] (raised for ``voltage="phase"``).
+        Intervals of the collocation grid, in [4, ``MAX_GRID``] (raised for ``voltage="phase"`` and a detent,
+        module docstring).
     load : float
         A constant load torque [N m].
     effects : PlantEffects, optional
         Detent, Coulomb friction and iron loss of the plant.
+    i_rest : float, optional
+        The d current at rest at both ends [A]; default ``limits.i_hold`` with field weakening (the paper's law's
+        plans), 0 without. A planner whose plans rest at ``i_d = 0`` (a field-oriented one) is measured against
+        ``i_rest=0``.
     initial : OptimalMove, optional
         A solution to start from (interpolated onto this grid), e.g. the same problem on a coarser grid.
 
@@ -234,13 +252,16 @@ def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     """
     d, voltage, grid, load, effects = _check_options(distance, motor, limits, voltage, grid, load, effects)
     field_weakening = bool(field_weakening)
+    if i_rest is None:
+        i_rest = limits.i_hold if field_weakening else 0.0
+    i_rest = check_quantity("d_current", i_rest, as_name="i_rest")
+    if not field_weakening and i_rest != 0:
+        raise InputError("i_rest", i_rest, f"i_rest={i_rest!r} A: without field weakening i_d is held at 0, "
+                         "at rest too")
     ca = _casadi()
     m = motor
     v_lim = limits.v_use * limits.v_bus
-    if voltage == "phase":
-        grid = min(MAX_GRID, max(grid, math.ceil(PHASE_NODES_PER_TURN * m.Nr * abs(d) / (2 * math.pi))))
-    n = grid
-    i_rest = limits.i_hold if field_weakening else 0.0
+    n = min(MAX_GRID, max(grid, _least_grid(d, m, voltage, effects)))
     iq0 = _rest_torque_current(0.0, m, load, effects)
     iq1 = _rest_torque_current(d, m, load, effects)
     for name, iq in (("start", iq0), ("end", iq1)):
@@ -348,7 +369,7 @@ def grid_converged(distance: float, motor: MotorParams, limits: MotorLimits, *, 
     if fine_n <= coarse_n:
         raise InputError("grids", grids, f"grids={grids!r}: the second grid must be finer than the first")
     coarse = minimum_time(distance, motor, limits, grid=coarse_n, **options)
-    # a grid the phase limit refined: the fine one doubles it
+    # a grid the phase limit or the detent refined: the fine one doubles it
     fine_n = max(fine_n, 2 * coarse.grid) if coarse.grid > coarse_n else fine_n
     fine = minimum_time(distance, motor, limits, grid=min(fine_n, MAX_GRID), initial=coarse, **options)
     return Converged(coarse, fine, abs(fine.tf / coarse.tf - 1.0))
