@@ -58,6 +58,7 @@ PHASE_NODES_PER_TURN = 16
 DETENT_NODES_PER_PERIOD = 8
 #: The most intervals of a grid.
 MAX_GRID = 20000
+_SLOWER = (1.0, 1.6, 2.5)  # the first guesses' cruise speeds, as fractions 1 / slower of 0.9 the steady top speed
 _IPOPT = {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.max_iter": 3000,
           "ipopt.tol": 1e-9, "ipopt.acceptable_tol": 1e-7, "ipopt.mu_strategy": "adaptive"}
 
@@ -191,16 +192,22 @@ def _rest_torque_current(theta: float, motor: MotorParams, load: float, effects:
     return float(load - effects.torque(0.0, theta, motor)) / motor.Km
 
 
-def _first_guess(d: float, motor: MotorParams, limits: MotorLimits, v_lim: float) -> float:
-    """A duration [s] to start from: the trapezoid at 70 % of the current's torque, cruising at the steady top speed."""
+def _first_guess(d: float, motor: MotorParams, limits: MotorLimits, v_lim: float,
+                 slower: float = 1.0) -> tuple[float, float, float]:
+    """A move to start from: (duration [s], acceleration [rad/s^2], cruise speed [rad/s]) of a trapezoid.
+
+    Its acceleration is 70 % of the current's torque over J, its cruise speed ``1 / slower`` of 0.9 times the
+    steady top speed (or the speed cap).
+    """
     a = 0.7 * motor.Km * limits.i_max / motor.J
-    w = 0.9 * v_lim / motor.Km
+    w = 0.9 * v_lim / motor.Km / slower
     if limits.speed_max is not None:
         w = min(w, limits.speed_max)
     d = abs(d)
     if w * w / a >= d:
-        return 2.0 * math.sqrt(d / a)
-    return w / a + d / w
+        w = math.sqrt(d * a)
+        return 2.0 * w / a, a, w
+    return w / a + d / w, a, w
 
 
 def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, voltage: str = "vector",
@@ -269,7 +276,7 @@ def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
             raise ValueError(f"the rest at the {name} needs {math.hypot(i_rest, iq):.4g} A (i_d {i_rest:g} A, "
                              f"i_q {iq:.4g} A against the load and detent), above i_max={limits.i_max:g} A")
 
-    t_scale = _first_guess(d, m, limits, v_lim)
+    t_scale = _first_guess(d, m, limits, v_lim)[0]
     w_scale = abs(d) / t_scale
     sx = np.array([limits.i_max, limits.i_max, w_scale, abs(d)])  # state scales: i_d, i_q, omega, theta
 
@@ -310,16 +317,20 @@ def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     opti.subject_to(xs[:, n] == ca.DM([i_rest / limits.i_max, iq1 / limits.i_max, 0.0, sign]))
     opti.subject_to(ts >= 1e-3)
     opti.minimize(ts)
-    _set_initial(opti, xs, us, ts, d, m, limits, sx, v_lim, t_scale, n, i_rest, initial)
     opti.solver("ipopt", dict(_IPOPT))
-    try:
-        sol = opti.solve()
-        stats = sol.stats()
-        get = sol.value
-    except RuntimeError:
-        stats = opti.stats()
+    sol = None
+    for slower in (1.0,) if initial is not None else _SLOWER:  # first guesses, until IPOPT converges from one
+        guess = _first_guess(d, m, limits, v_lim, slower)
+        _set_initial(opti, xs, us, ts, d, m, limits, sx, v_lim, t_scale, n, i_rest, initial, guess)
+        try:
+            sol = opti.solve()
+            break
+        except RuntimeError:
+            continue
+    if sol is None:
         raise ValueError(f"IPOPT found no minimum-time move of {d} rad ({voltage} bus, field weakening "
-                         f"{field_weakening}, grid {n}): {stats.get('return_status')}") from None
+                         f"{field_weakening}, grid {n}): {opti.stats().get('return_status')}")
+    stats, get = sol.stats(), sol.value
     x = np.asarray(get(xs)) * sx[:, None]
     u = np.asarray(get(us)) * v_lim
     duration = float(get(ts)) * t_scale
@@ -332,8 +343,9 @@ def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
 
 
 def _set_initial(opti: Any, xs: Any, us: Any, ts: Any, d: float, m: MotorParams, limits: MotorLimits, sx: Array,
-                 v_lim: float, t_scale: float, n: int, i_rest: float, initial: Optional[OptimalMove]) -> None:
-    """The starting point: ``initial`` interpolated onto the grid, or a smooth move of the first-guess duration."""
+                 v_lim: float, t_scale: float, n: int, i_rest: float, initial: Optional[OptimalMove],
+                 guess: tuple[float, float, float]) -> None:
+    """The starting point: ``initial`` interpolated onto the grid, or the first-guess trapezoid ``guess``."""
     s = np.linspace(0.0, 1.0, n + 1)
     if initial is not None:
         tau = initial.t / initial.tf
@@ -341,10 +353,14 @@ def _set_initial(opti: Any, xs: Any, us: Any, ts: Any, d: float, m: MotorParams,
         u = np.array([np.interp(s, tau, y) for y in (initial.v_d, initial.v_q)])
         tf = initial.tf
     else:
-        tf = t_scale
-        theta = d * (10 * s**3 - 15 * s**4 + 6 * s**5)
-        omega = d * (30 * s**2 - 60 * s**3 + 30 * s**4) / tf
-        accel = d * (60 * s - 180 * s**2 + 120 * s**3) / tf**2
+        tf, a, w = guess
+        t = s * tf
+        t1 = w / a
+        omega = np.minimum(np.minimum(a * t, w), a * (tf - t))
+        accel = np.where(t < t1, a, np.where(t > tf - t1, -a, 0.0))
+        theta = np.concatenate([[0.0], np.cumsum(0.5 * (omega[1:] + omega[:-1]) * np.diff(t))])
+        theta = d * theta / theta[-1]
+        omega, accel = np.sign(d) * omega, np.sign(d) * accel
         i_q = np.clip((m.J * accel + m.B * omega) / m.Km, -limits.i_max, limits.i_max)
         i_d = np.full_like(s, i_rest)
         v_q = m.R * i_q + m.Km * omega + m.Nr * omega * m.L * i_d
