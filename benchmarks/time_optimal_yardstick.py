@@ -16,6 +16,7 @@ bus and move, under the limits of docs/planning.md's comparison (``v_use`` 0.84,
     .venv/bin/python benchmarks/time_optimal_yardstick.py                     # 3 motors x 24, 12 V x 5 moves
     .venv/bin/python benchmarks/time_optimal_yardstick.py --motors nema17 --buses 24 --moves 1,5 --no-track
     .venv/bin/python benchmarks/time_optimal_yardstick.py --detent            # the optimum with the detent
+    .venv/bin/python benchmarks/time_optimal_yardstick.py --voltage phase     # each phase within v_use v_bus
 
 Durations in ms; a ratio over 1 is flatstep slower than the other.
 """
@@ -76,7 +77,7 @@ def field_weakening_planner() -> Optional[Any]:
 
 
 def case(motor: MotorParams, limits: MotorLimits, d: float, *, effects: PlantEffects, tracking: bool,
-         fw: Optional[Any]) -> dict[str, Any]:
+         fw: Optional[Any], voltage: str = "vector") -> dict[str, Any]:
     """One motor, bus and move: every planner's duration [s], the optima, the baselines and the tracking."""
     row: dict[str, Any] = {}
     try:
@@ -86,7 +87,7 @@ def case(motor: MotorParams, limits: MotorLimits, d: float, *, effects: PlantEff
         plan, row["flatstep"], row["flatstep_error"] = None, math.nan, str(exc)
     for key, weak in (("optimum", True), ("optimum_id0", False)):
         try:
-            c = grid_converged(d, motor, limits, grids=GRIDS, field_weakening=weak, effects=effects)
+            c = grid_converged(d, motor, limits, grids=GRIDS, field_weakening=weak, effects=effects, voltage=voltage)
             row[key], row[f"{key}_change"], row[f"{key}_peaks"] = c.fine.tf, c.change, c.fine.peaks()
         except ValueError as exc:  # printed as "-", the reason kept in the JSON
             row[key], row[f"{key}_change"], row[f"{key}_error"] = math.nan, math.nan, str(exc)
@@ -98,7 +99,7 @@ def case(motor: MotorParams, limits: MotorLimits, d: float, *, effects: PlantEff
         except ValueError as exc:
             row["fw_planner"], row["fw_planner_error"] = math.nan, str(exc)
         capped = MotorLimits(**{**limits.as_dict(), "speed_max": cap})
-        c = grid_converged(d, motor, capped, grids=GRIDS, i_rest=0.0, effects=effects)
+        c = grid_converged(d, motor, capped, grids=GRIDS, i_rest=0.0, effects=effects, voltage=voltage)
         row["optimum_fw_problem"], row["optimum_fw_problem_change"], row["speed_cap"] = c.fine.tf, c.change, cap
     ruckig, trap = best_ruckig(d, motor, limits), best_trapezoid(d, motor, limits)
     row["ruckig"], row["ruckig_caps"], row["ruckig_margins"] = ruckig.duration, ruckig.caps, ruckig.margins
@@ -160,6 +161,8 @@ def main() -> int:
     parser.add_argument("--moves", default=",".join(f"{m:g}" for m in MOVES), help="distances [rad]")
     parser.add_argument("--no-track", action="store_true", help="skip the runs on the 20 kHz drive")
     parser.add_argument("--detent", action="store_true", help="the optimum with the motor's detent torque")
+    parser.add_argument("--voltage", choices=("vector", "phase"), default="vector",
+                        help="the optimum's bus limit: the voltage vector's norm (the planners'), or each phase's")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON instead of the tables")
     args = parser.parse_args()
     fw = field_weakening_planner()
@@ -172,7 +175,8 @@ def main() -> int:
             limits = limits_for(v_bus, i_max)
             for d in (float(m) for m in args.moves.split(",")):
                 row = dict(motor=Path(name).stem, v_bus=v_bus, move=d, i_max=i_max,
-                           **case(motor, limits, d, effects=effects, tracking=not args.no_track, fw=fw))
+                           **case(motor, limits, d, effects=effects, tracking=not args.no_track, fw=fw,
+                                voltage=args.voltage))
                 rows.append(row)
                 print(f"{row['motor']} {v_bus:g} V {d:g} rad: flatstep {_ms(row['flatstep'])} ms, optimum "
                       f"{_ms(row['optimum'])} ms ({time.perf_counter() - start:.0f} s)", file=sys.stderr, flush=True)
