@@ -64,6 +64,13 @@ def test_field_weakening_and_the_phase_limit_only_help():
     assert np.max(np.abs([phase.v_a, phase.v_b])) <= phase.v_limit * (1 + 1e-6)
 
 
+def test_a_negative_move_mirrors_the_positive_one():
+    up, down = minimum_time(0.5, NEMA17, LIMITS24, grid=120), minimum_time(-0.5, NEMA17, LIMITS24, grid=120)
+    assert down.tf == pytest.approx(up.tf, rel=1e-6)
+    assert np.allclose(down.theta, -up.theta, atol=1e-6) and np.allclose(down.i_q, -up.i_q, atol=1e-5)
+    assert np.allclose(down.i_d, up.i_d, atol=1e-5)
+
+
 def test_caps_and_grid_convergence():
     capped = MotorLimits(v_bus=24.0, i_max=1.0, v_use=0.84, speed_max=40.0)
     c = grid_converged(1.0, NEMA17, capped, grids=(60, 120))

@@ -300,7 +300,7 @@ def minimum_time(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     if voltage == "vector":
         opti.subject_to(us[0, :] ** 2 + us[1, :] ** 2 <= 1)
     else:
-        phi = m.Nr * th * (1.0 if d > 0 else -1.0)
+        phi = m.Nr * th
         va = us[0, :] * ca.cos(phi) - us[1, :] * ca.sin(phi)
         vb = us[0, :] * ca.sin(phi) + us[1, :] * ca.cos(phi)
         opti.subject_to(opti.bounded(-1, va, 1))
