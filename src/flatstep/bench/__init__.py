@@ -10,6 +10,11 @@ c. one controller step: a C driver (ns per call; instructions per call by callgr
    the Python reference;
 d. batch throughput: 60 ms closed-loop runs per second at 20 kHz sampled control, one thread against all cores.
 
+The yardsticks of the time-optimal planners (benchmarks/time_optimal_yardstick.py, docs/planning.md section 6)
+live here too, imported by their own names: :mod:`.collocation` (the true minimum time by direct collocation,
+CasADi + IPOPT), :mod:`.fair_baselines` (Ruckig with i_d = 0, a trapezoid with field weakening) and
+:mod:`.drive_tracking` (a plan on the 20 kHz drive).
+
 The machine may be shared: the cases of a benchmark take turns in every round, medians are quoted, and the
 ratios measured in the same run are the figures that mean something. Clocks are read here, never in the library.
 """

@@ -11,6 +11,12 @@ with :math:`i_q = (J\ddot\theta + B\dot\theta)/K_m`, so only the shape of :math:
 * ``ruckig``: the time-optimal jerk-limited profile of the ``ruckig`` package (PyPI, the ``bench`` extra); its
   duration is Ruckig's, and its table is the seven-phase S-curve of :func:`.segments.scurve_rows`, whose
   duration matches Ruckig's (``tests/test_plan_baselines.py``).
+
+Both hold the paper's law's current across the torque axis (``i_hold``) throughout, and the acceleration cap is
+found by bisection at each speed cap and jerk time: baselines for the (rho, theta) law, not the fastest a drive
+can do with the same profiles. A field-oriented drive's own, Ruckig with ``i_d = 0`` and a trapezoid with field
+weakening, each with its caps searched on a full grid, are :mod:`flatstep.bench.fair_baselines`
+(docs/planning.md, section 6).
 """
 from __future__ import annotations
 
