@@ -25,8 +25,7 @@ LAYERS = {
     "plan": 2,
     "control": 3,
     "loop": 4,
-    "core": 5, "_core": 5, "_core_maps": 5, "_core_runs": 5, "_core_structs": 5, "_core_time_optimal": 5,
-    "_core_traj": 5, "_build_core": 5,
+    "core": 5,  # the binding to the C core: it imports the parts above, and nothing below imports it
     "_flatstep_core": 0,  # the compiled C core itself: it imports no Python
     "engine": 6,
     "interop": 7,

@@ -1,6 +1,6 @@
 """The cffi handle of the C core (csrc/), its status and error codes, struct builders and array marshalling.
 
-:mod:`flatstep._core_maps` and :mod:`flatstep._core_runs` share them. Arrays are float64, C-contiguous,
+:mod:`flatstep.core.maps` and :mod:`flatstep.core.runs` share them. Arrays are float64, C-contiguous,
 row-major ``(n, k)`` on the C side and ``(k, n)`` (components first, as in the Python reference) on this side.
 """
 from __future__ import annotations
@@ -12,14 +12,14 @@ from typing import Any, Callable, Iterator, NamedTuple, Optional, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._flatstep_core import ffi, lib
-from .control.protocol import Controller
-from .control.smc import FlatnessSMC
-from .errors import RunError
-from .model.motor import MotorParams
-from .model.plant import PlantEffects
-from .plan.protocol import Plan
-from .validate import check_positive
+from .._flatstep_core import ffi, lib
+from ..control.protocol import Controller
+from ..control.smc import FlatnessSMC
+from ..errors import RunError
+from ..model.motor import MotorParams
+from ..model.plant import PlantEffects
+from ..plan.protocol import Plan
+from ..validate import check_positive
 
 Array = NDArray[np.float64]
 #: A cffi cdata object (a C pointer or buffer): cffi ships no type information, so it is ``Any`` to mypy.

@@ -10,14 +10,14 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ._flatstep_core import ffi, lib
-from .model.motor import MotorParams
-from .plan.envelope import envelope
-from .plan.limits import MotorLimits
-from .plan.piecewise import NCOEF
-from .plan.smoothing import DEFAULT_WIDTHS, MAX_SEGMENTS, Table, check_samples, planning_limits, timing
-from .validate import InputError
-from .validate.limits import MAX_PLAN_SAMPLES
+from .._flatstep_core import ffi, lib
+from ..model.motor import MotorParams
+from ..validate import InputError
+from ..validate.limits import MAX_PLAN_SAMPLES
+from .envelope import envelope
+from .limits import MotorLimits
+from .piecewise import NCOEF
+from .smoothing import DEFAULT_WIDTHS, MAX_SEGMENTS, Table, check_samples, planning_limits, timing
 
 #: The workspace time_optimal_plan needs [fs_real].
 WORK_LEN = int(lib.time_optimal_work_len())
@@ -41,7 +41,7 @@ def limits_struct(limits: MotorLimits) -> Any:
 def plan_raw(distance: float, motor: MotorParams, limits: MotorLimits,
              widths: Optional[tuple[float, ...]] = None, work_len: int = WORK_LEN) -> tuple[int, Any]:
     """``time_optimal_plan``'s return code and ``struct to_result *`` (for tests of the error codes)."""
-    from ._core_structs import motor_struct
+    from ..core.structs import motor_struct
 
     work = np.empty(max(work_len, 1))
     w = np.ascontiguousarray(widths if widths else [], dtype=np.float64)

@@ -3,7 +3,7 @@
 The continuous loop (``continuous_run``) and its result (``arrays_result``), the one sampled loop
 (``sampled_run``) and many sampled runs at once (``batch_sampled``).
 
-Every run takes any controller with a C twin (:func:`~flatstep._core_structs.controller_struct`) and the plant
+Every run takes any controller with a C twin (:func:`~flatstep.core.structs.controller_struct`) and the plant
 as ``(motor, load, effects)``.
 """
 from __future__ import annotations
@@ -13,7 +13,16 @@ from typing import Any, Optional, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._core_structs import (
+from ..control.protocol import Controller
+from ..control.smc import FlatnessSMC
+from ..engine.result import full_step
+from ..loop.drive import Drive
+from ..loop.observers import Observer
+from ..loop.sensors import Sensors
+from ..model.motor import MotorParams
+from ..model.plant import PlantEffects
+from ..model.torque_model import TorqueModel
+from .structs import (
     RHO_MIN,
     V_LIMIT,
     Array,
@@ -34,15 +43,6 @@ from ._core_structs import (
     lib,
     smc_struct,
 )
-from .control.protocol import Controller
-from .control.smc import FlatnessSMC
-from .engine.result import full_step
-from .loop.drive import Drive
-from .loop.observers import Observer
-from .loop.sensors import Sensors
-from .model.motor import MotorParams
-from .model.plant import PlantEffects
-from .model.torque_model import TorqueModel
 
 #: Names of the columns of :func:`result_columns`, in the order of ``RES_*`` in csrc/arrays.h.
 RESULT_COLUMNS = ("va", "vb", "acc", "rho", "phi", "theta_ref", "omega_ref", "rho_ref", "ia_ref", "ib_ref",
