@@ -80,14 +80,9 @@ def _shape(out: Array, like: tuple[int, ...]) -> Array:
     return out.T.reshape((out.shape[1],) + like)
 
 
-def _motor(m: MotorParams) -> dict[str, float]:
-    """The fields of a ``struct motor_params`` holding ``m``."""
-    return dict(R=m.R, L=m.L, Km=m.Km, J=m.J, B=m.B, Nr=m.Nr)
-
-
 def motor_struct(m: MotorParams) -> CData:
-    """A ``struct motor_params`` holding ``m``."""
-    return ffi.new("struct motor_params *", _motor(m))
+    """A ``struct motor_params`` holding ``m`` (its fields: ``m.c_params()``)."""
+    return ffi.new("struct motor_params *", m.c_params())
 
 
 def plan_struct(p: Plan) -> CData:
@@ -140,18 +135,9 @@ def controller_struct(controller: Controller) -> BoundController:
     return BoundController(state, iface)
 
 
-def _effects(effects: Optional[PlantEffects]) -> dict[str, float]:
-    """The fields of a ``struct plant_effects`` (all zero: none)."""
-    if effects is None:
-        return {}
-    return dict(detent_torque=effects.detent_torque, detent_harmonic=effects.detent_harmonic,
-                coulomb_torque=effects.coulomb_torque, coulomb_speed=effects.coulomb_speed,
-                magnetizing_resistance=effects.magnetizing_resistance or 0.0)
-
-
 def _plant_fields(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> dict[str, Any]:
-    """The fields of a ``struct plant``: the simulated motor, its constant load torque and its effects."""
-    return dict(motor=_motor(motor), load=float(load), effects=_effects(effects))
+    """The fields of a ``struct plant``: the simulated motor, its constant load torque, its effects (none: zero)."""
+    return dict(motor=motor.c_params(), load=float(load), effects=effects.c_effects() if effects is not None else {})
 
 
 def _plant(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> CData:

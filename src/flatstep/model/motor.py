@@ -82,6 +82,18 @@ class MotorParams:
         """The parameters by name (``R``, ``L``, ``Km``, ``J``, ``B``, ``Nr``)."""
         return asdict(self)
 
+    def c_params(self) -> dict[str, float]:
+        """The fields of the C ``struct motor_params`` (csrc/motor.h) holding these parameters."""
+        return dict(R=self.R, L=self.L, Km=self.Km, J=self.J, B=self.B, Nr=self.Nr)
+
+
+def full_step(Nr: int) -> float:
+    r"""One full step of a two-phase motor with ``Nr`` rotor teeth [rad]: :math:`\pi/(2N_r)`.
+
+    A two-phase motor makes four full steps per electrical period :math:`2\pi/N_r`.
+    """
+    return math.pi / (2 * Nr)
+
 
 #: Named parameter sets. ``paper``: the motor of the paper's Section 3. ``nema17``: a NEMA 17-size hybrid
 #: stepper, Beckhoff AS1010-0000 (1.8 deg, 200 steps: Nr = 50; 1.0 A rated; R = 4.10 ohm; L = 9.50 mH;
