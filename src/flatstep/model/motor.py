@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..validate import check_count, check_finite, check_quantity
+from .datasheet_math import parameters_from_datasheet
 
 Load = Union[float, Callable[[NDArray[np.float64]], ArrayLike]]
 
@@ -65,11 +66,10 @@ class MotorParams:
         """The parameters from a datasheet's figures.
 
         :func:`flatstep.model.datasheet.from_datasheet` takes the same keywords and also returns what it assumed
-        and how sure that is.
+        and how sure that is; both derive the parameters with
+        :func:`flatstep.model.datasheet_math.parameters_from_datasheet`.
         """
-        from .datasheet import from_datasheet
-
-        return from_datasheet(**datasheet).params
+        return cls(**parameters_from_datasheet(**datasheet).params)
 
     def replace(self, **changes: float) -> "MotorParams":
         """Return a copy with some parameters changed (validated again)."""
