@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from flatstep._core_traj import traj_flag
+from flatstep.core.traj import traj_flag
 from flatstep.model.motor import PRESETS
 from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal import time_optimal

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flatstep._core_time_optimal import plan_raw
+from flatstep.plan.time_optimal_c import plan_raw
 from flatstep.model.motor import PRESETS
 from flatstep.plan import time_optimal as now
 from flatstep.plan.limits import MotorLimits

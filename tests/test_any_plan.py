@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep import _core
-from flatstep._core_structs import controller_struct
+from flatstep import core
+from flatstep.core.structs import controller_struct
 from flatstep._flatstep_core import ffi
 from flatstep.loop.design import design_gains
 from flatstep.control.protocol import is_static
@@ -89,7 +89,7 @@ def test_every_planner_output_is_a_plan(plans):
     assert {k: v for k, v in table.c_plan().items() if k != "traj"} == pytest.approx(PAPER_PLAN.as_dict())
     for plan in (PAPER_PLAN, table, plans["time_optimal"]):  # C plan_eval on struct plan: psi, or the table
         tt = np.linspace(plan.t0 - 0.001, plan.tf + 0.001, 301)
-        for a, b in zip(_core.plan_flag(plan, tt), plan.flag(tt), strict=True):
+        for a, b in zip(core.plan_flag(plan, tt), plan.flag(tt), strict=True):
             np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13 * max(1.0, np.max(np.abs(b))))
     with pytest.raises(ValueError, match=r"not a flatstep plan: it lacks \['theta1'"):
         check_plan(type("Half", (), {"t0": 0.0, "tf": 1.0})())
@@ -137,12 +137,12 @@ def test_c_loop_is_the_python_reference(kind, plan_name):
     ctrl = _controller(kind, plan)
     loop = fs.DriveLoop(control_period=TS, substeps=1)
     x0 = plan.x0(MOTOR.Nr)
-    X, V, _, status, _ = _core.run_sampled(ctrl, MOTOR, 0.0, x0, PARITY_PERIODS, Ts=TS, substeps=1,
+    X, V, _, status, _ = core.run_sampled(ctrl, MOTOR, 0.0, x0, PARITY_PERIODS, Ts=TS, substeps=1,
                                           effects=PLANT.effects)
     py = run_reference(MOTOR, ctrl, loop, x0, 0.0, PARITY_PERIODS, PLANT.effects)
     t = py["t"]
     assert np.sum(plan.breaks < t[-1]) >= 4 and np.ptp(X[3]) > 9e-4  # the window holds moves, and breaks of the table
-    assert not (status & _core.FAULT_BITS).any() and py["faults"].size == 0
+    assert not (status & core.FAULT_BITS).any() and py["faults"].size == 0
     np.testing.assert_allclose(X, py["x"], rtol=0, atol=1e-10)
     np.testing.assert_allclose(V, py["v"], rtol=0, atol=1e-7)
 
@@ -170,7 +170,7 @@ def test_batch_summaries_measure_against_the_table(plans):
     plan = plans["hermite"]
     ctrl = _controller("cascade", plan)
     n = int(round((plan.tf + 0.01) / TS))
-    rows = _core.run_sampled_summaries([dict(controller=ctrl, motor=MOTOR, load=0.0, effects=PLANT.effects,
+    rows = core.run_sampled_summaries([dict(controller=ctrl, motor=MOTOR, load=0.0, effects=PLANT.effects,
                                                 x0=plan.x0(MOTOR.Nr), n_periods=n, Ts=TS, substeps=2)])
     r = fs.simulate(PLANT, plan, ctrl, loop=fs.DriveLoop(control_period=TS, substeps=2), t_end=n * TS)
     assert rows[0] is not None and rows[0]["status"] == "ok"

@@ -122,10 +122,10 @@ def test_the_c_batch_path_gives_the_per_run_rows(monkeypatch):
                             controller_type=["microstep", "cascade", "exact_linearization"])
             + [replace(SAMPLED, name="effects", plant=fs.Plant(MOTOR, fs.PlantEffects(detent_torque=1e-4)))]
             + [infeasible])
-    from flatstep import _core
+    from flatstep import core
 
-    calls, batch = [], _core.run_sampled_summaries
-    monkeypatch.setattr(_core, "run_sampled_summaries", lambda runs: calls.append(len(runs)) or batch(runs))
+    calls, batch = [], core.run_sampled_summaries
+    monkeypatch.setattr(core, "run_sampled_summaries", lambda runs: calls.append(len(runs)) or batch(runs))
     fast = run_batch(grid, workers=2, chunk_size=3)
     assert sorted(calls) == [0, 3, 3, 3, 3]  # one C call per chunk of 3; the infeasible plan never reaches C
     assert fast[-1]["error"].startswith("InfeasiblePlanError")

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep import _core
+from flatstep import core
 from flatstep.loop.drive import Drive
 from flatstep.loop.observers import Observer
 from flatstep.loop.sensors import Sensors
@@ -145,5 +145,5 @@ def test_c_engine_refuses_what_it_does_not_model(motor, plan):
 def test_run_sampled_checks_the_noise_shape(motor, plan):
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "model")
     with pytest.raises(ValueError, match=r"noise has shape \(10, 2\); expected \(11, 2\)"):
-        _core.run_sampled(ctrl, motor, 0.0, plan.x0(motor.Nr), 10, Ts=TS, substeps=4, sensors=Sensors(),
+        core.run_sampled(ctrl, motor, 0.0, plan.x0(motor.Nr), 10, Ts=TS, substeps=4, sensors=Sensors(),
                           noise=np.zeros((10, 2)))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep import _core
-from flatstep._core_structs import _plant
+from flatstep import core
+from flatstep.core.structs import _plant
 from flatstep.control.smc import FlatnessSMC, SMCGains
 from flatstep.model.flat import FlatFlag
 from flatstep.model.motor import MotorParams
@@ -37,25 +37,25 @@ def test_plan_eval():
     for r in VECTORS["plan"]:
         by_plan.setdefault(json.dumps(r["plan"]), []).append(r)
     for key, recs in by_plan.items():
-        flag = _core.plan_flag(RestToRest(**json.loads(key)), [r["t"] for r in recs])
+        flag = core.plan_flag(RestToRest(**json.loads(key)), [r["t"] for r in recs])
         assert_rel(np.array(flag).T, [r["flag"] for r in recs], key)
 
 
 def test_flat_voltages():
     for r in VECTORS["flat_voltages"]:
-        assert_rel(_core.flat_voltages(MotorParams(**r["motor"]), *r["args"]), r["v"], r["args"])
+        assert_rel(core.flat_voltages(MotorParams(**r["motor"]), *r["args"]), r["v"], r["args"])
 
 
 def test_flat_to_state():
     for r in VECTORS["flat_to_state"]:
-        x, v = _core.flat_to_state(FlatFlag(*r["flag"]), MotorParams(**r["motor"]), r["load"])
+        x, v = core.flat_to_state(FlatFlag(*r["flag"]), MotorParams(**r["motor"]), r["load"])
         assert_rel(x, r["x"], r["flag"])
         assert_rel(v, r["v"], r["flag"])
 
 
 def test_state_to_flat():
     for r in VECTORS["state_to_flat"]:
-        flag = _core.state_to_flat(r["x"], r["v"], MotorParams(**r["motor"]), r["load"])
+        flag = core.state_to_flat(r["x"], r["v"], MotorParams(**r["motor"]), r["load"])
         assert_rel(np.array(flag), r["flag"], r["x"])
 
 
@@ -67,18 +67,18 @@ def test_smc_step():
         motor, plan, gains, measurement = json.loads(key)
         ctrl = FlatnessSMC(MotorParams(**motor), RestToRest(**plan), SMCGains(**gains), measurement)
         y = np.array([r["y"] for r in recs]).T
-        v, status = _core.smc_voltages(ctrl, [r["t"] for r in recs], y[:4], y[4] if measurement == "ideal" else None)
-        assert not status.any(), _core.status_names(np.bitwise_or.reduce(status))
+        v, status = core.smc_voltages(ctrl, [r["t"] for r in recs], y[:4], y[4] if measurement == "ideal" else None)
+        assert not status.any(), core.status_names(np.bitwise_or.reduce(status))
         assert_rel(v.T, [r["v"] for r in recs], key)
 
 
 def test_binding_matches_the_reference_on_arrays_with_shape(motor, plan):
     """The binding keeps the reference's array shapes (components first, then the sample shape)."""
     t = np.linspace(0.0, 0.06, 12).reshape(3, 4)
-    flag_c, flag_p = _core.plan_flag(plan, t), plan.flag(t)
+    flag_c, flag_p = core.plan_flag(plan, t), plan.flag(t)
     assert np.shape(flag_c) == (6, 3, 4)
     np.testing.assert_array_equal(np.array(flag_c), np.array(flag_p))
-    x_c, v_c = _core.flat_to_state(flag_c, motor)
+    x_c, v_c = core.flat_to_state(flag_c, motor)
     assert x_c.shape == (4, 3, 4) and v_c.shape == (2, 3, 4)
 
 
@@ -91,29 +91,29 @@ def test_binding_matches_the_reference_on_arrays_with_shape(motor, plan):
 ])
 def test_smc_guards_where_the_reference_gives_nan_or_huge_voltages(motor, plan, state, ddtheta, names):
     ctrl = FlatnessSMC(motor, plan)
-    v, status = _core.smc_voltages(ctrl, 0.03, np.array(state)[:, None], ddtheta)
-    assert _core.status_names(status[0]) == names
-    assert np.all(np.isfinite(v)) and np.hypot(*v[:, 0]) <= _core.V_LIMIT * (1 + 1e-15)
+    v, status = core.smc_voltages(ctrl, 0.03, np.array(state)[:, None], ddtheta)
+    assert core.status_names(status[0]) == names
+    assert np.all(np.isfinite(v)) and np.hypot(*v[:, 0]) <= core.V_LIMIT * (1 + 1e-15)
     if names != ["saturated"]:
         assert np.all(v == 0.0)
     else:  # saturation keeps the direction of the reference's voltage
         ref = ctrl.voltages(0.03, np.array(state), ddtheta)
-        np.testing.assert_allclose(v[:, 0], ref / np.hypot(*ref) * _core.V_LIMIT, rtol=1e-12)
+        np.testing.assert_allclose(v[:, 0], ref / np.hypot(*ref) * core.V_LIMIT, rtol=1e-12)
 
 
 def test_binding_rejects_bad_input(motor, plan):
     ctrl = FlatnessSMC(motor, plan)
     with pytest.raises(ValueError, match="v_limit=0.0"):
-        _core.smc_voltages(ctrl, 0.0, np.zeros((4, 1)), 0.0, v_limit=0.0)
+        core.smc_voltages(ctrl, 0.0, np.zeros((4, 1)), 0.0, v_limit=0.0)
     with pytest.raises(ValueError, match=r"x has shape \(3, 1\)"):
-        _core.smc_voltages(ctrl, 0.0, np.zeros((3, 1)), 0.0)
+        core.smc_voltages(ctrl, 0.0, np.zeros((3, 1)), 0.0)
     with pytest.raises(ValueError, match="ddtheta"):
-        _core.smc_voltages(ctrl, 0.0, np.zeros((4, 1)))
+        core.smc_voltages(ctrl, 0.0, np.zeros((4, 1)))
     with pytest.raises(ValueError, match="outside the domain"):
-        _core.flat_to_state(plan.flag(np.array([0.0, 0.03])), motor, load_torque=1.0)
+        core.flat_to_state(plan.flag(np.array([0.0, 0.03])), motor, load_torque=1.0)
     with pytest.raises(ValueError, match="ia = ib = 0"):
-        _core.state_to_flat(np.zeros(4), np.zeros(2), motor)
-    assert np.isnan(_core.flat_voltages(motor, 0.0, 0, 0, 0, 0, 0, 0, 0)).all()
+        core.state_to_flat(np.zeros(4), np.zeros(2), motor)
+    assert np.isnan(core.flat_voltages(motor, 0.0, 0, 0, 0, 0, 0, 0, 0)).all()
 
 
 BASELINES = {"microstep": (fs.Microstepping, fs.MicrostepGains), "cascade": (fs.CascadeFOC, fs.CascadeGains),
@@ -139,13 +139,13 @@ def test_baseline_steps_match_the_reference(kind):
     assert len(records) >= 200
     for r in records:
         ctrl = _baseline(kind, r)
-        bound = _core.controller_struct(ctrl)
+        bound = core.controller_struct(ctrl)
         if r["state"] is not None:
             for i, value in enumerate(r["state"]):
                 bound.state.integral[i] = value
-        v = _core.ffi.new("double[2]")
-        status = bound.iface.step(bound.iface.self, r["t"], _core.ffi.new("double[5]", r["y"]), v)
-        assert not status & _core.FAULT_BITS
+        v = core.ffi.new("double[2]")
+        status = bound.iface.step(bound.iface.self, r["t"], core.ffi.new("double[5]", r["y"]), v)
+        assert not status & core.FAULT_BITS
         c = np.array([v[0], v[1]] + ([bound.state.integral[i] for i in range(len(r["state"]))] if r["state"] else []))
         p = np.array(r["v"] + (r["state_after"] or []))
         err = np.abs(c - p)
@@ -159,8 +159,8 @@ def test_plant_effects_match_the_reference():
         effects = None if r["effects"] is None else fs.PlantEffects(**r["effects"])
         active += effects is not None and effects.active
         plant = _plant(MotorParams(**r["motor"]), r["load"], effects)
-        dx = _core.ffi.new("double[4]")
-        _core.lib.plant_rhs(plant, _core.ffi.new("double[4]", r["x"]), _core.ffi.new("double[2]", r["v"]), dx)
+        dx = core.ffi.new("double[4]")
+        core.lib.plant_rhs(plant, core.ffi.new("double[4]", r["x"]), core.ffi.new("double[2]", r["v"]), dx)
         c, p = np.array(list(dx)), np.array(r["dx"])
         assert np.all(np.abs(c - p) <= 1e-12 * np.abs(p) + ABS_FLOOR), f"C {c} vs Python {p} ({r['effects']})"
     assert active >= 100

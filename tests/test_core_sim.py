@@ -42,7 +42,7 @@ def test_continuous_c_engine_matches_scipy_reference(name):
 
 @pytest.mark.parametrize("name", RUNS)
 def test_c_result_assembly_matches_the_numpy_one(name):
-    """simulate(engine='c') assembles its SimResult in one C call (_core.result_columns); NumPy's assemble()
+    """simulate(engine='c') assembles its SimResult in one C call (core.result_columns); NumPy's assemble()
     on the same states gives the same series: references bit for bit (plan_flag is exact), the rest to
     rounding (measured: voltages 5.2e-14 V, reference voltages 1.6e-15 V, phi 2.2e-16 rad)."""
     from flatstep.engine.simulate import Run, assemble
@@ -62,15 +62,15 @@ def test_c_result_assembly_matches_the_numpy_one(name):
 
 
 def test_plan_to_state_is_plan_flag_then_flat_to_state():
-    from flatstep import _core
+    from flatstep import core
 
     t = np.linspace(0.0, 0.06, 301)
-    x, v = _core.plan_to_state(fs.PAPER_PLAN, PAPER, t, 1e-5)
-    x_ref, v_ref = _core.flat_to_state(_core.plan_flag(fs.PAPER_PLAN, t), PAPER, 1e-5)
+    x, v = core.plan_to_state(fs.PAPER_PLAN, PAPER, t, 1e-5)
+    x_ref, v_ref = core.flat_to_state(core.plan_flag(fs.PAPER_PLAN, t), PAPER, 1e-5)
     np.testing.assert_array_equal(x, x_ref)
     np.testing.assert_array_equal(v, v_ref)
     with pytest.raises(ValueError, match="outside the domain of the flat maps"):
-        _core.plan_to_state(fs.PAPER_PLAN, PAPER, t, 1.0)  # a load torque far beyond Km rho
+        core.plan_to_state(fs.PAPER_PLAN, PAPER, t, 1.0)  # a load torque far beyond Km rho
 
 
 def test_continuous_c_engine_converges_to_the_reference_at_tighter_tolerances():
@@ -108,18 +108,18 @@ def test_every_c_integrator_tracks_fig1_and_matches_the_default(method, lo, hi):
     """continuous_run's three integrators: Fig. 1 starts on the plan, so theta*(t) is the exact angle; at rtol
     1e-10 each stays within 1e-9 rad of it, and the currents agree with the default's to 1e-7 A. Evaluations
     per accepted step: 12 (DOP853), 6 (DOPRI5), up to 3 more where a step holds an output time (dense7)."""
-    from flatstep import _core
+    from flatstep import core
 
     plant, ctrl, load = RUNS["fig1"]
     p = fs.PAPER_PLAN
     t = np.linspace(0.0, 0.06, 601)
-    X, st = _core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12, method=method)
-    X0, _ = _core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12)
+    X, st = core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12, method=method)
+    X0, _ = core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12)
     assert np.abs(X[3] - p.flag(t).theta).max() < 1e-9
     assert np.abs(X[:2] - X0[:2]).max() < 1e-7
     assert lo * st["steps"] <= st["rhs_evals"] <= hi * st["steps"] + (lo + 1) * st["rejected"] + 6
     with pytest.raises(ValueError, match="not a C integrator"):
-        _core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12, method="RK45")
+        core.run_continuous(ctrl, plant, load, p.x0(plant.Nr), t, rtol=1e-10, atol=1e-12, method="RK45")
 
 
 def zoh_reference(plant, ctrl, load, Ts, n):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep._core_structs import _in, _out, controller_struct, ffi, lib
+from flatstep.core.structs import _in, _out, controller_struct, ffi, lib
 from flatstep.control.tuning import LABELS, make_controller
 from flatstep.loop.drive import Drive
 from flatstep.loop.observers import Observer

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep._core_structs import _in, _out, controller_struct, ffi, lib
+from flatstep.core.structs import _in, _out, controller_struct, ffi, lib
 from flatstep.loop.design import design_gains
 from flatstep.control.dq_smc import DQIntegral
 from flatstep.control.protocol import is_static

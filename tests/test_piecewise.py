@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from flatstep._core_traj import traj_flag, traj_theta, traj_valid
+from flatstep.core.traj import traj_flag, traj_theta, traj_valid
 from flatstep.plan.piecewise import NCOEF, PiecewisePlan
 from flatstep.plan.rest_to_rest import RestToRest
 

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from flatstep import _core
-from flatstep._core_structs import smc_struct
+from flatstep import core
+from flatstep.core.structs import smc_struct
 from flatstep._flatstep_core import ffi, lib
 from flatstep.control.smc import FlatnessSMC, SMCGains
 from flatstep.engine.simulate import simulate
@@ -32,7 +32,7 @@ def test_c_law_on_a_table_is_the_python_law(sequence, measurement):
     x = np.array([0.4 * np.sin(50 * ref.theta), 0.4 * np.cos(50 * ref.theta), ref.dtheta, ref.theta])
     x += rng.normal(scale=[[0.01], [0.01], [0.5], [1e-3]], size=x.shape)
     acc = ref.ddtheta + rng.normal(scale=10.0, size=t.size)
-    v_c, status = _core.smc_voltages(ctrl, t, x, acc if measurement == "ideal" else None)
+    v_c, status = core.smc_voltages(ctrl, t, x, acc if measurement == "ideal" else None)
     v_py = ctrl.voltages(t, x, acc if measurement == "ideal" else None)
     assert not status.any()
     np.testing.assert_allclose(v_c, v_py, rtol=1e-11, atol=1e-11 * np.max(np.abs(v_py)))

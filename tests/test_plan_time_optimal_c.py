@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from flatstep._core_time_optimal import WORK_LEN, plan_raw
+from flatstep.plan.time_optimal_c import WORK_LEN, plan_raw
 from flatstep._flatstep_core import lib
 from flatstep.model.motor import PRESETS
 from flatstep.plan.limits import MotorLimits

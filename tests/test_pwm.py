@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep import _core
+from flatstep import core
 from flatstep.loop.drive import Drive
 from flatstep.loop.observers import Observer
 from flatstep.loop.sensors import Sensors
@@ -39,11 +39,11 @@ LOOPS = {  # name: (measurement, DriveLoop settings besides the drive)
 
 def c_pwm_period(drive, v, i, Tp):
     """C ``drive_pwm_period`` on a switched ``Drive``: (durations, levels) as lists."""
-    p = _core.ffi.new("struct drive_params *", dict(v_bus=drive.v_bus, pwm=_core.lib.DRIVE_SWITCHED,
+    p = core.ffi.new("struct drive_params *", dict(v_bus=drive.v_bus, pwm=core.lib.DRIVE_SWITCHED,
                                                      f_pwm=drive.f_pwm, dead_time=drive.dead_time))
-    dur = _core.ffi.new("fs_real[]", _core.lib.DRIVE_PWM_SEGMENTS)
-    lv = _core.ffi.new("fs_real[][2]", _core.lib.DRIVE_PWM_SEGMENTS)
-    m = _core.lib.drive_pwm_period(p, list(v), list(i), Tp, dur, lv)
+    dur = core.ffi.new("fs_real[]", core.lib.DRIVE_PWM_SEGMENTS)
+    lv = core.ffi.new("fs_real[][2]", core.lib.DRIVE_PWM_SEGMENTS)
+    m = core.lib.drive_pwm_period(p, list(v), list(i), Tp, dur, lv)
     return [dur[k] for k in range(m)], [(lv[k][0], lv[k][1]) for k in range(m)]
 
 
@@ -62,7 +62,7 @@ def test_c_pwm_period_is_the_reference_bit_for_bit():
         Tp = rng.uniform(1e-5, 3e-4) / drive.pwm_periods(TS)
         dur, lv = drive.pwm_period(v, i, Tp)
         assert c_pwm_period(drive, v, i, Tp) == (dur, lv)
-        assert 1 <= len(dur) <= _core.lib.DRIVE_PWM_SEGMENTS and abs(sum(dur) - Tp) < 1e-18
+        assert 1 <= len(dur) <= core.lib.DRIVE_PWM_SEGMENTS and abs(sum(dur) - Tp) < 1e-18
         segments += len(dur)
     assert segments > 1500  # both phases switch: most periods have 5 to 9 segments
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import flatstep as fs
-from flatstep import _core
+from flatstep import core
 from flatstep.control.tuning import LABELS, REST_HOLD_DAMPING
 from flatstep.model.motor import torque
 from flatstep.model.torque_model import NO_TORQUES
@@ -53,8 +53,8 @@ def test_hold_without_a_known_torque_is_the_detent_hold_bit_for_bit(motor, plan,
     np.testing.assert_array_equal(i_star, plan.rho2 * np.array([c2 * c - s2 * s, s2 * c + c2 * s]))
     x = np.array([[0.1, 0.2], [-0.3, 0.35], [0.5, -2.0], [plan.theta2 + 1e-3, plan.theta2 - 2e-4]])
     t = np.array([plan.tf, plan.tf + 0.01])
-    v_none, _ = _core.smc_voltages(fs.FlatnessSMC(motor, plan, HOLD, "model"), t, x, None, v_limit=1e6)
-    v, _ = _core.smc_voltages(fs.FlatnessSMC(motor, plan, HOLD, "model", torques=torques), t, x, None, v_limit=1e6)
+    v_none, _ = core.smc_voltages(fs.FlatnessSMC(motor, plan, HOLD, "model"), t, x, None, v_limit=1e6)
+    v, _ = core.smc_voltages(fs.FlatnessSMC(motor, plan, HOLD, "model", torques=torques), t, x, None, v_limit=1e6)
     np.testing.assert_array_equal(v, v_none)
 
 
@@ -70,8 +70,8 @@ def test_c_hold_matches_the_reference(motor, plan, torques):
     x = np.array([rng.uniform(-0.5, 0.5, n), rng.uniform(-0.5, 0.5, n), rng.uniform(-30, 30, n),
                   plan.theta2 + rng.uniform(-0.01, 0.01, n)])
     x[2, :20] = rng.uniform(-1e4, 1e4, 20)  # speeds where the damping torque is clipped
-    v, status = _core.smc_voltages(ctrl, t, x, None, v_limit=1e6)
-    assert not status.any(), _core.status_names(np.bitwise_or.reduce(status))
+    v, status = core.smc_voltages(ctrl, t, x, None, v_limit=1e6)
+    assert not status.any(), core.status_names(np.bitwise_or.reduce(status))
     held = t >= plan.tf
     assert 50 < held.sum() < n - 50
     ref = ctrl.voltages(t, x)

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from flatstep._core_traj import traj_flag
+from flatstep.core.traj import traj_flag
 from flatstep.plan.segments import PSI_PEAKS, scurve_phases
 from flatstep.plan.waypoints import FAMILIES, Caps, Waypoint, plan_waypoints
 

@@ -33,7 +33,7 @@ def bench_batch(repeat: int = 3, runs: int = 200, control_period: float = 5e-5, 
 
     core = core_module()
     if core is None:
-        raise RuntimeError("benchmark (d) needs the C binding (flatstep._core); install flatstep with its C core")
+        raise RuntimeError("benchmark (d) needs the C binding (flatstep.core); install flatstep with its C core")
     loop = DriveLoop(control_period=control_period, substeps=substeps)
     sc = replace(PAPER_SCENARIOS["fig1"], loop=loop)
     motor, plan, ctrl = sc.motor, sc.plan, sc.controller()

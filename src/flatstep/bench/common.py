@@ -112,7 +112,7 @@ def race(cases: dict[str, Callable[[], Any]], repeat: int, min_time: float = 0.0
 def core_module() -> Optional[ModuleType]:
     """The C binding, or None when it is not built."""
     try:
-        from .. import _core
+        from .. import core
     except ImportError:
         return None
-    return _core
+    return core

@@ -126,7 +126,7 @@ def bench_plan(repeat: int = 7, n: int = 401, min_time: float = 0.02, stock_basi
         cases["flatstep C core, raw lib call"] = _raw_core_plan(core, motor, plan, t)
         cases["flatstep C core, binding (two calls)"] = lambda: core.flat_to_state(core.plan_flag(plan, t), motor)
     else:
-        notes.append("the C binding (flatstep._core) is not available: NumPy path only")
+        notes.append("the C binding (flatstep.core) is not available: NumPy path only")
     cases["flatstep NumPy reference"] = lambda: flat_to_state(plan.flag(t), motor)
     baseline = "python-control flatsys, psi basis"
     cases[baseline] = lambda: pc(t)

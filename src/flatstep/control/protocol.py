@@ -12,7 +12,7 @@ continuous loop (:class:`StaticController`).
 
 The C twin of a controller is named by ``c_name``: ``csrc/<c_name>.h`` declares ``struct <c_name>_params``,
 ``<c_name>_init``, ``<c_name>_reset``, ``<c_name>_step`` and ``<c_name>_controller``, and ``c_params()`` returns
-the fields of its params struct. The binding (:func:`flatstep._core_structs.controller_struct`) needs nothing
+the fields of its params struct. The binding (:func:`flatstep.core.structs.controller_struct`) needs nothing
 else, so adding a controller touches its Python file, its C file and nothing more.
 """
 from __future__ import annotations

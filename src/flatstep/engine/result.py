@@ -21,7 +21,6 @@ A run whose state became non-finite does not return a result: it raises a Runtim
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Optional, Sequence
@@ -29,14 +28,11 @@ from typing import Any, Optional, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from ..model.motor import full_step
+
 Array = NDArray[np.float64]
 #: A run's statuses, best first (module docstring).
 STATUSES = ("ok", "fault", "lost")
-
-
-def full_step(Nr: int) -> float:
-    r"""One full step of a two-phase motor with ``Nr`` rotor teeth [rad]: :math:`\pi/(2N_r)`."""
-    return math.pi / (2 * Nr)
 
 
 #: Two rest angles closer than this, relative to the largest angle (at least 1 rad), are the same rest: the ends of

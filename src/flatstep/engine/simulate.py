@@ -20,7 +20,7 @@ from typing import Any, Callable, NamedTuple, Optional, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .. import _core
+from .. import core
 from ..control.protocol import Controller, SlidingController, StaticController, is_static
 from ..control.smc import FlatnessSMC
 from ..errors import RunError
@@ -194,12 +194,12 @@ def _continuous_c(plant: Plant, plan: Plan, controller: Controller, solver: Cont
     meta = {"engine": "c", "method": method, "rtol": solver.rtol, "atol": solver.atol}
     if isinstance(controller, FlatnessSMC):
         # The run and its series (voltages, references, sliding variables) in two C calls on one controller.
-        X, cols, status, stats = _core.continuous_result(controller, plant.motor, load, x0, t, rtol=solver.rtol,
+        X, cols, status, stats = core.continuous_result(controller, plant.motor, load, x0, t, rtol=solver.rtol,
                                                          atol=solver.atol, effects=plant.effects,
                                                          method=method, max_steps=solver.max_steps)
-        stats = {**stats, "controller_status": _core.status_names(np.bitwise_or.reduce(status))}
+        stats = {**stats, "controller_status": core.status_names(np.bitwise_or.reduce(status))}
         return Run(t, X, {**meta, **stats}, columns=cols)
-    X, stats = _core.run_continuous(controller, plant.motor, load, x0, t, rtol=solver.rtol, atol=solver.atol,
+    X, stats = core.run_continuous(controller, plant.motor, load, x0, t, rtol=solver.rtol, atol=solver.atol,
                                     effects=plant.effects, method=method, max_steps=solver.max_steps)
     return Run(t, X, {**meta, **stats})
 
@@ -265,13 +265,13 @@ def _sampled_c(plant: Plant, plan: Plan, controller: Controller, loop: DriveLoop
     """C ``sampled_run``: any controller, any plant effect, any loop part (switched PWM included)."""
     _check_measurement(controller, loop)
     n = _periods(loop, t_end)
-    X, V, Y, status, stats = _core.run_sampled(
+    X, V, Y, status, stats = core.run_sampled(
         controller, plant.motor, _constant_load(plant, "c"), x0, n, Ts=loop.control_period,
         substeps=loop.substeps, effects=plant.effects, drive=loop.drive, sensors=loop.sensors,
         observer=loop.observer, compute_delay=loop.compute_delay)
     t = np.arange(n + 1, dtype=np.float64) * np.float64(loop.control_period)
     return Run(t, X, {"engine": "c", "method": "RK4", **stats}, v=V, y=Y,
-               faults=t[(status & _core.FAULT_BITS) != 0])
+               faults=t[(status & core.FAULT_BITS) != 0])
 
 
 def _sampled_python(plant: Plant, plan: Plan, controller: Controller, loop: DriveLoop, t_end: float,

@@ -1,6 +1,7 @@
 """The power stage: DC-bus saturation per H-bridge, averaged or switched PWM."""
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -9,6 +10,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..validate import InputError, check_choice, check_finite, check_quantity
 
+#: The bridge's modes, in the order of C ``enum drive_pwm`` (csrc/drive.h: ``DRIVE_AVERAGED = 0``,
+#: ``DRIVE_SWITCHED = 1``).
 PWM_MODES = ("averaged", "switched")
 
 
@@ -135,3 +138,19 @@ class Drive:
     def as_dict(self) -> dict[str, Any]:
         """The parameters as a dict, for a result's metadata."""
         return asdict(self)
+
+    def c_params(self, compute_delay: bool = False) -> dict[str, Any]:
+        """The fields of the C ``struct drive_params`` (csrc/drive.h) for this drive.
+
+        Parameters
+        ----------
+        compute_delay : bool
+            Apply each command one period after it is computed (a setting of the loop, kept in this struct).
+        """
+        return dict(v_bus=self.v_bus, compute_delay=bool(compute_delay), pwm=PWM_MODES.index(self.pwm),
+                    f_pwm=self.f_pwm, dead_time=self.dead_time)
+
+    @staticmethod
+    def c_ideal_params(compute_delay: bool = False) -> dict[str, Any]:
+        """The fields of the C ``struct drive_params`` without a drive: an unlimited averaged bridge (v_bus = inf)."""
+        return dict(v_bus=math.inf, compute_delay=bool(compute_delay))

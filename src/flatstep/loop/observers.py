@@ -11,6 +11,9 @@ from numpy.typing import NDArray
 from ..model.motor import MotorParams
 from ..validate import check_count, check_positive, check_quantity
 
+#: The longest estimate the C observer holds (``OBSERVER_MAX_ORDER``, csrc/observer.h): angle, speed, load, its rate.
+MAX_ORDER = 4
+
 
 @dataclass(frozen=True)
 class Observer:
@@ -49,6 +52,16 @@ class Observer:
     def as_dict(self) -> dict[str, Any]:
         """The bandwidth and the load states, for a result's metadata."""
         return asdict(self)
+
+    def c_params(self, motor: MotorParams, Ts: float) -> dict[str, Any]:
+        """The fields of the C ``struct observer_params`` (csrc/observer.h): :meth:`matrices` for ``motor`` and ``Ts``.
+
+        ``Ad`` gives its ``order`` rows, each padded to :data:`MAX_ORDER` columns; the rest of the struct is zero.
+        """
+        Ad, Bd, Lc = self.matrices(motor, Ts)
+        n = self.order
+        return dict(order=n, Ad=[[float(Ad[i, j]) for j in range(n)] + [0.0] * (MAX_ORDER - n) for i in range(n)],
+                    Bd=[float(b) for b in Bd], Lc=[float(c) for c in Lc])
 
 
 @lru_cache(maxsize=64)

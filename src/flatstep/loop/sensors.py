@@ -99,3 +99,8 @@ class Sensors:
     def as_dict(self) -> dict[str, Any]:
         """The parameters as a dict, for a result's metadata."""
         return asdict(self)
+
+    def c_params(self) -> dict[str, Any]:
+        """The fields of the C ``struct sensors_params`` (csrc/sensors.h) for these sensors (the noise stays here)."""
+        return dict(angle_step=self.angle_step, encoder_offset=self.encoder_offset, current_step=self.current_step,
+                    current_range=self.current_range, current_offset=list(self.current_offset), delay=self.delay)

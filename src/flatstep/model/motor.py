@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..validate import check_count, check_finite, check_quantity
+from .datasheet_math import parameters_from_datasheet
 
 Load = Union[float, Callable[[NDArray[np.float64]], ArrayLike]]
 
@@ -65,11 +66,10 @@ class MotorParams:
         """The parameters from a datasheet's figures.
 
         :func:`flatstep.model.datasheet.from_datasheet` takes the same keywords and also returns what it assumed
-        and how sure that is.
+        and how sure that is; both derive the parameters with
+        :func:`flatstep.model.datasheet_math.parameters_from_datasheet`.
         """
-        from .datasheet import from_datasheet
-
-        return from_datasheet(**datasheet).params
+        return cls(**parameters_from_datasheet(**datasheet).params)
 
     def replace(self, **changes: float) -> "MotorParams":
         """Return a copy with some parameters changed (validated again)."""
@@ -81,6 +81,18 @@ class MotorParams:
     def as_dict(self) -> dict[str, float]:
         """The parameters by name (``R``, ``L``, ``Km``, ``J``, ``B``, ``Nr``)."""
         return asdict(self)
+
+    def c_params(self) -> dict[str, float]:
+        """The fields of the C ``struct motor_params`` (csrc/motor.h) holding these parameters."""
+        return dict(R=self.R, L=self.L, Km=self.Km, J=self.J, B=self.B, Nr=self.Nr)
+
+
+def full_step(Nr: int) -> float:
+    r"""One full step of a two-phase motor with ``Nr`` rotor teeth [rad]: :math:`\pi/(2N_r)`.
+
+    A two-phase motor makes four full steps per electrical period :math:`2\pi/N_r`.
+    """
+    return math.pi / (2 * Nr)
 
 
 #: Named parameter sets. ``paper``: the motor of the paper's Section 3. ``nema17``: a NEMA 17-size hybrid

@@ -90,8 +90,14 @@ class PlantEffects:
         return motor.Km**2 * omega**2 / self.magnetizing_resistance
 
     def as_dict(self) -> dict[str, Any]:
-        """The effects' fields by name, for a result's metadata and the C ``struct plant_effects``."""
+        """The effects' fields by name, for a result's metadata."""
         return asdict(self)
+
+    def c_effects(self) -> dict[str, float]:
+        """The fields of the C ``struct plant_effects`` (csrc/plant.h): no iron loss is ``magnetizing_resistance`` 0."""
+        return dict(detent_torque=self.detent_torque, detent_harmonic=self.detent_harmonic,
+                    coulomb_torque=self.coulomb_torque, coulomb_speed=self.coulomb_speed,
+                    magnetizing_resistance=self.magnetizing_resistance or 0.0)
 
 
 NO_EFFECTS = PlantEffects()

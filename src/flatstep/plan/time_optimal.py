@@ -308,7 +308,7 @@ def time_optimal(distance: float, motor: MotorParams, limits: MotorLimits, *, th
                          "shorter one is a hold (a dwell)")
     _check_widths(widths)
     if engine == "c":
-        from .._core_time_optimal import plan_table
+        from .time_optimal_c import plan_table
 
         return _plan(plan_table(d, motor, limits, widths), d, theta1, t0, from_c=True)
     return _plan(plan_move(d, motor, limits, widths).table, d, theta1, t0)
@@ -346,7 +346,7 @@ def time_optimal_sequence(waypoints: list[tuple[float, float]], motor: MotorPara
     check_engine(engine)
     t0 = check_t0(t0)
     if engine == "c":
-        from .._core_time_optimal import plan_table
+        from .time_optimal_c import plan_table
 
     breaks, rows, rho_rows = [np.array([t0])], [], []
     t = t0

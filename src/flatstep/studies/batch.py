@@ -65,10 +65,10 @@ def summarised_in_c(scenario: Scenario) -> bool:
     It can for a sampled run (any controller, plant effect, sensors, observer, averaged bridge) with a constant
     load.
     """
-    from .. import _core
+    from .. import core
 
     loop = scenario.loop
-    return (loop is not None and _core.drive_unsupported(loop.drive, loop.sensors) is None
+    return (loop is not None and core.drive_unsupported(loop.drive, loop.sensors) is None
             and scenario.simulated_plant.constant_load is not None)
 
 
@@ -78,7 +78,7 @@ def _run_chunk_c(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[
     All are simulated and summarised in C; an infeasible plan gives the same error row, and a run the C batch
     could not finish is run again by :func:`_run_one` for its error row.
     """
-    from .. import _core
+    from .. import core
 
     rows: dict[int, dict[str, Any]] = {}
     todo: list[tuple[int, Scenario]] = []
@@ -98,7 +98,7 @@ def _run_chunk_c(chunk: list[tuple[int, Scenario]], engine: str, keep: Sequence[
                          n_periods=max(1, math.ceil(s.t_end / loop.control_period - 1e-9)),
                          Ts=loop.control_period, substeps=loop.substeps, drive=loop.drive, sensors=loop.sensors,
                          observer=loop.observer, compute_delay=loop.compute_delay))
-    summaries = _core.run_sampled_summaries(runs)
+    summaries = core.run_sampled_summaries(runs)
     check_cancelled()  # an interrupted batch: the runs cut short are no results
     for (i, s), summary in zip(todo, summaries, strict=True):  # one summary per run
         rows[i] = {"index": i, "name": s.name, **summary, "error": None} if summary is not None \
@@ -212,7 +212,7 @@ def run_batch(scenarios: Sequence[Scenario], *, engine: str = "c", executor: Opt
     Notes
     -----
     Summary rows of sampled runs on the C engine (:func:`summarised_in_c`, no ``keep``) are computed in C, one
-    call per chunk (``_core.run_sampled_summaries``: runs and summaries in C, threads instead of processes,
+    call per chunk (``core.run_sampled_summaries``: runs and summaries in C, threads instead of processes,
     since the C call releases the GIL); the rows equal those of one ``Scenario.run`` per scenario.
 
     Ctrl-C (KeyboardInterrupt) stops the batch and is raised again; the rows finished before it are in

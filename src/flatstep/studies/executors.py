@@ -65,7 +65,7 @@ def default_chunk_size(n_runs: int, n_workers: int) -> int:
 
 def check_cancelled() -> None:
     """Raise :class:`ChunkCancelled` if this thread's batch was interrupted (its cancel flag is set)."""
-    from .._core_structs import cancel_requested
+    from ..core.structs import cancel_requested
 
     if cancel_requested():
         raise ChunkCancelled("the batch was interrupted")
@@ -97,7 +97,7 @@ def check_rows(executor: Any, chunk: Sequence[tuple[int, Any]], rows: Any) -> Ro
 
 def _in_scope(flag: Any, run_chunk: Callable[..., Rows], chunk: Any, *args: Any) -> Rows:
     """``run_chunk(chunk, *args)`` with this thread's C runs polling ``flag``; its rows unless it was set."""
-    from .._core_structs import cancel_scope
+    from ..core.structs import cancel_scope
 
     with cancel_scope(flag):
         rows = run_chunk(chunk, *args)
@@ -112,11 +112,11 @@ def run_chunks(pool: Executor, run_chunk: Callable[..., Rows], chunks: Sequence[
 
     If waiting is interrupted (Ctrl-C's KeyboardInterrupt, or an exception raised by ``record``), the chunks
     not started are cancelled and the exception is raised again. On a ``ThreadPoolExecutor`` the running
-    chunks are stopped first: their C runs poll a flag (:func:`flatstep._core_structs.cancel_scope`) that is
+    chunks are stopped first: their C runs poll a flag (:func:`flatstep.core.structs.cancel_scope`) that is
     set here, so they end within one control period or integrator step, and the exception is raised once
     they have. Chunks running in other processes (a process pool, a Dask cluster) are not stopped here.
     """
-    from .._core_structs import cancel_flag
+    from ..core.structs import cancel_flag
 
     flag = cancel_flag() if isinstance(pool, ThreadPoolExecutor) else None
     futures: list[Future[Rows]] = [pool.submit(run_chunk, chunk, *args) if flag is None

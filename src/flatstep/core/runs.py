@@ -3,7 +3,7 @@
 The continuous loop (``continuous_run``) and its result (``arrays_result``), the one sampled loop
 (``sampled_run``) and many sampled runs at once (``batch_sampled``).
 
-Every run takes any controller with a C twin (:func:`~flatstep._core_structs.controller_struct`) and the plant
+Every run takes any controller with a C twin (:func:`~flatstep.core.structs.controller_struct`) and the plant
 as ``(motor, load, effects)``.
 """
 from __future__ import annotations
@@ -13,14 +13,21 @@ from typing import Any, Optional, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._core_structs import (
+from ..control.protocol import Controller
+from ..control.smc import FlatnessSMC
+from ..loop.drive import Drive
+from ..loop.observers import Observer
+from ..loop.sensors import Sensors
+from ..model.motor import MotorParams, full_step
+from ..model.plant import PlantEffects
+from ..model.torque_model import TorqueModel
+from .structs import (
     RHO_MIN,
     V_LIMIT,
     Array,
     CData,
     _check,
     _in,
-    _motor,
     _out,
     _plant,
     _plant_fields,
@@ -34,15 +41,6 @@ from ._core_structs import (
     lib,
     smc_struct,
 )
-from .control.protocol import Controller
-from .control.smc import FlatnessSMC
-from .engine.result import full_step
-from .loop.drive import Drive
-from .loop.observers import Observer
-from .loop.sensors import Sensors
-from .model.motor import MotorParams
-from .model.plant import PlantEffects
-from .model.torque_model import TorqueModel
 
 #: Names of the columns of :func:`result_columns`, in the order of ``RES_*`` in csrc/arrays.h.
 RESULT_COLUMNS = ("va", "vb", "acc", "rho", "phi", "theta_ref", "omega_ref", "rho_ref", "ia_ref", "ib_ref",
@@ -190,22 +188,11 @@ def _loop_fields(model: MotorParams, Ts: float, substeps: int, drive: Optional[D
     why = drive_unsupported(drive, sensors)
     if why is not None:
         raise ValueError(f"the C sampled loop does not model {why}; use engine='python'")
-    p: dict[str, Any] = dict(Ts=Ts, substeps=substeps, sensed=sensors is not None, observed=observer is not None,
-                             model=_motor(model), torques=torques.as_dict() if torques is not None else {},
-                             drive=dict(v_bus=drive.v_bus if drive is not None else np.inf,
-                                        compute_delay=bool(compute_delay)))
-    if drive is not None and drive.pwm == "switched":
-        p["drive"].update(pwm=lib.DRIVE_SWITCHED, f_pwm=drive.f_pwm, dead_time=drive.dead_time)
-    if sensors is not None:
-        p["sensors"] = dict(angle_step=sensors.angle_step, encoder_offset=sensors.encoder_offset,
-                            current_step=sensors.current_step, current_range=sensors.current_range,
-                            current_offset=list(sensors.current_offset), delay=sensors.delay)
-    if observer is not None:
-        Ad, Bd, Lc = observer.matrices(model, Ts)
-        n = observer.order
-        p["observer"] = dict(order=n, Ad=[[float(Ad[i, j]) for j in range(n)] + [0.0] * (4 - n) for i in range(n)],
-                             Bd=[float(b) for b in Bd], Lc=[float(c) for c in Lc])
-    return p
+    return dict(Ts=Ts, substeps=substeps, sensed=sensors is not None, observed=observer is not None,
+                model=model.c_params(), torques=torques.as_dict() if torques is not None else {},
+                drive=drive.c_params(compute_delay) if drive is not None else Drive.c_ideal_params(compute_delay),
+                sensors=sensors.c_params() if sensors is not None else {},
+                observer=observer.c_params(model, Ts) if observer is not None else {})
 
 
 def _noise(sensors: Optional[Sensors], n1: int, noise: Optional[ArrayLike]) -> Array:

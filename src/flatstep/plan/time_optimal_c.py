@@ -1,7 +1,9 @@
 """The C time-optimal planner (csrc/time_optimal.h) behind ``time_optimal(..., engine="c")``.
 
 :func:`plan_table` returns the table :func:`flatstep.plan.time_optimal.plan_move` plans, planned by
-``time_optimal_plan`` (the same algorithm, csrc/time_optimal.c).
+``time_optimal_plan`` (the same algorithm, csrc/time_optimal.c). It calls the compiled core directly, with the
+motor's own C fields (:meth:`~flatstep.model.motor.MotorParams.c_params`): the plan layer does not import the
+binding (:mod:`flatstep.core`), which sits above it.
 """
 from __future__ import annotations
 
@@ -10,14 +12,14 @@ from typing import Any, Optional
 
 import numpy as np
 
-from ._flatstep_core import ffi, lib
-from .model.motor import MotorParams
-from .plan.envelope import envelope
-from .plan.limits import MotorLimits
-from .plan.piecewise import NCOEF
-from .plan.smoothing import DEFAULT_WIDTHS, MAX_SEGMENTS, Table, check_samples, planning_limits, timing
-from .validate import InputError
-from .validate.limits import MAX_PLAN_SAMPLES
+from .._flatstep_core import ffi, lib
+from ..model.motor import MotorParams
+from ..validate import InputError
+from ..validate.limits import MAX_PLAN_SAMPLES
+from .envelope import envelope
+from .limits import MotorLimits
+from .piecewise import NCOEF
+from .smoothing import DEFAULT_WIDTHS, MAX_SEGMENTS, Table, check_samples, planning_limits, timing
 
 #: The workspace time_optimal_plan needs [fs_real].
 WORK_LEN = int(lib.time_optimal_work_len())
@@ -41,12 +43,11 @@ def limits_struct(limits: MotorLimits) -> Any:
 def plan_raw(distance: float, motor: MotorParams, limits: MotorLimits,
              widths: Optional[tuple[float, ...]] = None, work_len: int = WORK_LEN) -> tuple[int, Any]:
     """``time_optimal_plan``'s return code and ``struct to_result *`` (for tests of the error codes)."""
-    from ._core_structs import motor_struct
-
     work = np.empty(max(work_len, 1))
     w = np.ascontiguousarray(widths if widths else [], dtype=np.float64)
     out = ffi.new("struct to_result *")
-    rc = lib.time_optimal_plan(motor_struct(motor), limits_struct(limits), float(distance),
+    m = ffi.new("struct motor_params *", motor.c_params())
+    rc = lib.time_optimal_plan(m, limits_struct(limits), float(distance),
                                ffi.from_buffer("double[]", w) if w.size else ffi.NULL, w.size,
                                ffi.from_buffer("double[]", work), work_len, out)
     return int(rc), out

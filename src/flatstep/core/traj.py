@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._core_structs import Array, _in, _out, _shape, _vec, lib
-from .model.flat import FlatFlag
-from .plan.piecewise import MAX_ORDER, PiecewisePlan
+from ..model.flat import FlatFlag
+from ..plan.piecewise import MAX_ORDER, PiecewisePlan
+from .structs import Array, _in, _out, _shape, _vec, lib
 
 
 def traj_flag(plan: PiecewisePlan, t: ArrayLike) -> FlatFlag:

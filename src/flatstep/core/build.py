@@ -1,6 +1,7 @@
 """cffi API-mode build of the C core (csrc/) as ``flatstep._flatstep_core``; run by setuptools at install time.
 
-setup.py names this file in ``cffi_modules``; nothing imports it at run time and nothing compiles at run time.
+setup.py names this file in ``cffi_modules`` (setuptools runs it by path); nothing imports it at run time and
+nothing compiles at run time.
 
 Every ``csrc/*.c`` is compiled in. The declarations Python sees are the headers' own: each header marks the
 structs, enums and prototypes the binding needs between a ``// cffi:begin`` and a ``// cffi:end`` line, and
@@ -14,7 +15,7 @@ from pathlib import Path
 
 from cffi import FFI
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 CSRC = ROOT / "csrc"
 BLOCK = re.compile(r"^// cffi:begin\n(.*?)^// cffi:end$", re.S | re.M)
 INCLUDE = re.compile(r'^#include "(\w+)\.h"', re.M)

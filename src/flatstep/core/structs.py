@@ -1,6 +1,6 @@
 """The cffi handle of the C core (csrc/), its status and error codes, struct builders and array marshalling.
 
-:mod:`flatstep._core_maps` and :mod:`flatstep._core_runs` share them. Arrays are float64, C-contiguous,
+:mod:`flatstep.core.maps` and :mod:`flatstep.core.runs` share them. Arrays are float64, C-contiguous,
 row-major ``(n, k)`` on the C side and ``(k, n)`` (components first, as in the Python reference) on this side.
 """
 from __future__ import annotations
@@ -12,14 +12,14 @@ from typing import Any, Callable, Iterator, NamedTuple, Optional, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._flatstep_core import ffi, lib
-from .control.protocol import Controller
-from .control.smc import FlatnessSMC
-from .errors import RunError
-from .model.motor import MotorParams
-from .model.plant import PlantEffects
-from .plan.protocol import Plan
-from .validate import check_positive
+from .._flatstep_core import ffi, lib
+from ..control.protocol import Controller
+from ..control.smc import FlatnessSMC
+from ..errors import RunError
+from ..model.motor import MotorParams
+from ..model.plant import PlantEffects
+from ..plan.protocol import Plan
+from ..validate import check_positive
 
 Array = NDArray[np.float64]
 #: A cffi cdata object (a C pointer or buffer): cffi ships no type information, so it is ``Any`` to mypy.
@@ -80,14 +80,9 @@ def _shape(out: Array, like: tuple[int, ...]) -> Array:
     return out.T.reshape((out.shape[1],) + like)
 
 
-def _motor(m: MotorParams) -> dict[str, float]:
-    """The fields of a ``struct motor_params`` holding ``m``."""
-    return dict(R=m.R, L=m.L, Km=m.Km, J=m.J, B=m.B, Nr=m.Nr)
-
-
 def motor_struct(m: MotorParams) -> CData:
-    """A ``struct motor_params`` holding ``m``."""
-    return ffi.new("struct motor_params *", _motor(m))
+    """A ``struct motor_params`` holding ``m`` (its fields: ``m.c_params()``)."""
+    return ffi.new("struct motor_params *", m.c_params())
 
 
 def plan_struct(p: Plan) -> CData:
@@ -140,18 +135,9 @@ def controller_struct(controller: Controller) -> BoundController:
     return BoundController(state, iface)
 
 
-def _effects(effects: Optional[PlantEffects]) -> dict[str, float]:
-    """The fields of a ``struct plant_effects`` (all zero: none)."""
-    if effects is None:
-        return {}
-    return dict(detent_torque=effects.detent_torque, detent_harmonic=effects.detent_harmonic,
-                coulomb_torque=effects.coulomb_torque, coulomb_speed=effects.coulomb_speed,
-                magnetizing_resistance=effects.magnetizing_resistance or 0.0)
-
-
 def _plant_fields(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> dict[str, Any]:
-    """The fields of a ``struct plant``: the simulated motor, its constant load torque and its effects."""
-    return dict(motor=_motor(motor), load=float(load), effects=_effects(effects))
+    """The fields of a ``struct plant``: the simulated motor, its constant load torque, its effects (none: zero)."""
+    return dict(motor=motor.c_params(), load=float(load), effects=effects.c_effects() if effects is not None else {})
 
 
 def _plant(motor: MotorParams, load: float, effects: Optional[PlantEffects] = None) -> CData:

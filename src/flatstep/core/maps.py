@@ -10,7 +10,11 @@ from typing import Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._core_structs import (
+from ..control.smc import FlatnessSMC
+from ..model.flat import FlatFlag
+from ..model.motor import MotorParams
+from ..plan.protocol import Plan
+from .structs import (
     RHO_MIN,
     V_LIMIT,
     Array,
@@ -25,10 +29,6 @@ from ._core_structs import (
     plan_struct,
     smc_struct,
 )
-from .control.smc import FlatnessSMC
-from .model.flat import FlatFlag
-from .model.motor import MotorParams
-from .plan.protocol import Plan
 
 
 def plan_flag(plan: Plan, t: ArrayLike) -> FlatFlag:
