@@ -47,10 +47,10 @@ PUBLIC: dict[str, list[str]] = {
 #: The modules that are not public API: the parts the public modules are built from, the C binding, the command
 #: line (documented by ``flatstep COMMAND --help``) and the benchmarks (docs/benchmarks.md).
 INTERNAL = {
-    "_build_core", "_core", "_core_maps", "_core_runs", "_core_structs", "_core_time_optimal", "_core_traj",
     "_version", "json_out", "__main__",
     "model.datasheet_math",
-    "plan.arguments", "plan.envelope", "plan.margins", "plan.segments", "plan.smoothing", "plan.table_checks",
+    "plan.arguments", "plan.time_optimal_c", "plan.envelope", "plan.margins", "plan.segments", "plan.smoothing",
+    "plan.table_checks",
     "control.cascade", "control.dq_smc", "control.exact_linearization", "control.loops", "control.microstep",
     "control.protocol", "control.smc", "control.spec", "control.tuning",
     "studies.batch_file", "studies.calibrate_accuracy", "studies.file_values", "studies.fingerprint",
