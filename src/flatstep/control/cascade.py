@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,6 +43,10 @@ from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.protocol import Plan
 from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, pi_integrate, pi_output
+
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
 
 
 @dataclass(frozen=True)
@@ -159,3 +163,15 @@ class CascadeFOC(BaselineController[CascadeGains]):
                     gains=dict(current_bandwidth=g.current_bandwidth, position_bandwidth=g.position_bandwidth,
                                decoupling=g.decoupling), torques=self.torques.as_dict(),
                     Ts=self.control_period, v_limit=self.v_limit)
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> CascadeFOC:
+    """The cascade as ``spec`` asks (flatstep.control.spec), tuned by rule (:mod:`flatstep.control.build`).
+
+    Current loops at ``lambda``, the P-PI loop at ``w = omega_n``; ``feedforward`` is the anti-cogging (the known
+    torques in the q-current command), ``observer_torques`` gives them to the observer too.
+    """
+    lam, wn = context.bandwidths()
+    return CascadeFOC(context.motor, context.plan, CascadeGains(current_bandwidth=lam, position_bandwidth=wn),
+                      control_period=context.period, measurement=context.measurement, v_limit=context.v_limit,
+                      torques=context.torques, model_observer=spec.observer_torques)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,7 +35,12 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.motor import MotorParams
 from ..plan.protocol import Plan
 from ..validate import check_finite, check_positive
+from .build import XI
 from .loops import BaselineController, inverse_park, park
+
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
 
 
 @dataclass(frozen=True)
@@ -122,3 +127,14 @@ class ExactLinearization(BaselineController[LinearizationGains]):
         return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(wn=g.wn, xi=g.xi, p3=g.p3, pd=g.pd),
                     measurement=1 if self.measurement == "model" else 0, v_limit=self.v_limit)
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> ExactLinearization:
+    """Exact linearization (flatstep.control.spec), its poles by rule (flatstep.control.build).
+
+    The angle's at ``(s + lambda)(s^2 + 2 xi omega_n s + omega_n^2)``, the d current's at ``lambda``.
+    """
+    lam, wn = context.bandwidths()
+    return ExactLinearization(context.motor, context.plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam),
+                              control_period=context.period, measurement=context.measurement,
+                              v_limit=context.v_limit)

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,6 +40,10 @@ from ..model.motor import MotorParams
 from ..plan.protocol import Plan
 from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, pi_integrate, pi_output
+
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
 
 
 @dataclass(frozen=True)
@@ -130,3 +134,10 @@ class Microstepping(BaselineController[MicrostepGains]):
         return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(current_bandwidth=self.gains.current_bandwidth, feedforward=self.gains.feedforward),
                     Ts=self.control_period, v_limit=self.v_limit)
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> Microstepping:
+    """The microstepping driver (flatstep.control.spec), its current loops at ``lambda`` (flatstep.control.build)."""
+    lam, _ = context.bandwidths()
+    return Microstepping(context.motor, context.plan, MicrostepGains(lam), control_period=context.period,
+                         measurement=context.measurement, v_limit=context.v_limit)

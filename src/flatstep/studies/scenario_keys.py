@@ -11,7 +11,7 @@ from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
 from ..control.smc import MEASUREMENTS, SMCGains
-from ..control.spec import LAWS, OPTION_LAWS, RHO_PLANS
+from ..control.spec import LAWS, OPTIONS
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.drive import PWM_MODES, Drive
 from ..loop.observers import Observer
@@ -142,13 +142,9 @@ KEYS: dict[str, dict[str, Key]] = {
                     "the controller by name (flatstep.control.spec: each name is a law and its options)"),
         "law": Key("", ", ".join(f'"{c}"' for c in LAWS), '"smc"',
                    "the control law, with the options below (instead of type)"),
-        **{k: Key("", "true, false", "false", f"with law: {doc} ({', '.join(OPTION_LAWS[k])})")
-           for k, doc in (("feedforward", "the known torques ([feedforward]) in the law and its observer"),
-                          ("observer_torques", "the cascade's observer knows the torques too"),
-                          ("integral", "integral action on s2"), ("km_estimate", "an online estimate of Km"),
-                          ("hold", "hold the target's detent from tf on"))},
-        "rho_plan": Key("", ", ".join(f'"{r}"' for r in RHO_PLANS), '"plan"',
-                        "with law: the plan's rho*, or rho*(t) from the torque the move needs (smc)"),
+        **{k: Key("", ", ".join(f'"{v}"' for v in opt.values) if opt.values else "true, false",
+                  f'"{opt.values[0]}"' if opt.values else "false", f"with law: {opt.doc} ({', '.join(opt.laws)})")
+           for k, opt in OPTIONS.items()},
         "bandwidth_scale": _q("scale", 1.0, "multiplies every bandwidth of a baseline"),
         "measurement": Key("", ", ".join(f'"{m}"' for m in MEASUREMENTS), "what the drive gives",
                            "where the law's speed and acceleration come from (observer with an observer, model with "

@@ -1,0 +1,104 @@
+r"""What a law's builder gets from a run: the model, the plan, the drive's facts, and the design rules.
+
+:func:`flatstep.control.make_controller` turns its arguments into one :class:`BuildContext` and hands it, with the
+:class:`~flatstep.control.spec.ControllerSpec`, to the law's builder (each law file's ``from_spec``). The baselines
+take their bandwidths from the same design quantities :func:`flatstep.loop.design.design_gains` uses for the sliding
+controller on that drive:
+
+* inner (current) bandwidth :math:`\lambda = 0.3/T_s` (0.15/T_s with a computation delay), the sliding
+  controller's :math:`W/\epsilon`;
+* outer (position) bandwidth :math:`\omega_n = \lambda/4`, its error dynamics' natural frequency, with
+  :math:`\xi = 0.9`;
+* the same bus voltage for the anti-windup, the same measurement (observer or encoder) as the scenario's.
+
+``bandwidth_scale`` multiplies every bandwidth of a baseline.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Optional
+
+from ..model.motor import MotorParams
+from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
+from ..plan.loss_aware import LossAwareRho
+from ..plan.protocol import Plan
+from ..validate import check_positive
+from .smc import SMCGains
+
+#: The design rules of flatstep.loop.design (docs/drive.md): the boundary layer's bandwidth times the control period
+#: (halved with a computation delay), the error dynamics' natural frequency over it and their damping, the margin
+#: of the reaching gains over the disturbance bound.
+LAMBDA_TS = 0.3
+LAMBDA_TS_DELAYED = 0.15
+WN_OVER_LAMBDA = 0.25
+XI = 0.9
+W_MARGIN = 2.0
+
+
+def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
+    r"""``(lambda, omega_n)`` [rad/s] for a control period.
+
+    .. math:: \lambda T_s = 0.3 \text{ (0.15 delayed)},\qquad \omega_n = \lambda/4
+    """
+    Ts = check_positive("control_period", control_period, unit=" s")
+    lam = (LAMBDA_TS_DELAYED if compute_delay else LAMBDA_TS) / Ts
+    return lam, WN_OVER_LAMBDA * lam
+
+
+@dataclass(frozen=True)
+class BuildContext:
+    """Everything a law's builder may read besides its spec.
+
+    Parameters
+    ----------
+    motor : MotorParams
+        The controller's nominal model.
+    plan : Plan
+        The move.
+    measurement : str
+        Where speed and acceleration come from (``"ideal"``, ``"model"``, ``"observer"``).
+    control_period : float or None
+        Ts [s]; ``None`` for continuous time (only laws and options that do not need it).
+    smc_gains : SMCGains
+        The sliding laws' gains (designed or given).
+    v_limit : float
+        The bus voltage the anti-windup knows [V] (``inf``: none).
+    bandwidth_scale : float
+        Multiplies every bandwidth of a baseline.
+    compute_delay : bool
+        One control period between measuring and applying (halves the baselines' bandwidths).
+    torques : TorqueModel
+        The torques the law knows beyond eq. (1): the run's, when an option that needs them is on, else none.
+    d_current : DCurrentPlan
+        The planned d current of the d-q laws.
+    loss_aware : LossAwareRho or None
+        The loss-aware rho*(t), when one is given.
+    """
+
+    motor: MotorParams
+    plan: Plan
+    measurement: str
+    control_period: Optional[float] = None
+    smc_gains: SMCGains = SMCGains()
+    v_limit: float = math.inf
+    bandwidth_scale: float = 1.0
+    compute_delay: bool = False
+    torques: TorqueModel = NO_TORQUES
+    d_current: DCurrentPlan = ZERO_D_CURRENT
+    loss_aware: Optional[LossAwareRho] = None
+
+    @property
+    def period(self) -> float:
+        """The control period [s] (make_controller has checked that a law needing it has one)."""
+        if self.control_period is None:
+            raise ValueError("this controller advances by the control period: give control_period "
+                             "([drive] control_rate)")
+        return self.control_period
+
+    def bandwidths(self) -> tuple[float, float]:
+        r"""The baselines' ``(lambda, omega_n)`` [rad/s]: :func:`bandwidths` times ``bandwidth_scale``."""
+        scale = check_positive("bandwidth_scale", self.bandwidth_scale)
+        lam, wn = bandwidths(self.period, self.compute_delay)
+        return scale * lam, scale * wn
