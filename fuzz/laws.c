@@ -233,7 +233,7 @@ static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, u
     return rc;
 }
 
-// Returns cascade_init's status; decodes the cascade (options: 1 no decoupling). Aborts when a documented
+// Returns cascade_init's status; decodes the cascade (options: 1 no decoupling, 2 the voltage feedforward). Aborts when a documented
 // requirement is broken yet accepted.
 static int init_cascade(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t options, const struct setup *u)
 {
@@ -241,14 +241,19 @@ static int init_cascade(struct fz_law *c, struct fz_reader *r, bool hostile, uin
     bool ok;
     int rc;
     p.motor = *u->model, p.plan = *u->plan, p.Ts = u->Ts, p.v_limit = u->v_limit;
-    p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.position_bandwidth = 200, p.gains.decoupling = !(options & 1);
+    p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.decoupling = !(options & 1);
+    p.gains.k_theta = 200.0 / 3, p.gains.k_omega = 450, p.gains.ki_omega = 30000;
+    p.gains.voltage_feedforward = (options & 2) != 0;
+    p.torques = (struct torque_model){0};
     if (hostile) {
         p.gains.current_bandwidth = fz_value(r, p.gains.current_bandwidth);
-        p.gains.position_bandwidth = fz_value(r, p.gains.position_bandwidth), p.Ts = fz_value(r, p.Ts);
+        p.gains.k_theta = fz_value(r, p.gains.k_theta), p.gains.k_omega = fz_value(r, p.gains.k_omega);
+        p.gains.ki_omega = fz_value(r, p.gains.ki_omega), p.Ts = fz_value(r, p.Ts);
         p.v_limit = fz_value(r, p.v_limit);
     }
     ok = motor_ok(&p.motor) && plan_ok(&p.plan) && fz_positive(p.gains.current_bandwidth)
-         && fz_positive(p.gains.position_bandwidth) && fz_positive(p.Ts) && p.v_limit > 0;
+         && fz_positive(p.gains.k_theta) && fz_positive(p.gains.k_omega) && isfinite(p.gains.ki_omega)
+         && p.gains.ki_omega >= 0 && fz_positive(p.Ts) && p.v_limit > 0;
     rc = cascade_init(&c->u.cas, &p);
     if (!ok && rc == CASCADE_PARAMS_OK)
         FZ_FAIL("cascade_init accepted invalid parameters");

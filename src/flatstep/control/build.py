@@ -11,20 +11,23 @@ controller on that drive:
   :math:`\xi = 0.9`;
 * the same bus voltage for the anti-windup, the same measurement (observer or encoder) as the scenario's.
 
-``bandwidth_scale`` multiplies every bandwidth of a baseline.
+``bandwidth_scale`` multiplies every bandwidth of a baseline. Two more settings make every law's gains free:
+``lambda_ts`` replaces the rule's :math:`\lambda T_s` (the current loop's speed: a baseline's current bandwidth
+:math:`\lambda`, a sliding law's boundary layers :math:`W/\epsilon`), and ``law_gains`` gives a law's gains by
+name over its rule (the fields of its gains class: ``CascadeGains``'s ``k_theta``, say).
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Optional
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Mapping, Optional, TypeVar
 
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.loss_aware import LossAwareRho
 from ..plan.protocol import Plan
-from ..validate import check_positive
+from ..validate import InputError, check_positive
 from .smc import SMCGains
 
 #: The design rules of flatstep.loop.design (docs/drive.md): the boundary layer's bandwidth times the control period
@@ -35,6 +38,17 @@ LAMBDA_TS_DELAYED = 0.15
 WN_OVER_LAMBDA = 0.25
 XI = 0.9
 W_MARGIN = 2.0
+#: A gains class (a dataclass) a law builds from its rule and ``law_gains``.
+G = TypeVar("G")
+
+
+def check_lambda_ts(value: Any) -> float:
+    """The current loop's speed times the control period, in (0, 1] (the error decays by 1 - lambda Ts a period)."""
+    lam_ts = check_positive("lambda_ts", value)
+    if lam_ts > 1.0:
+        raise InputError("lambda_ts", value, f"lambda_ts={value!r} must be in (0, 1]: the current loop's error "
+                         "decays by 1 - lambda Ts a period (0.3 is the design rule)")
+    return lam_ts
 
 
 def bandwidths(control_period: float, compute_delay: bool = False) -> tuple[float, float]:
@@ -75,6 +89,10 @@ class BuildContext:
         The planned d current of the d-q laws.
     loss_aware : LossAwareRho or None
         The loss-aware rho*(t), when one is given.
+    lambda_ts : float or None
+        The current loop's speed times Ts, in (0, 1] (``None``: the rule's 0.3, 0.15 delayed).
+    law_gains : mapping
+        The law's gains by name, over its rule (empty: the rule's).
     """
 
     motor: MotorParams
@@ -88,6 +106,15 @@ class BuildContext:
     torques: TorqueModel = NO_TORQUES
     d_current: DCurrentPlan = ZERO_D_CURRENT
     loss_aware: Optional[LossAwareRho] = None
+    lambda_ts: Optional[float] = None
+    law_gains: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.lambda_ts is not None:
+            object.__setattr__(self, "lambda_ts", check_lambda_ts(self.lambda_ts))
+        if not isinstance(self.law_gains, Mapping):
+            raise InputError("law_gains", self.law_gains, f"law_gains={self.law_gains!r} is not a mapping of gain "
+                             "names to values")
 
     @property
     def period(self) -> float:
@@ -101,4 +128,38 @@ class BuildContext:
         r"""The baselines' ``(lambda, omega_n)`` [rad/s]: :func:`bandwidths` times ``bandwidth_scale``."""
         scale = check_positive("bandwidth_scale", self.bandwidth_scale)
         lam, wn = bandwidths(self.period, self.compute_delay)
+        if self.lambda_ts is not None:
+            lam = self.lambda_ts / self.period
+            wn = WN_OVER_LAMBDA * lam
         return scale * lam, scale * wn
+
+    def gains(self, kind: type[G], rule: Mapping[str, Any], fixed: Mapping[str, Any] = {}) -> G:
+        """The law's gains: ``kind(**rule)`` with ``law_gains`` over the rule and the spec's ``fixed`` over both.
+
+        Raises
+        ------
+        InputError
+            For a name in ``law_gains`` that is not a field of ``kind`` (or is set by the spec's options).
+        """
+        return kind(**{**rule, **self.checked_gains(kind, fixed), **fixed})
+
+    def sliding_gains(self) -> SMCGains:
+        r"""The sliding laws' gains: ``smc_gains``, ``law_gains`` over them, and the boundary layers of ``lambda_ts``.
+
+        With ``lambda_ts``, :math:`\epsilon_i = W_i/\lambda`, :math:`\lambda = \lambda T_s/T_s`, so that each
+        boundary layer's bandwidth :math:`W_i/\epsilon_i` is the current loop's speed asked for.
+        """
+        g = replace(self.smc_gains, **self.checked_gains(SMCGains)) if self.law_gains else self.smc_gains
+        if self.lambda_ts is None:
+            return g
+        lam = self.lambda_ts / self.period
+        return replace(g, eps1=g.W1 / lam, eps2=g.W2 / lam)
+
+    def checked_gains(self, kind: type, fixed: Mapping[str, Any] = {}) -> Mapping[str, Any]:
+        """``law_gains``, refused by name if one is not a field of ``kind`` or is one of ``fixed``."""
+        valid = [f.name for f in fields(kind) if f.name not in fixed]
+        for name, value in self.law_gains.items():
+            if name not in valid:
+                raise InputError(name, value, f"{name}={value!r} is not a gain of this law ({kind.__name__}); "
+                                 f"valid: {valid}")
+        return self.law_gains

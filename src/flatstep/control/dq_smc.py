@@ -340,7 +340,7 @@ def from_spec(spec: ControllerSpec, context: BuildContext) -> DQFlatnessSMC:
     held while the bus limits) and ``km_estimate`` :meth:`DQKmAdaptation.designed` (at the integral's rate, held as
     the integral is); both advance by the control period.
     """
-    g, v = context.smc_gains, context.v_limit
+    g, v = context.sliding_gains(), context.v_limit
     integral = DQIntegral.designed(g, context.period, v) if spec.integral else None
     adaptation = (DQKmAdaptation.designed(context.motor, context.plan, g, context.period, v)
                   if spec.km_estimate else None)

@@ -132,9 +132,11 @@ class ExactLinearization(BaselineController[LinearizationGains]):
 def from_spec(spec: ControllerSpec, context: BuildContext) -> ExactLinearization:
     """Exact linearization (flatstep.control.spec), its poles by rule (flatstep.control.build).
 
-    The angle's at ``(s + lambda)(s^2 + 2 xi omega_n s + omega_n^2)``, the d current's at ``lambda``.
+    The angle's at ``(s + lambda)(s^2 + 2 xi omega_n s + omega_n^2)``, the d current's at ``lambda``; any of
+    :class:`LinearizationGains`'s fields given in ``context.law_gains`` replaces the rule's.
     """
     lam, wn = context.bandwidths()
-    return ExactLinearization(context.motor, context.plan, LinearizationGains(wn=wn, xi=XI, p3=lam, pd=lam),
+    gains = context.gains(LinearizationGains, dict(wn=wn, xi=XI, p3=lam, pd=lam))
+    return ExactLinearization(context.motor, context.plan, gains,
                               control_period=context.period, measurement=context.measurement,
                               v_limit=context.v_limit)

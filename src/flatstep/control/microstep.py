@@ -137,7 +137,11 @@ class Microstepping(BaselineController[MicrostepGains]):
 
 
 def from_spec(spec: ControllerSpec, context: BuildContext) -> Microstepping:
-    """The microstepping driver (flatstep.control.spec), its current loops at ``lambda`` (flatstep.control.build)."""
+    """The microstepping driver (flatstep.control.spec), its current loops at ``lambda`` (flatstep.control.build).
+
+    Any of :class:`MicrostepGains`'s fields given in ``context.law_gains`` replaces the rule's.
+    """
     lam, _ = context.bandwidths()
-    return Microstepping(context.motor, context.plan, MicrostepGains(lam), control_period=context.period,
+    gains = context.gains(MicrostepGains, dict(current_bandwidth=lam))
+    return Microstepping(context.motor, context.plan, gains, control_period=context.period,
                          measurement=context.measurement, v_limit=context.v_limit)

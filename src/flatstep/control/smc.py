@@ -261,7 +261,7 @@ def from_spec(spec: ControllerSpec, context: BuildContext) -> FlatnessSMC:
     the known torques' load angle on the target; ``rho_plan="loss_aware"`` tracks the loss-aware rho*(t)
     (``context.loss_aware``, default ``LossAwareRho.for_plan(plan)``).
     """
-    gains = context.smc_gains
+    gains = context.sliding_gains()
     if spec.hold and gains.hold_damping is None:
         gains = replace(gains, hold_damping=REST_HOLD_DAMPING)
     loss_aware = None

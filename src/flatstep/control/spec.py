@@ -15,6 +15,8 @@ option                 what it adds                                             
 ``hold``               the detent hold from ``tf`` on                                 smc
 ``rho_plan``           ``"plan"`` (the plan's rho*) or ``"loss_aware"`` (rho*(t)      smc
                        from the torque the move needs)
+``voltage_feedforward`` the voltage of the planned q current, ``R iq* + L diq*/dt``   cascade
+                       (with the known torques along the plan when ``feedforward``)
 =====================  =============================================================  ==============================
 
 Every combination the table allows is a controller; :meth:`ControllerSpec.name` is its name (the historical type
@@ -50,6 +52,8 @@ class Law:
     sliding : bool
         Whether its gains are the run's :class:`~flatstep.control.smc.SMCGains` (designed or given), else tuned by
         rule from the control period.
+    gains : type
+        Its gains class (a dataclass): the names a scenario's ``[controller]`` table may give.
     needs : tuple of str
         Of :data:`NEEDS`, what the law needs with every option off.
     """
@@ -57,6 +61,7 @@ class Law:
     build: Callable[["ControllerSpec", BuildContext], Any]
     label: str
     sliding: bool
+    gains: type
     needs: tuple[str, ...] = ()
 
 
@@ -102,12 +107,13 @@ class Option:
 
 #: The control laws, the paper's first, each with its builder.
 LAW_TABLE: dict[str, Law] = {
-    "smc": Law(smc.from_spec, "flatness + SMC", sliding=True),
-    "dq_smc": Law(dq_smc.from_spec, "flatness d-q SMC", sliding=True),
-    "cascade": Law(cascade.from_spec, "cascaded PID (FOC)", sliding=False, needs=("control_period",)),
-    "microstep": Law(microstep.from_spec, "open-loop microstep", sliding=False, needs=("control_period",)),
-    "exact_linearization": Law(exact_linearization.from_spec, "exact linearization", sliding=False,
-                               needs=("control_period",)),
+    "smc": Law(smc.from_spec, "flatness + SMC", True, smc.SMCGains),
+    "dq_smc": Law(dq_smc.from_spec, "flatness d-q SMC", True, smc.SMCGains),
+    "cascade": Law(cascade.from_spec, "cascaded PID (FOC)", False, cascade.CascadeGains, ("control_period",)),
+    "microstep": Law(microstep.from_spec, "open-loop microstep", False, microstep.MicrostepGains,
+                     ("control_period",)),
+    "exact_linearization": Law(exact_linearization.from_spec, "exact linearization", False,
+                               exact_linearization.LinearizationGains, ("control_period",)),
 }
 #: The options, in the order of a controller's name.
 OPTIONS: dict[str, Option] = {
@@ -125,6 +131,8 @@ OPTIONS: dict[str, Option] = {
                    why="the hold holds the plan's rho at the target"),
     "rho_plan": Option(("smc",), "the plan's rho*, or rho*(t) from the torque the move needs", "rho(t)", 0,
                        values=("plan", "loss_aware")),
+    "voltage_feedforward": Option(("cascade",), "the voltage of the planned q current, R iq* + L diq*/dt (with the "
+                                  "known torques along the plan when feedforward)", "v ff", 6),
 }
 #: The control laws, the paper's first.
 LAWS = tuple(LAW_TABLE)
@@ -134,6 +142,9 @@ SLIDING_LAWS = tuple(k for k, law in LAW_TABLE.items() if law.sliding)
 OPTION_LAWS: dict[str, tuple[str, ...]] = {name: opt.laws for name, opt in OPTIONS.items()}
 #: The values of ``rho_plan``.
 RHO_PLANS = OPTIONS["rho_plan"].values
+#: The gain names each law takes (its gains class's fields; the options' own switches left out).
+LAW_GAINS: dict[str, tuple[str, ...]] = {k: tuple(f.name for f in fields(law.gains) if f.name not in OPTIONS)
+                                         for k, law in LAW_TABLE.items()}
 #: Short labels of the laws, for tables and figures.
 LAW_LABELS = {k: law.label for k, law in LAW_TABLE.items()}
 
@@ -155,6 +166,8 @@ class ControllerSpec:
         The options of the module docstring's table (default off).
     rho_plan : str
         ``"plan"`` or ``"loss_aware"`` (:data:`RHO_PLANS`).
+    voltage_feedforward : bool
+        The cascade's current-reference voltage (module docstring; default off).
     """
 
     law: str = "smc"
@@ -164,6 +177,7 @@ class ControllerSpec:
     km_estimate: bool = False
     hold: bool = False
     rho_plan: str = "plan"
+    voltage_feedforward: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.law, str) or self.law not in LAWS:
@@ -254,7 +268,7 @@ class ControllerSpec:
 
     @classmethod
     def parse(cls, value: Any, where: str = "controller") -> "ControllerSpec":
-        """A spec from a name (an alias or ``law+option+...``), a mapping of fields, or a spec.
+        """A spec from a name (``law+option+...``, an alias, or ``alias+option+...``), a mapping of fields, or a spec.
 
         Raises
         ------
@@ -278,10 +292,13 @@ class ControllerSpec:
         if value in ALIASES:
             return ALIASES[value]
         law, *opts = value.split("+")
+        kwargs: dict[str, Any] = {}
+        if law in ALIASES:  # a historical name with more options: "cascade_model+voltage_feedforward"
+            base = ALIASES[law]
+            law, kwargs = base.law, {name: getattr(base, name) for name in base.options_on()}
         if law not in LAWS:
             raise InputError(where, value, f"{where}={value!r} is unknown; valid: {list(ALIASES)}, or "
                              f"law+option+... with a law of {list(LAWS)} and options of {list(OPTIONS)}")
-        kwargs: dict[str, Any] = {}
         choices = {v: name for name, opt in OPTIONS.items() for v in opt.values}
         for opt in opts:
             if opt in choices:
@@ -318,14 +335,23 @@ ALIASES: dict[str, ControllerSpec] = {
 #: The controllers a scenario can name by their historical type names (``[controller] type``), the paper's first;
 #: any other valid combination of a law and its options is named ``law+option+...``.
 CONTROLLER_TYPES = tuple(ALIASES)
-#: Short labels of the historical names for tables and figures (:func:`label` for any name).
-LABELS = {"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
+
+
+class _Labels(dict[str, str]):
+    """The historical names' labels; any other controller name's label is its spec's (``LABELS[name]``)."""
+
+    def __missing__(self, name: str) -> str:
+        return ControllerSpec.parse(name).label()
+
+
+#: Short labels of the historical names for tables and figures; ``LABELS[name]`` of any other name is its spec's.
+LABELS = _Labels({"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
           "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
           "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q SMC + ff",
           "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
           "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff",
           "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff",
-          "smc_ff_hold": "flatness SMC+ff, hold", "dq_smc_i_ff_km": "flatness d-q I+ff+Km"}
+          "smc_ff_hold": "flatness SMC+ff, hold", "dq_smc_i_ff_km": "flatness d-q I+ff+Km"})
 #: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
 SMC_TYPES = tuple(k for k, s in ALIASES.items() if s.sliding)
 #: The flatness types that can run in continuous time (no integral or estimate advancing by the control period).
@@ -336,4 +362,13 @@ FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
 
 def label(kind: str) -> str:
     """The label of a controller name (:data:`LABELS`, or the spec's own for a ``law+option+...`` name)."""
-    return LABELS.get(kind) or ControllerSpec.parse(kind).label()
+    return LABELS[kind]
+
+
+def is_controller(name: object) -> bool:
+    """Whether ``name`` names a controller: an alias, ``law+option+...`` or ``alias+option+...``, valid."""
+    try:
+        ControllerSpec.parse(name)
+    except ValueError:
+        return False
+    return isinstance(name, str)

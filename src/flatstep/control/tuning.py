@@ -7,7 +7,7 @@ from the spec and a :class:`~flatstep.control.build.BuildContext` (the baselines
 from __future__ import annotations
 
 import math
-from typing import Optional, Union
+from typing import Any, Mapping, Optional, Union
 
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
@@ -37,7 +37,8 @@ def make_controller(kind: object, motor: MotorParams, plan: Plan, *, control_per
                     bandwidth_scale: float = 1.0, compute_delay: bool = False,
                     torques: Optional[TorqueModel] = None,
                     d_current: DCurrentPlan = ZERO_D_CURRENT,
-                    loss_aware: Optional[LossAwareRho] = None) -> AnyController:
+                    loss_aware: Optional[LossAwareRho] = None, lambda_ts: Optional[float] = None,
+                    law_gains: Optional[Mapping[str, Any]] = None) -> AnyController:
     """The controller ``kind`` for this motor model, plan and drive.
 
     ``kind`` is a :class:`~flatstep.control.spec.ControllerSpec`, a name (one of :data:`CONTROLLER_TYPES` or
@@ -45,8 +46,11 @@ def make_controller(kind: object, motor: MotorParams, plan: Plan, *, control_per
     designed or given); the baselines are tuned by rule (:mod:`flatstep.control.build`) from ``control_period``,
     with every bandwidth times ``bandwidth_scale``. ``torques`` (the torques known beyond eq. (1)) is required by
     the options that need it (``feedforward``) and read by no other controller; ``d_current`` is the d-q laws'
-    planned d current, ``loss_aware`` the loss-aware rho*(t) (default ``LossAwareRho.for_plan(plan)``). What each
-    option adds is said by its law's ``from_spec``.
+    planned d current, ``loss_aware`` the loss-aware rho*(t) (default ``LossAwareRho.for_plan(plan)``).
+    ``lambda_ts`` replaces the rule's current-loop speed times Ts for every law (a sliding law's boundary layers,
+    a baseline's current bandwidth; needs ``control_period``), and ``law_gains`` gives the law's gains by name over
+    its rule (:class:`~flatstep.control.build.BuildContext`). What each option adds is said by its law's
+    ``from_spec``.
 
     Raises
     ------
@@ -57,13 +61,14 @@ def make_controller(kind: object, motor: MotorParams, plan: Plan, *, control_per
     if spec.needs_torques and torques is None:
         raise ValueError(f"controller type {spec.name()!r} needs the torques it knows beyond eq. (1): give a "
                          "TorqueModel (a [feedforward] table in a scenario file), or use the type without feedforward")
-    if spec.needs_control_period and control_period is None:
+    if (spec.needs_control_period or lambda_ts is not None) and control_period is None:
         raise ValueError(f"controller type {spec.name()!r} is tuned from the control period "
                          f"(lambda = 0.3/Ts) or advances by it: give one ([drive] control_rate); only the flatness "
                          f"types {CONTINUOUS_TYPES} have gains of their own for continuous time")
     context = BuildContext(motor, plan, measurement, control_period=control_period, smc_gains=smc_gains,
                            v_limit=v_limit, bandwidth_scale=bandwidth_scale, compute_delay=compute_delay,
                            torques=torques if spec.needs_torques and torques is not None else NO_TORQUES,
-                           d_current=d_current, loss_aware=loss_aware)
+                           d_current=d_current, loss_aware=loss_aware, lambda_ts=lambda_ts,
+                           law_gains=dict(law_gains or {}))
     controller: AnyController = spec.build(context)
     return controller
