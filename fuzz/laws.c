@@ -209,7 +209,7 @@ static int init_smc(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t
     return rc;
 }
 
-// Returns microstep_init's status; decodes the driver (options: 1 no feedforward). Aborts when a documented
+// Returns microstep_init's status; decodes the driver (options: 1 no feedforward, 2 the back EMF). Aborts when a documented
 // requirement is broken yet accepted.
 static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t options, const struct setup *u)
 {
@@ -218,6 +218,7 @@ static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, u
     int rc;
     p.motor = *u->model, p.plan = *u->plan, p.Ts = u->Ts, p.v_limit = u->v_limit;
     p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.feedforward = !(options & 1);
+    p.gains.back_emf = (options & 2) != 0;
     if (hostile) {
         p.gains.current_bandwidth = fz_value(r, p.gains.current_bandwidth), p.Ts = fz_value(r, p.Ts);
         p.v_limit = fz_value(r, p.v_limit);
@@ -273,6 +274,7 @@ static int init_exact(struct fz_law *c, struct fz_reader *r, bool hostile, uint8
     int rc;
     p.motor = *u->model, p.plan = *u->plan, p.v_limit = u->v_limit;
     p.measurement = options & 1 ? EXACT_LINEARIZATION_MODEL : EXACT_LINEARIZATION_MEASURED;
+    p.torques = (struct torque_model){0};
     g->wn = 200, g->xi = 0.8, g->p3 = 0.3 / u->Ts, g->pd = 0.3 / u->Ts;
     if (hostile) {
         g->wn = fz_value(r, g->wn), g->xi = fz_value(r, g->xi), g->p3 = fz_value(r, g->p3);

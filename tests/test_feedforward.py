@@ -131,8 +131,31 @@ def test_a_scenario_file_gives_any_law_its_gains(tmp_path):
         load_scenario(path)
 
 
+def test_on_the_reference_the_exact_linearization_with_the_torques_is_the_flat_feedforward():
+    """At the reference state the law's voltages are the feedforward of the same torques (model mode)."""
+    ctrl = build("exact_linearization+feedforward")
+    ref = reference(PLAN, MOTOR, T, torques=TORQUES)
+    np.testing.assert_allclose(ctrl.voltages(T, ref.state), ref.voltages, rtol=1e-9, atol=1e-9)
+    assert ctrl.observer_torques == TORQUES
+    without = build("exact_linearization").voltages(T, ref.state)
+    assert np.max(np.abs(without - ref.voltages)) > 0.1  # the torques matter
+
+
+def test_the_back_emf_of_the_microstepping_driver():
+    off, on = build("microstep"), build("microstep+back_emf")
+    y, t = np.array([0.3, -0.2, 40.0, 0.7, 0.0]), 0.02
+    (v0, s0), (v1, s1) = off.step(None, y, t), on.step(None, y, t)
+    f = PLAN.flag(t)
+    expected = MOTOR.Km * f.dtheta * np.array([-np.sin(MOTOR.Nr * f.theta), np.cos(MOTOR.Nr * f.theta)])
+    np.testing.assert_allclose(v1 - v0, expected, rtol=1e-12)
+    assert np.max(np.abs(expected)) > 0.1 and on.gains.back_emf and not off.gains.back_emf
+    np.testing.assert_array_equal(s0, s1)
+
+
 @pytest.mark.parametrize("kind, law_gains", [
     ("cascade+voltage_feedforward", None),
+    ("exact_linearization+feedforward", {"p3": 3000.0}),
+    ("microstep+back_emf", None),
     ("cascade+feedforward+observer_torques+voltage_feedforward", {"k_theta": 900.0, "k_omega": 2000.0,
                                                                   "ki_omega": 1e5}),
 ])

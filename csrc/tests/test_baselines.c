@@ -19,6 +19,7 @@ static void microstep_defaults(struct microstep_params *p)
     p->plan = PLAN;
     p->gains.current_bandwidth = 0.3 / TS;
     p->gains.feedforward = true;
+    p->gains.back_emf = false;
     p->Ts = TS;
     p->v_limit = INFINITY;
 }
@@ -48,6 +49,7 @@ static void exlin_defaults(struct exact_linearization_params *p)
     p->gains = (struct exact_linearization_gains){lambda / 4, 0.9, lambda, lambda};
     p->measurement = EXACT_LINEARIZATION_MODEL;
     p->v_limit = INFINITY;
+    p->torques = (struct torque_model){0};
 }
 
 // Returns 0; each _init rejects each invalid group and accepts the defaults (INFINITY as v_limit among them).

@@ -6,8 +6,8 @@ the laws that take it, what it needs from a run, what it requires or excludes):
 =====================  =============================================================  ==============================
 option                 what it adds                                                   laws
 =====================  =============================================================  ==============================
-``feedforward``        the torques known beyond eq. (1) (a ``TorqueModel``: detent,   smc, dq_smc, cascade
-                       Coulomb friction, load) in the law's voltages and observer
+``feedforward``        the torques known beyond eq. (1) (a ``TorqueModel``: detent,   smc, dq_smc, cascade,
+                       Coulomb friction, load) in the law's voltages and observer     exact_linearization
                        (the cascade: anti-cogging, as firmware does it)
 ``observer_torques``   the cascade's observer knows those torques too                cascade (with feedforward)
 ``integral``           integral action on ``s2``                                      dq_smc
@@ -17,6 +17,7 @@ option                 what it adds                                             
                        from the torque the move needs)
 ``voltage_feedforward`` the voltage of the planned q current, ``R iq* + L diq*/dt``   cascade
                        (with the known torques along the plan when ``feedforward``)
+``back_emf``           the back EMF at the plan's angle and speed                     microstep
 =====================  =============================================================  ==============================
 
 Every combination the table allows is a controller; :meth:`ControllerSpec.name` is its name (the historical type
@@ -117,8 +118,8 @@ LAW_TABLE: dict[str, Law] = {
 }
 #: The options, in the order of a controller's name.
 OPTIONS: dict[str, Option] = {
-    "feedforward": Option(("smc", "dq_smc", "cascade"), "the known torques ([feedforward]) in the law and its observer",
-                          "ff", 2, needs=("torques",)),
+    "feedforward": Option(("smc", "dq_smc", "cascade", "exact_linearization"),
+                          "the known torques ([feedforward]) in the law and its observer", "ff", 2, needs=("torques",)),
     "observer_torques": Option(("cascade",), "the cascade's observer knows the torques too", "model obs.", 3,
                                requires=("feedforward",),
                                why="the observer shares the torque model the feedforward brings",
@@ -133,6 +134,7 @@ OPTIONS: dict[str, Option] = {
                        values=("plan", "loss_aware")),
     "voltage_feedforward": Option(("cascade",), "the voltage of the planned q current, R iq* + L diq*/dt (with the "
                                   "known torques along the plan when feedforward)", "v ff", 6),
+    "back_emf": Option(("microstep",), "the back EMF at the plan's angle and speed in the driver's voltages", "emf", 7),
 }
 #: The control laws, the paper's first.
 LAWS = tuple(LAW_TABLE)
@@ -168,6 +170,8 @@ class ControllerSpec:
         ``"plan"`` or ``"loss_aware"`` (:data:`RHO_PLANS`).
     voltage_feedforward : bool
         The cascade's current-reference voltage (module docstring; default off).
+    back_emf : bool
+        The microstepping driver's back-EMF feedforward (default off).
     """
 
     law: str = "smc"
@@ -178,6 +182,7 @@ class ControllerSpec:
     hold: bool = False
     rho_plan: str = "plan"
     voltage_feedforward: bool = False
+    back_emf: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.law, str) or self.law not in LAWS:
