@@ -152,10 +152,27 @@ def test_the_back_emf_of_the_microstepping_driver():
     np.testing.assert_array_equal(s0, s1)
 
 
+def test_the_load_angle_of_the_microstepping_driver():
+    """Leading by the load angle puts the torque the plan needs on the q axis of the planned angle."""
+    ctrl = build("microstep+load_angle")
+    f = PLAN.flag(T)
+    i_d, i_q = fs.control.loops.park(*ctrl.current_reference(T), MOTOR.Nr * f.theta)
+    torque = MOTOR.J * f.ddtheta + MOTOR.B * f.dtheta
+    inside = np.abs(torque) < MOTOR.Km * f.rho
+    np.testing.assert_allclose((MOTOR.Km * i_q)[inside], torque[inside], rtol=1e-9, atol=1e-12)
+    assert np.max(np.abs(i_q)) > 0.05 and np.all(np.hypot(i_d, i_q) == pytest.approx(f.rho))
+    h = 1e-7
+    numeric = (ctrl.current_reference(T + h) - ctrl.current_reference(T - h)) / (2 * h)
+    mid = (T > 0.006) & (T < 0.044)
+    np.testing.assert_allclose(numeric[:, mid], ctrl.current_reference(T, 1)[:, mid], rtol=1e-4, atol=1e-2)
+    plain = build("microstep").current_reference(T)
+    assert np.max(np.abs(plain - ctrl.current_reference(T))) > 0.05
+
+
 @pytest.mark.parametrize("kind, law_gains", [
     ("cascade+voltage_feedforward", None),
     ("exact_linearization+feedforward", {"p3": 3000.0}),
-    ("microstep+back_emf", None),
+    ("microstep+back_emf+load_angle", None),
     ("cascade+feedforward+observer_torques+voltage_feedforward", {"k_theta": 900.0, "k_omega": 2000.0,
                                                                   "ki_omega": 1e5}),
 ])
