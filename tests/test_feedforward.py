@@ -123,6 +123,7 @@ def test_a_scenario_file_gives_any_law_its_gains(tmp_path):
     ctrl = sc.controller()
     assert sc.controller_type == "cascade+voltage_feedforward" and ctrl.gains.k_theta == 200.0
     assert ctrl.gains.current_bandwidth == pytest.approx(0.25 * 20000.0) and ctrl.gains.voltage_feedforward
+    assert replace(sc, controller_type="smc", lambda_ts=None).controller().gains == sc.gains  # cascade gains: its own
     path.write_text(FILE + 'type = "smc"\nk_theta = 200.0\n')
     with pytest.raises(ValueError, match=r"s.toml:controller.k_theta: k_theta is not a gain of law 'smc'"):
         load_scenario(path)
@@ -180,7 +181,8 @@ def test_the_c_twin_matches_the_reference_with_the_new_options(kind, law_gains):
     from flatstep.studies.scenario_file import load_scenario
 
     scenario, _ = load_scenario(EXAMPLES / "compare-paper-20khz.toml")
-    sc = replace(scenario, controller_type=kind, law_gains=law_gains, lambda_ts=0.25, t_end=scenario.plan.tf)
+    gains = {ControllerSpec.parse(kind).law: law_gains} if law_gains else None
+    sc = replace(scenario, controller_type=kind, law_gains=gains, lambda_ts=0.25, t_end=scenario.plan.tf)
     c, py = sc.run("c"), sc.run("python")
     np.testing.assert_allclose(c.theta, py.theta, rtol=0, atol=1e-9)
     np.testing.assert_allclose([c.va, c.vb], [py.va, py.vb], rtol=0, atol=1e-8)
