@@ -11,13 +11,30 @@ static bool positive(fs_real x)
 // Returns nothing; writes i* = rho* (cos Nr theta*, sin Nr theta*) at t and, when di is not NULL, its derivative.
 static void microstep_reference(const struct microstep *s, fs_real t, fs_real i[2], fs_real *di)
 {
-    fs_real ref[PLAN_FLAG_LEN], sn, cs, w;
+    // With the load angle the vector leads N_r theta* by delta, sin delta = c = (J theta*'' + B theta*') / (Km rho*)
+    // clipped to [-1, 1]; delta' = c' / cos delta inside (0 where clipped).
+    const struct motor_params *m = &s->p.motor;
+    fs_real ref[PLAN_FLAG_LEN], sn, cs, w, dp, c, cd, sp, cp;
     plan_flag(&s->plan, t, ref);
-    fs_sincos(s->p.motor.Nr * ref[PLAN_THETA], &sn, &cs);
+    fs_sincos(m->Nr * ref[PLAN_THETA], &sn, &cs);
+    dp = m->Nr * ref[PLAN_DTHETA];
+    if (s->p.gains.load_angle) {
+        c = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA]) / (m->Km * ref[PLAN_RHO]);
+        c = c > 1 ? 1 : c < -1 ? -1 : c;
+        cd = fs_sqrt(1 - c * c);
+        if (cd > 0)
+            dp = dp
+                 + ((m->J * ref[PLAN_DDDTHETA] + m->B * ref[PLAN_DDTHETA]) - c * m->Km * ref[PLAN_DRHO])
+                       / (m->Km * ref[PLAN_RHO]) / cd;
+        sp = sn * cd + cs * c;
+        cp = cs * cd - sn * c;
+        sn = sp;
+        cs = cp;
+    }
     i[0] = ref[PLAN_RHO] * cs;
     i[1] = ref[PLAN_RHO] * sn;
     if (di) {
-        w = s->p.motor.Nr * ref[PLAN_DTHETA] * ref[PLAN_RHO];
+        w = dp * ref[PLAN_RHO];
         di[0] = ref[PLAN_DRHO] * cs - w * sn;
         di[1] = ref[PLAN_DRHO] * sn + w * cs;
     }
@@ -60,12 +77,24 @@ void microstep_reset(struct microstep *s)
     s->integral[1] = s->p.motor.R * i[1];
 }
 
+// Returns nothing; writes the back EMF at the plan's angle and speed, Km theta*' (-sin Nr theta*, cos Nr theta*).
+static void microstep_back_emf(struct microstep *s, fs_real t, fs_real emf[2])
+{
+    fs_real f[PLAN_FLAG_LEN], sn, cs;
+    const struct motor_params *m = &s->p.motor;
+    plan_flag(&s->plan, t, f);
+    fs_sincos(m->Nr * f[PLAN_THETA], &sn, &cs);
+    emf[0] = -m->Km * f[PLAN_DTHETA] * sn;
+    emf[1] = m->Km * f[PLAN_DTHETA] * cs;
+}
+
 // Returns ctrl_status bits; writes the command v and advances the integrals (microstep.h).
 uint32_t microstep_step(struct microstep *s, fs_real t, const fs_real *y, fs_real *v)
 {
-    // v = kp (i* - i) + I [+ R i* + L di*/dt]; I += ki Ts (i* - i) unless max|v| > v_limit (anti-windup).
+    // v = kp (i* - i) + I [+ R i* + L di*/dt] [+ Km theta*' (-sin, cos)(Nr theta*)];
+    // I += ki Ts (i* - i) unless max|v| > v_limit (anti-windup).
     const struct motor_params *m = &s->p.motor;
-    fs_real i[2], di[2], e[2], out[2], next[2], z;
+    fs_real i[2], di[2], emf[2] = {0, 0}, e[2], out[2], next[2], z;
     bool hold;
     int k;
     v[0] = v[1] = 0;
@@ -74,11 +103,14 @@ uint32_t microstep_step(struct microstep *s, fs_real t, const fs_real *y, fs_rea
     if (z != 0)
         return CTRL_NONFINITE;
     microstep_reference(s, t, i, di);
+    if (s->p.gains.back_emf)
+        microstep_back_emf(s, t, emf);
     for (k = 0; k < 2; k++) {
         e[k] = i[k] - y[k];
         out[k] = s->kp * e[k] + s->integral[k];
         if (s->p.gains.feedforward)
             out[k] = out[k] + m->R * i[k] + m->L * di[k];
+        out[k] = out[k] + emf[k];
     }
     hold = fs_fabs(out[0]) > s->p.v_limit || fs_fabs(out[1]) > s->p.v_limit;
     for (k = 0; k < 2; k++)
