@@ -31,6 +31,7 @@ from ..validate import InputError
 from ..validate.paths import CSV_MARK, PNG_MARK, check_distinct, check_output, check_output_dir, json_marks
 from .calibrate import add_calibrate_command
 from .compare import add_compare_command
+from .curve import add_curve_command
 from .design import add_design_command
 from .flags import add_force, count, out_dir, quantity
 from .identify import add_identify_command
@@ -254,6 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_plan_command(sub)
     add_calibrate_command(sub)
     add_motor_command(sub)
+    add_curve_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)",
                          description="Benchmarks side by side in one run: medians and their ratios against each "

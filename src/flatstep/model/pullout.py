@@ -120,7 +120,7 @@ def pullout_torque(motor: MotorParams, drive_kind: str, v_bus: float, current: f
     ndarray
         :math:`\max(0, K_m i_{q,max} - B\omega)` per speed.
     """
-    V, I, w = _check_inputs(motor, drive_kind, v_bus, current, speeds, voltage_factor)
+    V, Imax, w = _check_inputs(motor, drive_kind, v_bus, current, speeds, voltage_factor)
     m = motor
     we = m.Nr * w
     Z = m.R + 1j * we * m.L
@@ -132,9 +132,9 @@ def pullout_torque(motor: MotorParams, drive_kind: str, v_bus: float, current: f
         disc = b * b - 4 * a * c
         with np.errstate(invalid="ignore"):
             iq = np.where(disc >= 0, (-b + np.sqrt(np.maximum(disc, 0.0))) / (2 * a), -np.inf)
-        iq = np.minimum(iq, I)
+        iq = np.minimum(iq, Imax)
     else:
-        iq = _max_iq_two_disks(I, -1j * m.Km * w / Z, V / absZ)
+        iq = _max_iq_two_disks(Imax, -1j * m.Km * w / Z, V / absZ)
     torque = m.Km * iq - m.B * w
     return np.where(np.isfinite(torque), np.maximum(torque, 0.0), 0.0)
 
@@ -144,11 +144,11 @@ def corner_speed(motor: MotorParams, v_bus: float, current: float, *, voltage_fa
 
     .. math:: (R I + K_m\omega)^2 + (N_r\omega L I)^2 = V^2
     """
-    V, I, _ = _check_inputs(motor, "foc", v_bus, current, 0.0, voltage_factor)
+    V, Imax, _ = _check_inputs(motor, "foc", v_bus, current, 0.0, voltage_factor)
     m = motor
-    a = m.Km**2 + (m.Nr * m.L * I) ** 2
-    b = 2 * m.R * I * m.Km
-    c = (m.R * I) ** 2 - V**2
+    a = m.Km**2 + (m.Nr * m.L * Imax) ** 2
+    b = 2 * m.R * Imax * m.Km
+    c = (m.R * Imax) ** 2 - V**2
     if c >= 0:
         return 0.0  # the bus cannot even drive the current at rest
     return float((-b + math.sqrt(b * b - 4 * a * c)) / (2 * a))
@@ -158,6 +158,8 @@ def top_speed(motor: MotorParams, drive_kind: str, v_bus: float, current: float,
               voltage_factor: float = 1.0, w_max: Optional[float] = None) -> float:
     """The highest speed [rad/s] whose pull-out torque is at least ``load`` [N m] (0 if not even at rest).
 
+    With no load, where the torque ends (below 1e-6 of its value at rest).
+
     Searched from rest upwards on a fine grid, then by bisection on the crossing; ``w_max`` bounds the search
     (default: the no-load speed of the bus, ``voltage_factor v_bus / Km`` times 20).
     """
@@ -166,6 +168,7 @@ def top_speed(motor: MotorParams, drive_kind: str, v_bus: float, current: float,
     top = 20.0 * V / motor.Km if w_max is None else check_quantity("speed", w_max, as_name="w_max")
     grid = np.linspace(0.0, top, 4001)
     t = pullout_torque(motor, drive_kind, v_bus, current, grid, voltage_factor=voltage_factor)
+    load = max(load, 1e-6 * float(t[0]))  # no load: where the torque ends
     below = np.flatnonzero(t < load)
     if below.size == 0:
         return float(top)
@@ -228,7 +231,7 @@ def pullout_curve(motor: MotorParams, drive_kind: str, v_bus: float, current: fl
 
 #: The fundamental of :class:`~flatstep.loop.drive.Drive`'s saturation over ``v_bus``: a vector scaled onto the
 #: square :math:`|v_a|, |v_b| \le v_{bus}` keeps its direction, and its mean radius over a turn is
-#: :math:`(4/\pi)\,\mathrm{artanh}(\tan(\pi/8))\cdot 2 = (4/\pi)\ln\tan(3\pi/8) = 1.1222`.
+#: :math:`(4/\pi)\ln\tan(3\pi/8) = 1.1222`.
 SQUARE_VECTOR = 4.0 / math.pi * math.log(math.tan(3.0 * math.pi / 8.0))
 
 

@@ -2,14 +2,16 @@
 
 At each speed the drive (:class:`~flatstep.control.microstep.Microstepping`, the current loops of a step/dir driver,
 no position feedback) brings the rotor up to speed on a gentle ramp and holds it there, against a constant load;
-the load rises with the speed (a Coulomb friction, :func:`_loaded`); the largest load it carries without losing a step (status ``ok``, docs/errors.md) is found by bisection, every
+the load rises with the speed (a Coulomb friction, :func:`_loaded`); the largest load it carries without
+losing a step (status ``ok``, docs/errors.md) is found by bisection, every
 speed's run at one bisection level in one batch. The model's curve is :func:`flatstep.model.pullout.pullout_torque`.
 """
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..loop.drive import Drive
 from ..loop.reference import DriveLoop
@@ -51,7 +53,7 @@ def _loaded(motor: MotorParams, load: float, speed: float) -> Plant:
     return Plant(motor, effects=PlantEffects(coulomb_torque=load, coulomb_speed=speed / LOAD_RISE))
 
 
-def engine_pullout(motor: MotorParams, v_bus: float, current: float, speeds: Sequence[float], *,
+def engine_pullout(motor: MotorParams, v_bus: float, current: float, speeds: ArrayLike, *,
                    control_rate: float = 20e3, substeps: int = 4, iterations: int = 10,
                    plant: MotorParams | None = None, **batch: Any) -> np.ndarray:
     """The largest constant load [N m] the open-loop drive carries at each speed [rad/s] without losing a step.

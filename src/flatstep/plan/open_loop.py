@@ -1,0 +1,137 @@
+r"""Plans for a step/dir drive at its physical limit: an acceleration that follows the pull-out curve.
+
+A step/dir driver holds a set current and turns its angle; the rotor follows while the torque it needs stays below
+the pull-out torque :math:`T_{po}(\omega)` (:func:`flatstep.model.pullout.pullout_torque`). With a share
+``margin`` of it (the torque margin is ``1 - margin``) and a known load :math:`\tau`, the acceleration may be
+
+.. math:: a(\omega) = \frac{m\,T_{po}(\omega) - \tau}{J},
+
+which falls with the speed, where a firmware's trapezoid takes one constant acceleration for the whole move, as low
+as its top speed needs. The plan accelerates along :math:`a(\omega)`, cruises at the speed cap, and brakes along
+the same curve (braking is helped by the back-EMF, so the same curve is on the safe side). The speed cap is where
+:math:`a(\omega)` has fallen to :data:`CRUISE_SHARE` of its value at rest (beyond it the speed grows too slowly to
+pay), or ``w_max`` if the user gives one (lowered to where :math:`a(\omega)` is :data:`FLOOR_SHARE` of its value
+at rest).
+
+The curve is cut into :data:`SEGMENTS` speed steps, each at the constant acceleration of its upper end (the lower,
+since :math:`T_{po}` falls with the speed): the plan is a :class:`~flatstep.plan.piecewise.PiecewisePlan` of
+quadratic segments at the run current, for :class:`~flatstep.control.microstep.Microstepping` or any controller.
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..model.motor import MotorParams
+from ..model.pullout import DRIVE_KINDS, pullout_torque
+from ..validate import InputError, check_choice, check_quantity
+from .arguments import check_angle, check_motor, check_t0
+from .piecewise import NCOEF, PiecewisePlan
+
+Array = NDArray[np.float64]
+#: Speed steps of the acceleration along the pull-out curve.
+SEGMENTS = 24
+#: The cruise speed is where the acceleration has fallen to this share of its value at rest.
+CRUISE_SHARE = 0.5
+#: A user's speed cap is lowered to where the acceleration has fallen to this share of its value at rest.
+FLOOR_SHARE = 0.01
+
+
+def acceleration_curve(motor: MotorParams, v_bus: float, current: float, speeds: Array, *, margin: float,
+                       load: float = 0.0, drive_kind: str = "chopper") -> Array:
+    r"""The allowed acceleration :math:`(m T_{po}(\omega) - \tau)/J` [rad/s^2] at each speed (module docstring)."""
+    return (margin * pullout_torque(motor, drive_kind, v_bus, current, speeds) - load) / motor.J
+
+
+def _cruise_speed(motor: MotorParams, v_bus: float, current: float, margin: float, load: float, drive_kind: str,
+                  w_max: Optional[float]) -> float:
+    """The speed cap: where the acceleration falls to CRUISE_SHARE of its value at rest, or ``w_max``."""
+    a0 = float(acceleration_curve(motor, v_bus, current, np.zeros(1), margin=margin, load=load,
+                                  drive_kind=drive_kind)[0])
+    if a0 <= 0:
+        raise InputError("load", load, f"load={load!r} N m is more than margin x the pull-out torque at rest "
+                         f"({margin:g} x {a0 * motor.J / margin + load / margin:.4g} N m): the drive cannot start")
+    top = 20.0 * v_bus / motor.Km
+    grid = np.linspace(0.0, top, 4001)
+    a = acceleration_curve(motor, v_bus, current, grid, margin=margin, load=load, drive_kind=drive_kind)
+    low = np.flatnonzero(a < (CRUISE_SHARE if w_max is None else FLOOR_SHARE) * a0)
+    w = float(grid[low[0] - 1]) if low.size else top
+    return min(w, w_max) if w_max is not None else w
+
+
+def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: float, *, margin: float = 0.4,
+                   load: float = 0.0, drive_kind: str = "chopper", w_max: Optional[float] = None,
+                   theta1: float = 0.0, t0: float = 0.0) -> PiecewisePlan:
+    """A rest-to-rest move of ``distance`` [rad] for a step/dir drive, accelerating along its pull-out curve.
+
+    Parameters
+    ----------
+    motor : MotorParams
+        The drive's model of the motor (with the load's inertia in J).
+    v_bus : float
+        The bus [V].
+    current : float
+        The run current, the current-vector norm the driver holds [A] (the plan's rho).
+    distance : float
+        The move [rad], either sign.
+    margin : float
+        The share of the pull-out torque the plan uses, in (0, 1]: the torque margin is ``1 - margin``.
+    load : float
+        A known load torque [N m], >= 0, that the drive carries besides the acceleration.
+    drive_kind : str
+        The curve (:data:`flatstep.model.pullout.DRIVE_KINDS`; ``"chopper"`` for a step/dir driver).
+    w_max : float, optional
+        A speed cap of the user's [rad/s] (e.g. the drive's electrical-frequency limit).
+    theta1, t0 : float
+        Start angle [rad] and time [s].
+
+    Returns
+    -------
+    PiecewisePlan
+        Quadratic segments: along the curve up, a cruise if the move is long enough, along the curve down.
+    """
+    check_motor(motor)
+    check_choice("drive_kind", drive_kind, DRIVE_KINDS)
+    v_bus, current = check_quantity("v_bus", v_bus), check_quantity("current", current)
+    d = check_angle(distance, "distance")
+    if d == 0:
+        raise InputError("distance", distance, "distance=0.0 rad: a move needs a distance; a rest is a dwell")
+    m = check_quantity("fraction", margin, as_name="margin")
+    load = check_quantity("torque_amplitude", load, as_name="load")
+    w_max = None if w_max is None else check_quantity("speed", w_max, as_name="w_max")
+    theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
+    cap = _cruise_speed(motor, v_bus, current, m, load, drive_kind, w_max)
+    edges = np.linspace(0.0, cap, SEGMENTS + 1)
+    acc = acceleration_curve(motor, v_bus, current, edges[1:], margin=m, load=load, drive_kind=drive_kind)
+    h = np.diff(edges) / acc
+    dist = 0.5 * (edges[:-1] + edges[1:]) * h
+    half = 0.5 * abs(d)
+    reach = np.cumsum(dist)
+    if reach[-1] > half:  # the peak speed is reached inside segment k: cut it there
+        k = int(np.searchsorted(reach, half))
+        rest = half - (reach[k - 1] if k else 0.0)
+        w0, a = edges[k], acc[k]
+        tau = (-w0 + math.sqrt(w0 * w0 + 2 * a * rest)) / a
+        starts, accs, durs = list(edges[:k]) + [w0], list(acc[:k]) + [a], list(h[:k]) + [tau]
+        cruise = 0.0
+    else:
+        starts, accs, durs = list(edges[:-1]), list(acc), list(h)
+        cruise = (abs(d) - 2 * reach[-1]) / cap
+    up = list(zip(starts, accs, durs, strict=True))
+    peak = up[-1][0] + up[-1][1] * up[-1][2]
+    down = [(w0 + a * t, -a, t) for w0, a, t in reversed(up)]
+    phases = up + ([(peak, 0.0, cruise)] if cruise > 0 else []) + down
+    rows, p = np.zeros((len(phases), NCOEF)), 0.0
+    for j, (w0, a, t) in enumerate(phases):
+        rows[j, -3:] = [a * t * t / 2, w0 * t, p]
+        p += w0 * t + a * t * t / 2
+    sign = 1.0 if d > 0 else -1.0
+    rows *= sign
+    rows[:, -1] += theta1
+    breaks = t0 + np.concatenate([[0.0], np.cumsum([t for _, _, t in phases])])
+    rho = np.zeros_like(rows)
+    rho[:, -1] = current
+    return PiecewisePlan(breaks, rows, rho)
