@@ -1,9 +1,10 @@
 """Open-loop plans along the pull-out curve against the best safe constant-acceleration trapezoid (docs/curves.md).
 
-For each motor and move: the fastest plan of flatstep.plan.open_loop (torque margin 60 %: 0.4 of the pull-out
-torque; its speed cap searched) and the fastest trapezoid that loses no step (studies.open_loop.best_trapezoid),
-both run by the open-loop microstepping drive (20 kHz, 24 V) on the 32 plants of +-10 % on R, L, Km, J, B. Prints both
-durations, their ratio, the lost runs and the worst angle error over the 32 plants.
+For each motor and move: the fastest plan of flatstep.plan.open_loop along the drive's own pull-out curve (measured on
+the C engine, studies.open_loop.measured_pullout; the share of it used and the speed cap searched, the share printed)
+and the fastest trapezoid that loses no step (studies.open_loop.best_trapezoid), both run by the open-loop
+microstepping drive (20 kHz, 24 V) on the 32 plants of +-10 % on R, L, Km, J, B. Prints both durations, their ratio,
+the lost runs and the worst angle error over the 32 plants.
 
     .venv/bin/python benchmarks/pullout_open_loop.py [--quick]
 """
@@ -15,11 +16,10 @@ from pathlib import Path
 from flatstep.model.datasheet import motor_from_table
 from flatstep.model.motor import MotorParams
 from flatstep.studies.file_values import read_toml
-from flatstep.studies.open_loop import best_open_loop, best_trapezoid
+from flatstep.studies.open_loop import best_open_loop, best_trapezoid, measured_pullout
 
 ROOT = Path(__file__).resolve().parent.parent
 V_BUS = 24.0
-MARGIN = 0.4
 
 
 def motors() -> dict[str, tuple[MotorParams, float]]:
@@ -41,8 +41,9 @@ def main() -> None:
     print(f"{'':<20}{'[rad]':>7}{'[ms]':>11}{'[ms]':>11}{'':>7}{'(ol/trap)':>9}{'[mrad] ol':>11}"
           f"{'[rad/s, rad/s^2]':>22}{'':>8}{'[rad/s]':>8}")
     for name, (motor, current) in chosen.items():
+        curve = measured_pullout(motor, V_BUS, current)
         for d in moves:
-            plan, info, ol = best_open_loop(motor, V_BUS, current, d, margin=MARGIN)
+            plan, info, ol = best_open_loop(motor, V_BUS, current, d, pullout=curve)
             trap, caps, tc = best_trapezoid(motor, V_BUS, current, d)
             print(f"{name:<20}{d:>7g}{1e3 * plan.tf:>11.2f}{1e3 * trap.tf:>11.2f}{plan.tf / trap.tf:>7.3f}"
                   f"{f'{ol.lost}/{tc.lost}':>9}{1e3 * ol.worst_error:>11.2f}"

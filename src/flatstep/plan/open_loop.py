@@ -20,10 +20,10 @@ quadratic segments at the run current, for :class:`~flatstep.control.microstep.M
 from __future__ import annotations
 
 import math
-from typing import Optional
+from typing import Callable, Optional
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
 from ..model.pullout import DRIVE_KINDS, pullout_torque
@@ -40,23 +40,50 @@ CRUISE_SHARE = 0.5
 FLOOR_SHARE = 0.01
 
 
+PulloutCurve = Callable[[Array], Array]
+
+
+def tabulated(speeds: ArrayLike, torque: ArrayLike) -> PulloutCurve:
+    """A pull-out curve from a table (measured, or read off a datasheet): speeds [rad/s] and torques [N m].
+
+    Linear between the points, held at the first point's torque below it and 0 beyond the last; made
+    non-increasing (each torque at most those at lower speeds), so that a segment's upper end is its lowest.
+    """
+    w = np.asarray(speeds, dtype=float)
+    t = np.asarray(torque, dtype=float)
+    if w.ndim != 1 or w.shape != t.shape or w.size < 2 or not (np.diff(w) > 0).all() or not np.isfinite(t).all() \
+            or (t < 0).any() or w[0] < 0:
+        raise InputError("speeds", speeds, "a tabulated pull-out curve needs at least 2 increasing speeds >= 0 [rad/s] "
+                         "and as many finite torques >= 0 [N m]")
+    t = np.minimum.accumulate(t)
+
+    def curve(x: Array) -> Array:
+        return np.interp(np.asarray(x, dtype=float), w, t, right=0.0)
+    return curve
+
+
 def acceleration_curve(motor: MotorParams, v_bus: float, current: float, speeds: Array, *, margin: float,
-                       load: float = 0.0, drive_kind: str = "chopper") -> Array:
-    r"""The allowed acceleration :math:`(m T_{po}(\omega) - \tau)/J` [rad/s^2] at each speed (module docstring)."""
-    return (margin * pullout_torque(motor, drive_kind, v_bus, current, speeds) - load) / motor.J
+                       load: float = 0.0, drive_kind: str = "chopper", pullout: Optional[PulloutCurve] = None) -> Array:
+    r"""The allowed acceleration :math:`(m T_{po}(\omega) - \tau)/J` [rad/s^2] at each speed (module docstring).
+
+    :math:`T_{po}` is ``pullout`` if given (e.g. :func:`tabulated`), else the model's curve of ``drive_kind``.
+    """
+    torque = pullout(speeds) if pullout is not None else pullout_torque(motor, drive_kind, v_bus, current, speeds)
+    return (margin * torque - load) / motor.J
 
 
 def _cruise_speed(motor: MotorParams, v_bus: float, current: float, margin: float, load: float, drive_kind: str,
-                  w_max: Optional[float]) -> float:
+                  w_max: Optional[float], pullout: Optional[PulloutCurve]) -> float:
     """The speed cap: where the acceleration falls to CRUISE_SHARE of its value at rest, or ``w_max``."""
     a0 = float(acceleration_curve(motor, v_bus, current, np.zeros(1), margin=margin, load=load,
-                                  drive_kind=drive_kind)[0])
+                                  drive_kind=drive_kind, pullout=pullout)[0])
     if a0 <= 0:
         raise InputError("load", load, f"load={load!r} N m is more than margin x the pull-out torque at rest "
                          f"({margin:g} x {a0 * motor.J / margin + load / margin:.4g} N m): the drive cannot start")
     top = 20.0 * v_bus / motor.Km
     grid = np.linspace(0.0, top, 4001)
-    a = acceleration_curve(motor, v_bus, current, grid, margin=margin, load=load, drive_kind=drive_kind)
+    a = acceleration_curve(motor, v_bus, current, grid, margin=margin, load=load, drive_kind=drive_kind,
+                           pullout=pullout)
     low = np.flatnonzero(a < (CRUISE_SHARE if w_max is None else FLOOR_SHARE) * a0)
     w = float(grid[low[0] - 1]) if low.size else top
     return min(w, w_max) if w_max is not None else w
@@ -64,7 +91,8 @@ def _cruise_speed(motor: MotorParams, v_bus: float, current: float, margin: floa
 
 def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: float, *, margin: float = 0.4,
                    load: float = 0.0, drive_kind: str = "chopper", w_max: Optional[float] = None,
-                   theta1: float = 0.0, t0: float = 0.0) -> PiecewisePlan:
+                   theta1: float = 0.0, t0: float = 0.0, shaping: bool = True,
+                   pullout: Optional[PulloutCurve] = None) -> PiecewisePlan:
     """A rest-to-rest move of ``distance`` [rad] for a step/dir drive, accelerating along its pull-out curve.
 
     Parameters
@@ -87,11 +115,19 @@ def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: f
         A speed cap of the user's [rad/s] (e.g. the drive's electrical-frequency limit).
     theta1, t0 : float
         Start angle [rad] and time [s].
+    shaping : bool
+        Average the angle over one :func:`natural_period` of the loaded rotor (:func:`box_shaped`): every jump of
+        the acceleration becomes a ramp that leaves the undamped rotor without ringing (default); ``False``: the
+        piecewise-constant acceleration as it is.
+    pullout : callable, optional
+        The pull-out curve to follow, torque [N m] of speed [rad/s] (e.g. :func:`tabulated` from a measurement);
+        default: the model's curve of ``drive_kind``.
 
     Returns
     -------
     PiecewisePlan
-        Quadratic segments: along the curve up, a cruise if the move is long enough, along the curve down.
+        Along the curve up, a cruise if the move is long enough, along the curve down: quadratic segments, cubic
+        ones once shaped.
     """
     check_motor(motor)
     check_choice("drive_kind", drive_kind, DRIVE_KINDS)
@@ -103,9 +139,10 @@ def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: f
     load = check_quantity("torque_amplitude", load, as_name="load")
     w_max = None if w_max is None else check_quantity("speed", w_max, as_name="w_max")
     theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
-    cap = _cruise_speed(motor, v_bus, current, m, load, drive_kind, w_max)
+    cap = _cruise_speed(motor, v_bus, current, m, load, drive_kind, w_max, pullout)
     edges = np.linspace(0.0, cap, SEGMENTS + 1)
-    acc = acceleration_curve(motor, v_bus, current, edges[1:], margin=m, load=load, drive_kind=drive_kind)
+    acc = acceleration_curve(motor, v_bus, current, edges[1:], margin=m, load=load, drive_kind=drive_kind,
+                             pullout=pullout)
     h = np.diff(edges) / acc
     dist = 0.5 * (edges[:-1] + edges[1:]) * h
     half = 0.5 * abs(d)
@@ -134,4 +171,46 @@ def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: f
     breaks = t0 + np.concatenate([[0.0], np.cumsum([t for _, _, t in phases])])
     rho = np.zeros_like(rows)
     rho[:, -1] = current
-    return PiecewisePlan(breaks, rows, rho)
+    plan = PiecewisePlan(breaks, rows, rho)
+    return box_shaped(plan, natural_period(motor, current, m)) if shaping else plan
+
+
+def natural_period(motor: MotorParams, current: float, margin: float) -> float:
+    r"""The period [s] of the rotor's ringing about its load angle on an open-loop drive.
+
+    .. math:: T_n = 2\pi\Big/\sqrt{K_m I N_r \cos\delta / J},\qquad \sin\delta = m
+
+    (the stiffness of the torque-angle curve :math:`K_m I \sin N_r e` at the load angle the margin ``m`` gives).
+    """
+    stiffness = motor.Km * current * motor.Nr * math.sqrt(max(1.0 - margin * margin, 0.01))
+    return 2.0 * math.pi / math.sqrt(stiffness / motor.J)
+
+
+def box_shaped(plan: PiecewisePlan, period: float) -> PiecewisePlan:
+    r"""The plan's angle averaged over a sliding window of one ``period``: no residual ringing at that period.
+
+    .. math:: \theta_s(t) = \frac1T\int_{t - T}^{t} \theta(s)\,ds
+
+    Every jump of the acceleration becomes a ramp of duration :math:`T`; a rotor that rings at :math:`1/T` is left
+    at rest after each ramp (a box input shaper). The move keeps its ends and lasts :math:`T` longer; the
+    segments are cubics between the breaks and the breaks shifted by :math:`T`.
+    """
+    from scipy.interpolate import PPoly
+
+    T = check_quantity("period", period)
+    b, h = plan.breaks, plan.durations
+    local = plan.theta.T * h[None, :] ** -np.arange(NCOEF - 1, -1, -1)[:, None]
+    hold1, hold2 = np.zeros((NCOEF, 1)), np.zeros((NCOEF, 1))
+    hold1[-1, 0], hold2[-1, 0] = plan.theta1, plan.theta2
+    x = np.concatenate([[b[0] - T], b, [b[-1] + T]])
+    antider = PPoly(np.hstack([hold1, local, hold2]), x).antiderivative()
+    edges = np.unique(np.concatenate([b, b + T]))
+    edges = edges[np.concatenate([[True], np.diff(edges) > 1e-9 * max(T, 1e-6)])]
+    tau = np.linspace(0.0, 1.0, 4)
+    t = edges[:-1, None] + np.diff(edges)[:, None] * tau[None, :]
+    values = (antider(t) - antider(t - T)) / T
+    vander = np.vander(tau, 4)
+    rows = np.linalg.solve(vander, values.T).T
+    rho = np.zeros((rows.shape[0], NCOEF))
+    rho[:, -1] = plan.rho1
+    return PiecewisePlan(edges, rows, rho)

@@ -20,7 +20,7 @@ from ..model.motor import MotorParams
 from ..model.plant import Plant
 from ..model.pullout import pullout_torque, top_speed
 from ..plan.baselines import trapezoid_rows
-from ..plan.open_loop import open_loop_plan
+from ..plan.open_loop import PulloutCurve, open_loop_plan, tabulated
 from ..plan.piecewise import NCOEF, PiecewisePlan
 from .batch import run_batch
 from .robustness import plant_errors
@@ -69,15 +69,19 @@ def trapezoid_plan(distance: float, v_max: float, a_max: float, current: float) 
     return PiecewisePlan(np.concatenate([[0.0], np.cumsum(h)]), rows, rho)
 
 
-def _confirmed(candidates: list[tuple[float, Callable[[float], PiecewisePlan]]], motor: MotorParams, v_bus: float,
-               control_rate: float, what: str) -> tuple[PiecewisePlan, float, PlantCheck]:
+#: A candidate of a search: its duration [s], its plan at a scale of its acceleration, and its caps.
+Candidate = tuple[float, Callable[[float], PiecewisePlan], dict[str, float]]
+
+
+def _confirmed(candidates: list[Candidate], motor: MotorParams, v_bus: float, control_rate: float,
+               what: str) -> tuple[PiecewisePlan, float, PlantCheck, dict[str, float]]:
     """The fastest candidate safe on all 32 plants, each tried at 1, 0.95, 0.9, 0.85 of its acceleration scale."""
-    for _, make in sorted(candidates, key=lambda c: c[0]):
+    for _, make, caps in sorted(candidates, key=lambda c: c[0]):
         for scale in (1.0, 0.95, 0.9, 0.85):
             plan = make(scale)
             check = check_on_plants(motor, plan, v_bus, control_rate=control_rate)
             if check.safe:
-                return plan, scale, check
+                return plan, scale, check, caps
     raise ValueError(f"no {what} kept all 32 plants")
 
 
@@ -91,8 +95,7 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
     """
     t0 = float(pullout_torque(motor, "chopper", v_bus, current, 0.0)[0])
     w_top = top_speed(motor, "chopper", v_bus, current, 0.0)
-    candidates: list[tuple[float, Callable[[float], PiecewisePlan]]] = []
-    caps: dict[int, tuple[float, float]] = {}
+    candidates: list[Candidate] = []
     for v in np.linspace(0.2, 1.2, speeds) * w_top:
         lo, hi = 0.0, 2.0 * t0 / motor.J
         for _ in range(iterations):
@@ -103,31 +106,54 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
         if lo > 0:
             def make(scale: float, v: float = float(v), a: float = lo) -> PiecewisePlan:
                 return trapezoid_plan(distance, v, a * scale, current)
-            candidates.append((make(1.0).tf, make))
-            caps[id(make)] = (float(v), lo)
-    plan, scale, check = _confirmed(candidates, motor, v_bus, control_rate, f"trapezoid over {distance} rad")
-    v, a = next(caps[id(m)] for tf, m in candidates if abs(m(scale).tf - plan.tf) <= 1e-12 * plan.tf)
-    return plan, {"v_max": v, "a_max": a * scale}, check
+            candidates.append((make(1.0).tf, make, {"v_max": float(v), "a_max": lo}))
+    plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate, f"trapezoid over {distance} rad")
+    return plan, {"v_max": caps["v_max"], "a_max": caps["a_max"] * scale}, check
 
 
-def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: float, *, margin: float = 0.4,
-                   control_rate: float = 20e3, speeds: int = 8) -> tuple[PiecewisePlan, dict[str, float], PlantCheck]:
-    """The fastest plan along the pull-out curve (at ``margin``) that loses no step on the 32 plants.
+#: The shares of the pull-out torque :func:`best_open_loop` tries (the torque margin is 1 minus the share).
+MARGINS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)
 
-    Its speed cap ``w_max`` searched on the trapezoid's grid: each kept by the weakest plant is a candidate; the
-    fastest is confirmed on all 32 plants (its margin lowered by 5 % at a time if needed).
+
+def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: float, *,
+                   margins: tuple[float, ...] = MARGINS, control_rate: float = 20e3, speeds: int = 8,
+                   pullout: Optional[PulloutCurve] = None) -> tuple[PiecewisePlan, dict[str, float], PlantCheck]:
+    """The fastest plan along the pull-out curve that loses no step on the 32 plants, with its margin.
+
+    The curve is ``pullout`` (default: the model's chopper curve). The share of it used (``margins``) and the
+    speed cap ``w_max`` (the trapezoid's grid) are searched as the trapezoid's caps are: each pair kept by the
+    weakest plant is a candidate; the fastest is confirmed on all 32 plants (its share lowered by 5 % at a time if
+    needed). Returns the plan, its share ``margin`` and peak speed ``w_peak``, and its check.
     """
     w_top = top_speed(motor, "chopper", v_bus, current, 0.0)
-    candidates: list[tuple[float, Callable[[float], PiecewisePlan]]] = []
-    for v in np.linspace(0.2, 1.2, speeds) * w_top:
-        def make(scale: float, v: float = float(v)) -> PiecewisePlan:
-            return open_loop_plan(motor, v_bus, current, distance, margin=margin * scale, w_max=v)
-        try:
-            plan = make(1.0)
-        except ValueError:
-            continue
-        if check_on_plants(motor, plan, v_bus, control_rate=control_rate, errors=[WEAKEST]).safe:
-            candidates.append((plan.tf, make))
-    plan, scale, check = _confirmed(candidates, motor, v_bus, control_rate, f"open-loop plan over {distance} rad")
-    return plan, {"margin": margin * scale, "w_peak": float(np.max(np.abs(plan.flag(np.linspace(
-        plan.t0, plan.tf, 2001)).dtheta)))}, check
+    candidates: list[Candidate] = []
+    for margin in margins:
+        for v in np.linspace(0.2, 1.2, speeds) * w_top:
+            def make(scale: float, v: float = float(v), margin: float = margin) -> PiecewisePlan:
+                return open_loop_plan(motor, v_bus, current, distance, margin=margin * scale, w_max=v,
+                                      pullout=pullout)
+            try:
+                plan = make(1.0)
+            except ValueError:
+                continue
+            if check_on_plants(motor, plan, v_bus, control_rate=control_rate, errors=[WEAKEST]).safe:
+                candidates.append((plan.tf, make, {"margin": margin, "w_max": float(v)}))
+    plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate,
+                                          f"open-loop plan over {distance} rad")
+    peak = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 2001)).dtheta)))
+    return plan, {"margin": caps["margin"] * scale, "w_peak": peak}, check
+
+
+def measured_pullout(motor: MotorParams, v_bus: float, current: float, *, control_rate: float = 20e3,
+                     points: int = 12) -> PulloutCurve:
+    """The drive's own pull-out curve, measured on the C engine (:func:`flatstep.studies.pullout.engine_pullout`).
+
+    At ``points`` speeds up to the field-weakening curve's top speed, on the nominal plant; :func:`tabulated`.
+    """
+    from .pullout import engine_pullout
+
+    w_top = top_speed(motor, "foc_weakening", v_bus, current, 0.0)
+    speeds = np.linspace(0.0, w_top, points + 1)[1:]
+    torque = engine_pullout(motor, v_bus, current, speeds, control_rate=control_rate, progress=False)
+    t_rest = float(pullout_torque(motor, "chopper", v_bus, current, 0.0)[0])
+    return tabulated(np.concatenate([[0.0], speeds]), np.concatenate([[t_rest], torque]))
