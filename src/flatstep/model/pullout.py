@@ -242,21 +242,22 @@ def convention_band(model: "MotorModel", drive_kind: str, v_bus: float, set_curr
     A datasheet's :math:`K_m = T_2/\rho_r` (:func:`flatstep.model.datasheet.torque_constant`) depends on whether its
     rated current is RMS (or DC) or peak (:math:`\sqrt 2` apart) and on its holding torque's tolerance (typical:
     +-10 %; a minimum: 0 to +20 %); a driver set to ``set_current`` holds :math:`\rho = \sqrt 2 I` if the setting
-    is RMS (or a full-step DC current), :math:`\rho = I` if it is the peak. Every combination is evaluated with the
-    model's R, L, B, Nr, and the envelope returned.
+    is RMS (or a full-step DC current), :math:`\rho = I` if it is the peak. Every combination (the tolerance on 9
+    points) is evaluated with the model's R, L, B, Nr, and the envelope returned.
     """
     from .datasheet import HOLDING_TORQUE_TOLERANCE, torque_constant
 
     sheet = model.datasheet
     rating = sheet.get("holding_torque_rating", "typical")
-    scales = (1.0, 1.2) if rating == "minimum" else (1.0 - HOLDING_TORQUE_TOLERANCE, 1.0 + HOLDING_TORQUE_TOLERANCE)
+    low, high = (1.0, 1.2) if rating == "minimum" else (1.0 - HOLDING_TORQUE_TOLERANCE, 1.0 + HOLDING_TORQUE_TOLERANCE)
+    scales = np.linspace(low, high, 9)  # the torque is not monotone in Km at speed (more Km, more back-EMF)
     current = check_quantity("current", set_current, as_name="set_current")
     curves = []
     for convention in ("rms", "peak"):
         Km, _ = torque_constant(sheet["holding_torque"], sheet["rated_current"], current=convention,
                                 holding_torque_phases=sheet.get("holding_torque_phases", 2))
         for scale in scales:
-            motor = model.params.replace(Km=Km * scale)
+            motor = model.params.replace(Km=Km * float(scale))
             for rho in (current, math.sqrt(2.0) * current):
                 curves.append(pullout_torque(motor, drive_kind, v_bus, rho, speeds, voltage_factor=voltage_factor))
     stack = np.array(curves)

@@ -10,6 +10,7 @@ grid, the largest acceleration cap by bisection on the weakest plant, the winner
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import product
 from typing import Any, Callable, Optional
 
 import numpy as np
@@ -120,28 +121,28 @@ def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: f
                    pullout: Optional[PulloutCurve] = None) -> tuple[PiecewisePlan, dict[str, float], PlantCheck]:
     """The fastest plan along the pull-out curve that loses no step on the 32 plants, with its margin.
 
-    The curve is ``pullout`` (default: the model's chopper curve). The share of it used (``margins``) and the
-    speed cap ``w_max`` (the trapezoid's grid) are searched as the trapezoid's caps are: each pair kept by the
-    weakest plant is a candidate; the fastest is confirmed on all 32 plants (its share lowered by 5 % at a time if
-    needed). Returns the plan, its share ``margin`` and peak speed ``w_peak``, and its check.
+    The curve is ``pullout`` (default: the model's chopper curve). The share of it used (``margins``), the
+    speed cap ``w_max`` (the trapezoid's grid) and the shaping (on, off) are searched as the trapezoid's caps are:
+    each choice kept by the weakest plant is a candidate; the fastest is confirmed on all 32 plants (its share
+    lowered by 5 % at a time if needed). Returns the plan, its share ``margin``, peak speed ``w_peak`` and
+    ``shaping`` (1 or 0), and its check.
     """
     w_top = top_speed(motor, "chopper", v_bus, current, 0.0)
     candidates: list[Candidate] = []
-    for margin in margins:
-        for v in np.linspace(0.2, 1.2, speeds) * w_top:
-            def make(scale: float, v: float = float(v), margin: float = margin) -> PiecewisePlan:
-                return open_loop_plan(motor, v_bus, current, distance, margin=margin * scale, w_max=v,
-                                      pullout=pullout)
-            try:
-                plan = make(1.0)
-            except ValueError:
-                continue
-            if check_on_plants(motor, plan, v_bus, control_rate=control_rate, errors=[WEAKEST]).safe:
-                candidates.append((plan.tf, make, {"margin": margin, "w_max": float(v)}))
+    for margin, v, shaping in product(margins, np.linspace(0.2, 1.2, speeds) * w_top, (True, False)):
+        def make(scale: float, v: float = float(v), margin: float = margin, shaping: bool = shaping) -> PiecewisePlan:
+            return open_loop_plan(motor, v_bus, current, distance, margin=margin * scale, w_max=v,
+                                  pullout=pullout, shaping=shaping)
+        try:
+            plan = make(1.0)
+        except ValueError:
+            continue
+        if check_on_plants(motor, plan, v_bus, control_rate=control_rate, errors=[WEAKEST]).safe:
+            candidates.append((plan.tf, make, {"margin": margin, "w_max": float(v), "shaping": float(shaping)}))
     plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate,
                                           f"open-loop plan over {distance} rad")
     peak = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 2001)).dtheta)))
-    return plan, {"margin": caps["margin"] * scale, "w_peak": peak}, check
+    return plan, {"margin": caps["margin"] * scale, "w_peak": peak, "shaping": caps["shaping"]}, check
 
 
 def measured_pullout(motor: MotorParams, v_bus: float, current: float, *, control_rate: float = 20e3,

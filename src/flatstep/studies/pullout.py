@@ -26,7 +26,7 @@ from .scenario import Scenario
 #: The share of the model's pull-out torque spent on the ramp's acceleration (the rest is left for the load).
 RAMP_SHARE = 0.05
 #: How long the speed is held after the ramp: this many electrical periods, at least :data:`HOLD_MIN` [s].
-HOLD_PERIODS = 40
+HOLD_PERIODS = 10
 HOLD_MIN = 0.02
 #: The load reaches tanh(LOAD_RISE) = 0.9993 of its value at the held speed.
 LOAD_RISE = 4.0
