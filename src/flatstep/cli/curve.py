@@ -123,8 +123,9 @@ def _figure(report: dict[str, Any], path: str) -> None:
 
     w = np.array(report["speeds_rad_s"])
     fig, ax = plt.subplots(figsize=(7, 4.2))
+    widths = {"chopper": (3.0, "-"), "foc": (1.2, "--"), "foc_weakening": (1.5, "-")}
     for kind, t in report["torque"].items():
-        line = ax.plot(w, t, label=kind)[0]
+        line = ax.plot(w, t, label=kind, lw=widths[kind][0], ls=widths[kind][1])[0]
         if "band" in report:
             lo, hi = report["band"][kind]
             ax.fill_between(w, lo, hi, color=line.get_color(), alpha=0.15)
@@ -138,8 +139,7 @@ def _figure(report: dict[str, Any], path: str) -> None:
     ax.set_ylabel("pull-out torque [N m]")
     top = ax.secondary_xaxis("top", functions=(_to_rpm, _to_rad_s))
     top.set_xlabel("speed [rpm]")
-    ax.set_title(f"v_bus {report['v_bus']:g} V, {report['current']:.3g} A", fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, title=f"v_bus {report['v_bus']:g} V, {report['current']:.3g} A", title_fontsize=8)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
