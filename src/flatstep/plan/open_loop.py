@@ -13,9 +13,12 @@ the same curve (braking is helped by the back-EMF, so the same curve is on the s
 pay), or ``w_max`` if the user gives one (lowered to where :math:`a(\omega)` is :data:`FLOOR_SHARE` of its value
 at rest).
 
-The curve is cut into :data:`SEGMENTS` speed steps, each at the constant acceleration of its upper end (the lower,
-since :math:`T_{po}` falls with the speed): the plan is a :class:`~flatstep.plan.piecewise.PiecewisePlan` of
-quadratic segments at the run current, for :class:`~flatstep.control.microstep.Microstepping` or any controller.
+The curve is cut into :data:`SEGMENTS` speed steps; on each the acceleration runs linearly in time from the curve's
+value one step ahead to its value two steps ahead (below the curve at every speed of the step, since
+:math:`T_{po}` falls with the speed), so that it is continuous from the first step to the peak: the plan is a
+:class:`~flatstep.plan.piecewise.PiecewisePlan` of cubic segments at the run current, for
+:class:`~flatstep.control.microstep.Microstepping` or any controller. The acceleration jumps only at the start, at
+the peak and at the end, which the shaping (:func:`box_shaped`) turns into ramps.
 """
 from __future__ import annotations
 
@@ -118,7 +121,7 @@ def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: f
     shaping : bool
         Average the angle over one :func:`natural_period` of the loaded rotor (:func:`box_shaped`): every jump of
         the acceleration becomes a ramp that leaves the undamped rotor without ringing (default); ``False``: the
-        piecewise-constant acceleration as it is.
+        three jumps (start, peak, end) as they are.
     pullout : callable, optional
         The pull-out curve to follow, torque [N m] of speed [rad/s] (e.g. :func:`tabulated` from a measurement);
         default: the model's curve of ``drive_kind``.
@@ -126,8 +129,7 @@ def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: f
     Returns
     -------
     PiecewisePlan
-        Along the curve up, a cruise if the move is long enough, along the curve down: quadratic segments, cubic
-        ones once shaped.
+        Along the curve up, a cruise if the move is long enough, along the curve down: cubic segments.
     """
     check_motor(motor)
     check_choice("drive_kind", drive_kind, DRIVE_KINDS)
@@ -140,39 +142,52 @@ def open_loop_plan(motor: MotorParams, v_bus: float, current: float, distance: f
     w_max = None if w_max is None else check_quantity("speed", w_max, as_name="w_max")
     theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
     cap = _cruise_speed(motor, v_bus, current, m, load, drive_kind, w_max, pullout)
-    edges = np.linspace(0.0, cap, SEGMENTS + 1)
-    acc = acceleration_curve(motor, v_bus, current, edges[1:], margin=m, load=load, drive_kind=drive_kind,
-                             pullout=pullout)
-    h = np.diff(edges) / acc
-    dist = 0.5 * (edges[:-1] + edges[1:]) * h
+
+    def accel(w: Array) -> Array:
+        return acceleration_curve(motor, v_bus, current, w, margin=m, load=load, drive_kind=drive_kind,
+                                  pullout=pullout)
+
     half = 0.5 * abs(d)
-    reach = np.cumsum(dist)
-    if reach[-1] > half:  # the peak speed is reached inside segment k: cut it there
-        k = int(np.searchsorted(reach, half))
-        rest = half - (reach[k - 1] if k else 0.0)
-        w0, a = edges[k], acc[k]
-        tau = (-w0 + math.sqrt(w0 * w0 + 2 * a * rest)) / a
-        starts, accs, durs = list(edges[:k]) + [w0], list(acc[:k]) + [a], list(h[:k]) + [tau]
-        cruise = 0.0
-    else:
-        starts, accs, durs = list(edges[:-1]), list(acc), list(h)
-        cruise = (abs(d) - 2 * reach[-1]) / cap
-    up = list(zip(starts, accs, durs, strict=True))
-    peak = up[-1][0] + up[-1][1] * up[-1][2]
-    down = [(w0 + a * t, -a, t) for w0, a, t in reversed(up)]
-    phases = up + ([(peak, 0.0, cruise)] if cruise > 0 else []) + down
+    up, reach = _ramp_up(accel, cap)
+    if reach > half:  # the peak speed is below the cap: the one whose ramp covers half the move
+        lo, hi = 0.0, cap
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if _ramp_up(accel, mid)[1] <= half else (lo, mid)
+        up, reach = _ramp_up(accel, lo)
+    peak = up[-1][0] + 0.5 * (up[-1][1] + up[-1][2]) * up[-1][3]
+    cruise = (abs(d) - 2 * reach) / peak
+    down = [(w0 + 0.5 * (a0 + a1) * h, -a1, -a0, h) for w0, a0, a1, h in reversed(up)]
+    phases = up + ([(peak, 0.0, 0.0, cruise)] if cruise > 1e-9 * (abs(d) / peak) else []) + down
     rows, p = np.zeros((len(phases), NCOEF)), 0.0
-    for j, (w0, a, t) in enumerate(phases):
-        rows[j, -3:] = [a * t * t / 2, w0 * t, p]
-        p += w0 * t + a * t * t / 2
+    for j, (w0, a0, a1, h) in enumerate(phases):
+        rows[j, -4:] = [(a1 - a0) * h * h / 6, a0 * h * h / 2, w0 * h, p]
+        p += w0 * h + a0 * h * h / 2 + (a1 - a0) * h * h / 6
+    rows[-1, -1] += abs(d) - p  # the rounding of the bisection, on the last segment's constant
     sign = 1.0 if d > 0 else -1.0
     rows *= sign
     rows[:, -1] += theta1
-    breaks = t0 + np.concatenate([[0.0], np.cumsum([t for _, _, t in phases])])
+    breaks = t0 + np.concatenate([[0.0], np.cumsum([h for *_, h in phases])])
     rho = np.zeros_like(rows)
     rho[:, -1] = current
     plan = PiecewisePlan(breaks, rows, rho)
     return box_shaped(plan, natural_period(motor, current, m)) if shaping else plan
+
+
+def _ramp_up(accel: Callable[[Array], Array], peak: float) -> tuple[list[tuple[float, float, float, float]], float]:
+    """From rest to ``peak`` in SEGMENTS speed steps, the acceleration linear in time and continuous; its distance.
+
+    On step k, from speed w_k to w_k+1, the acceleration goes from ``accel(w_k+1)`` to ``accel(w_k+2)`` (the curve one
+    and two steps ahead: below it at every speed of the step, as the curve falls), over ``2 dw / (a0 + a1)``.
+    Returns (start speed, start and end acceleration, duration) per step and the distance covered.
+    """
+    dw = peak / SEGMENTS
+    edges = dw * np.arange(SEGMENTS + 2, dtype=np.float64)
+    a = np.maximum(accel(edges[1:]), 1e-9 * max(float(accel(edges[:1])[0]), 1e-9))
+    h = 2 * dw / (a[:-1] + a[1:])
+    dist = edges[:-2] * h + a[:-1] * h * h / 2 + (a[1:] - a[:-1]) * h * h / 6
+    steps = [(float(edges[k]), float(a[k]), float(a[k + 1]), float(h[k])) for k in range(SEGMENTS)]
+    return steps, float(np.sum(dist))
 
 
 def natural_period(motor: MotorParams, current: float, margin: float) -> float:
@@ -192,8 +207,8 @@ def box_shaped(plan: PiecewisePlan, period: float) -> PiecewisePlan:
     .. math:: \theta_s(t) = \frac1T\int_{t - T}^{t} \theta(s)\,ds
 
     Every jump of the acceleration becomes a ramp of duration :math:`T`; a rotor that rings at :math:`1/T` is left
-    at rest after each ramp (a box input shaper). The move keeps its ends and lasts :math:`T` longer; the
-    segments are cubics between the breaks and the breaks shifted by :math:`T`.
+    at rest after each ramp (a box input shaper). The move keeps its ends and lasts :math:`T` longer; its segments,
+    between the breaks and the breaks shifted by :math:`T`, are one degree above the plan's.
     """
     from scipy.interpolate import PPoly
 
@@ -206,10 +221,12 @@ def box_shaped(plan: PiecewisePlan, period: float) -> PiecewisePlan:
     antider = PPoly(np.hstack([hold1, local, hold2]), x).antiderivative()
     edges = np.unique(np.concatenate([b, b + T]))
     edges = edges[np.concatenate([[True], np.diff(edges) > 1e-9 * max(T, 1e-6)])]
-    tau = np.linspace(0.0, 1.0, 4)
+    used = np.flatnonzero(np.any(plan.theta != 0.0, axis=0))
+    degree = min(NCOEF - 1, NCOEF - int(used[0]) if used.size else 1)  # one above the plan's own
+    tau = np.linspace(0.0, 1.0, degree + 1)
     t = edges[:-1, None] + np.diff(edges)[:, None] * tau[None, :]
     values = (antider(t) - antider(t - T)) / T
-    vander = np.vander(tau, 4)
+    vander = np.vander(tau, degree + 1)
     rows = np.linalg.solve(vander, values.T).T
     rho = np.zeros((rows.shape[0], NCOEF))
     rho[:, -1] = plan.rho1

@@ -112,33 +112,35 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
     return plan, {"v_max": caps["v_max"], "a_max": caps["a_max"] * scale}, check
 
 
-#: The shares of the pull-out torque :func:`best_open_loop` tries (the torque margin is 1 minus the share).
-MARGINS = (0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3)
-
-
-def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: float, *,
-                   margins: tuple[float, ...] = MARGINS, control_rate: float = 20e3, speeds: int = 8,
+def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: float, *, control_rate: float = 20e3,
+                   speeds: int = 8, iterations: int = 7,
                    pullout: Optional[PulloutCurve] = None) -> tuple[PiecewisePlan, dict[str, float], PlantCheck]:
     """The fastest plan along the pull-out curve that loses no step on the 32 plants, with its margin.
 
-    The curve is ``pullout`` (default: the model's chopper curve). The share of it used (``margins``), the
-    speed cap ``w_max`` (the trapezoid's grid) and the shaping (on, off) are searched as the trapezoid's caps are:
-    each choice kept by the weakest plant is a candidate; the fastest is confirmed on all 32 plants (its share
-    lowered by 5 % at a time if needed). Returns the plan, its share ``margin``, peak speed ``w_peak`` and
-    ``shaping`` (1 or 0), and its check.
+    The curve is ``pullout`` (default: the model's chopper curve). Searched as the trapezoid's caps are
+    (:func:`best_trapezoid`): at each speed cap ``w_max`` of the same grid, with and without shaping, the largest
+    share of the curve kept by the weakest plant, by bisection in (0, 1]; the candidates, fastest first, confirmed
+    on all 32 plants (their share lowered by 5 % at a time if needed). Returns the plan, its share ``margin``, peak
+    speed ``w_peak`` and ``shaping`` (1 or 0), and its check.
     """
     w_top = top_speed(motor, "chopper", v_bus, current, 0.0)
     candidates: list[Candidate] = []
-    for margin, v, shaping in product(margins, np.linspace(0.2, 1.2, speeds) * w_top, (True, False)):
-        def make(scale: float, v: float = float(v), margin: float = margin, shaping: bool = shaping) -> PiecewisePlan:
-            return open_loop_plan(motor, v_bus, current, distance, margin=margin * scale, w_max=v,
-                                  pullout=pullout, shaping=shaping)
-        try:
-            plan = make(1.0)
-        except ValueError:
-            continue
-        if check_on_plants(motor, plan, v_bus, control_rate=control_rate, errors=[WEAKEST]).safe:
-            candidates.append((plan.tf, make, {"margin": margin, "w_max": float(v), "shaping": float(shaping)}))
+    for v, shaping in product(np.linspace(0.2, 1.2, speeds) * w_top, (True, False)):
+        def make(scale: float, v: float = float(v), shaping: bool = shaping) -> PiecewisePlan:
+            return open_loop_plan(motor, v_bus, current, distance, margin=scale, w_max=v, pullout=pullout,
+                                  shaping=shaping)
+        lo, hi = 0.0, 1.0
+        for _ in range(iterations):
+            share = 0.5 * (lo + hi)
+            try:
+                ok = check_on_plants(motor, make(share), v_bus, control_rate=control_rate, errors=[WEAKEST]).safe
+            except ValueError:  # the share leaves no acceleration at rest
+                ok = False
+            lo, hi = (share, hi) if ok else (lo, share)
+        if lo > 0:
+            def at(scale: float, make: Callable[[float], PiecewisePlan] = make, lo: float = lo) -> PiecewisePlan:
+                return make(lo * scale)
+            candidates.append((at(1.0).tf, at, {"margin": lo, "w_max": float(v), "shaping": float(shaping)}))
     plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate,
                                           f"open-loop plan over {distance} rad")
     peak = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 2001)).dtheta)))
