@@ -37,7 +37,7 @@ def main() -> None:
     moves = (1.0, 20.0) if args.quick else (1.0, 5.0, 20.0, 60.0)
     chosen = dict(list(motors().items())[:1]) if args.quick else motors()
     print(f"{'motor':<20}{'move':>7}{'open loop':>11}{'trapezoid':>11}{'ratio':>7}{'lost':>9}{'worst err':>11}"
-          f"{'trap caps (v, a)':>22}{'margin':>8}{'ol peak':>8}")
+          f"{'trap caps (v, a)':>22}{'share':>8}{'ol peak':>8}")
     print(f"{'':<20}{'[rad]':>7}{'[ms]':>11}{'[ms]':>11}{'':>7}{'(ol/trap)':>9}{'[mrad] ol':>11}"
           f"{'[rad/s, rad/s^2]':>22}{'':>8}{'[rad/s]':>8}")
     for name, (motor, current) in chosen.items():

@@ -20,16 +20,17 @@ The shaft's pull-out torque is :math:`K_m \max i_q - B\omega` over what the driv
   the rising side of its torque-angle curve, :math:`\delta \le 90` electrical degrees, i.e. :math:`i_d \ge 0`:
   the largest :math:`i_q` of the two disks with :math:`i_d \ge 0`, which is the :math:`i_d = 0` point (the voltage
   disk's centre has :math:`i_d < 0`). Past the corner speed the steady state also exists at
-  :math:`\delta > 90` degrees, up to the ``"foc_weakening"`` torque, but the undamped rotor does not hold it: the
-  C engine's runs lose the step there (docs/curves.md).
+  :math:`\delta > 90` degrees, up to the ``"foc_weakening"`` torque, but the undamped rotor holds only a small
+  part of it: the C engine's runs keep the step there with far less load (docs/curves.md).
 * ``"foc_weakening"``: field-oriented control that chooses :math:`i_d` freely: the same set, the same largest
   :math:`i_q`, held stably by the loop.
 * ``"foc"``: field-oriented control with :math:`i_d = 0`: :math:`i_q \le I` and
   :math:`(R i_q + K_m\omega)^2 + (\omega_e L i_q)^2 \le V^2`.
 
 The voltage is the sine amplitude each H-bridge can give, :math:`V = v_{bus}` (the per-phase limit of
-:class:`~flatstep.loop.drive.Drive`). A chopper whose bridges stay fully on in saturation applies a square wave, whose
-fundamental is :math:`4v_{bus}/\pi`: ``voltage_factor`` up to :data:`SQUARE_WAVE` covers that.
+:class:`~flatstep.loop.drive.Drive`; ``voltage_factor`` scales it). A chopper whose bridges stay fully on in
+saturation applies a square wave, whose fundamental is :math:`4v_{bus}/\pi`: ``voltage_factor`` up to
+:data:`SQUARE_WAVE` covers that.
 """
 from __future__ import annotations
 

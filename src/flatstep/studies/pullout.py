@@ -1,10 +1,10 @@
 """The pull-out torque of the open-loop microstepping drive measured on the C engine: constant speed, rising load.
 
 At each speed the drive (:class:`~flatstep.control.microstep.Microstepping`, the current loops of a step/dir driver,
-no position feedback) brings the rotor up to speed on a gentle ramp and holds it there, against a constant load;
-the load rises with the speed (a Coulomb friction, :func:`_loaded`); the largest load it carries without
-losing a step (status ``ok``, docs/errors.md) is found by bisection, every
-speed's run at one bisection level in one batch. The model's curve is :func:`flatstep.model.pullout.pullout_torque`.
+no position feedback) brings the rotor up to speed on a gentle ramp and holds it there, against a load that rises
+with the speed (a Coulomb friction, :func:`_loaded`). The largest load it carries without losing a step (status
+``ok``: never a full step behind the command, docs/errors.md) is found by bisection, every speed's run at one
+bisection level in one batch. The model's curve is :func:`flatstep.model.pullout.pullout_torque`.
 """
 from __future__ import annotations
 
