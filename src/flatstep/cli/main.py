@@ -175,7 +175,8 @@ Commands: reproduce (the paper's figures), simulate (one move), design (gains fo
 scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
 from a recording), calibrate (detent, friction and load from the drive's own sensors), plan (the fastest
 moves through waypoints under the motor's limits), motor (a motor from its datasheet, with what was assumed),
-bench (benchmarks). 'flatstep COMMAND --help' lists a command's flags.
+curve (pull-out torque against speed for a drive), bench (benchmarks). 'flatstep COMMAND --help' lists a
+command's flags.
 
 Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
 move; 4 a controller faulted; 5 a run stopped before its end (non-finite state, or the continuous law
