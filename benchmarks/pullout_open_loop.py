@@ -36,18 +36,18 @@ def main() -> None:
     args = parser.parse_args()
     moves = (1.0, 20.0) if args.quick else (1.0, 5.0, 20.0, 60.0)
     chosen = dict(list(motors().items())[:1]) if args.quick else motors()
-    print(f"{'motor':<20}{'move':>7}{'open loop':>11}{'trapezoid':>11}{'ratio':>7}{'lost':>9}{'worst err':>11}"
-          f"{'trap caps (v, a)':>22}{'share':>8}{'ol peak':>8}")
-    print(f"{'':<20}{'[rad]':>7}{'[ms]':>11}{'[ms]':>11}{'':>7}{'(ol/trap)':>9}{'[mrad] ol':>11}"
-          f"{'[rad/s, rad/s^2]':>22}{'':>8}{'[rad/s]':>8}")
+    print(f"{'motor':<20}{'move':>6}{'open loop':>10}{'trapezoid':>10}{'ratio':>7}{'lost':>6}{'worst err':>13}"
+          f"{'share':>7}{'ol peak':>8}{'trap v, a':>17}")
+    print(f"{'':<20}{'[rad]':>6}{'[ms]':>10}{'[ms]':>10}{'ol/trap':>7}{'ol/tr':>6}{'ol/tr [mrad]':>13}"
+          f"{'':>7}{'[rad/s]':>8}{'[rad/s, rad/s^2]':>17}")
     for name, (motor, current) in chosen.items():
         curve = measured_pullout(motor, V_BUS, current)
         for d in moves:
             plan, info, ol = best_open_loop(motor, V_BUS, current, d, pullout=curve)
             trap, caps, tc = best_trapezoid(motor, V_BUS, current, d)
-            print(f"{name:<20}{d:>7g}{1e3 * plan.tf:>11.2f}{1e3 * trap.tf:>11.2f}{plan.tf / trap.tf:>7.3f}"
-                  f"{f'{ol.lost}/{tc.lost}':>9}{1e3 * ol.worst_error:>11.2f}"
-                  f"{caps['v_max']:>10.1f}, {caps['a_max']:>9.0f}{info['margin']:>8.3f}{info['w_peak']:>8.1f}",
+            print(f"{name:<20}{d:>6g}{1e3 * plan.tf:>10.2f}{1e3 * trap.tf:>10.2f}{plan.tf / trap.tf:>7.3f}"
+                  f"{f'{ol.lost}/{tc.lost}':>6}{f'{1e3 * ol.worst_error:.1f}/{1e3 * tc.worst_error:.1f}':>13}"
+                  f"{info['margin']:>7.3f}{info['w_peak']:>8.1f}{caps['v_max']:>8.1f},{caps['a_max']:>8.0f}",
                   flush=True)
 
 

@@ -122,3 +122,15 @@ def test_cli_curve_of_a_motor_file_needs_a_bus(cli, tmp_path):
     assert "--v-bus" in run.stderr
     run = cli(["curve", "m.toml", "--v-bus", "24", "--drive", "foc", "--json"], cwd=tmp_path)
     assert run.returncode == 0 and '"foc"' in run.stdout
+
+
+def test_cli_curve_of_a_datasheet_motor_defaults_to_its_rated_current_and_gives_the_band(cli, tmp_path):
+    (tmp_path / "m.toml").write_text("[motor]\nstep_angle = 1.8\nrated_current = 0.84\nholding_torque = 0.2746\n"
+                                     "resistance = 5.75\ninductance = 9.3e-3\nrotor_inertia = 34e-7\n")
+    run = cli(["curve", "m.toml", "--v-bus", "24", "--points", "5"], cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "current-vector norm 1.188 A" in run.stdout  # sqrt 2 x 0.84 A
+    run = cli(["curve", "m.toml", "--v-bus", "24", "--current", "0.84", "--points", "5", "--json"], cwd=tmp_path)
+    assert run.returncode == 0 and '"band"' in run.stdout
+    run = cli(["curve", "m.toml", "--out", "m.toml", "--v-bus", "24"], cwd=tmp_path)
+    assert run.returncode == 2 and "input" in run.stderr

@@ -37,18 +37,26 @@ def _bus(args: argparse.Namespace, file_bus: Optional[float]) -> float:
     return file_bus
 
 
-def _rho(args: argparse.Namespace, plan_rho: float) -> float:
-    """The current-vector norm the driver holds [A]: ``--current`` as ``--setting``, else the plan's run current."""
-    if args.current is None:
-        return plan_rho
-    return args.current * (math.sqrt(2.0) if args.setting == "rms" else 1.0)
+def _rho(args: argparse.Namespace, plan_rho: float, doc: dict[str, Any]) -> float:
+    """The current-vector norm the driver holds [A].
+
+    ``--current`` read as ``--setting``; else the file's plan's run current; else, for a motor given by its datasheet,
+    the rated current-vector norm; else the default plan's.
+    """
+    if args.current is not None:
+        return float(args.current) * (math.sqrt(2.0) if args.setting == "rms" else 1.0)
+    table = doc.get("motor", {})
+    if "plan" not in doc and uses_datasheet(table):
+        return motor_from_table(table, str(args.scenario)).rated_rho
+    return plan_rho
 
 
 def curve_report(args: argparse.Namespace) -> dict[str, Any]:
     """The curve of ``flatstep curve``: speeds, torques per drive kind, the band, the landmarks."""
     sf = read_scenario_file(args.scenario)
+    doc = read_toml(sf.path)
     motor, v_bus = sf.motor, _bus(args, sf.v_bus)
-    rho = _rho(args, sf.scenario.plan.rho1)
+    rho = _rho(args, sf.scenario.plan.rho1, doc)
     kinds = DRIVE_KINDS if args.drive == "all" else (args.drive,)
     w_top = args.w_max if args.w_max is not None else 1.5 * top_speed(motor, "foc_weakening", v_bus, rho, 0.0)
     speeds = np.linspace(0.0, w_top, args.points)
@@ -61,7 +69,7 @@ def curve_report(args: argparse.Namespace) -> dict[str, Any]:
     }
     if sf.control_rate is not None:
         report["electrical_speed_limit"] = electrical_speed_limit(motor, sf.control_rate)
-    table = read_toml(sf.path).get("motor", {})
+    table = doc.get("motor", {})
     if args.current is not None and uses_datasheet(table):
         model = motor_from_table(table, str(sf.path))
         report["band"] = {k: [b.tolist() for b in convention_band(model, k, v_bus, args.current, speeds)]
@@ -174,8 +182,8 @@ def add_curve_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) 
     cur.add_argument("--v-bus", type=quantity("v_bus", "--v-bus"), default=None,
                      help="the bus [V] (default: the file's [drive] v_bus)")
     cur.add_argument("--current", type=quantity("current", "--current"), default=None,
-                     help="the driver's current setting per phase [A], read as --setting (default: the plan's run "
-                     "current, a current-vector norm)")
+                     help="the driver's current setting per phase [A], read as --setting (default: the file's plan's "
+                     "run current, a current-vector norm; for a motor file, its rated one)")
     cur.add_argument("--setting", choices=("rms", "peak"), default="rms", help="what --current is: the RMS (or the "
                      "DC current of a full-step drive, default) or the peak of the phase current")
     cur.add_argument("--load", type=quantity("torque_amplitude", "--load"), default=0.0,
