@@ -31,6 +31,7 @@ from ..validate import InputError
 from ..validate.paths import CSV_MARK, PNG_MARK, check_distinct, check_output, check_output_dir, json_marks
 from .calibrate import add_calibrate_command
 from .compare import add_compare_command
+from .curve import add_curve_command
 from .design import add_design_command
 from .export import add_export_command
 from .flags import add_force, count, out_dir, quantity
@@ -175,7 +176,8 @@ Commands: reproduce (the paper's figures), simulate (one move), design (gains fo
 scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
 from a recording), calibrate (detent, friction and load from the drive's own sensors), plan (the fastest
 moves through waypoints under the motor's limits), motor (a motor from its datasheet, with what was assumed),
-export (a plan as step timestamps or a setpoint stream), bench (benchmarks). 'flatstep COMMAND --help' lists a
+export (a plan as step timestamps or a setpoint stream), curve (pull-out torque against speed for a drive),
+bench (benchmarks). 'flatstep COMMAND --help' lists a
 command's flags.
 
 Exit codes: 0 every run ok; 1 an unexpected error; 2 a refused input (nothing was run); 3 a run lost its
@@ -257,6 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_calibrate_command(sub)
     add_motor_command(sub)
     add_export_command(sub)
+    add_curve_command(sub)
 
     ben = sub.add_parser("bench", help="benchmarks side by side, medians and ratios (docs/benchmarks.md)",
                          description="Benchmarks side by side in one run: medians and their ratios against each "

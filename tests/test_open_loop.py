@@ -1,0 +1,82 @@
+"""Open-loop plans along the pull-out curve (flatstep.plan.open_loop) and their check on the drive."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flatstep.model.motor import MotorParams
+from flatstep.model.pullout import pullout_torque
+from flatstep.plan.open_loop import acceleration_curve, box_shaped, natural_period, open_loop_plan, tabulated
+from flatstep.studies.open_loop import WEAKEST, best_open_loop, best_trapezoid, check_on_plants, measured_pullout
+
+NEMA17 = MotorParams.preset("nema17")
+
+
+@pytest.mark.parametrize("distance", [1.0, -5.0, 60.0])
+def test_unshaped_plan_follows_the_curve_and_ends_at_rest(distance):
+    """From rest to rest over the distance; the acceleration never above m T_po(omega)/J at the speed reached."""
+    plan = open_loop_plan(NEMA17, 24.0, 1.0, distance, margin=0.5, shaping=False, theta1=0.3)
+    assert plan.theta1 == pytest.approx(0.3) and plan.theta2 == pytest.approx(0.3 + distance, abs=1e-9)
+    t = np.linspace(plan.t0, plan.tf, 20001)
+    f = plan.flag(t)
+    assert abs(f.dtheta[0]) < 1e-12 and abs(f.dtheta[-1]) < 1e-9 * abs(distance) / (plan.tf - plan.t0)
+    allowed = acceleration_curve(NEMA17, 24.0, 1.0, np.abs(f.dtheta), margin=0.5)
+    assert (np.abs(f.ddtheta) <= allowed * (1 + 1e-9) + 1e-6).all()
+    assert np.sign(f.dtheta[len(t) // 2]) == np.sign(distance)
+
+
+def test_shaping_keeps_the_ends_and_makes_the_acceleration_continuous():
+    raw = open_loop_plan(NEMA17, 24.0, 1.0, 5.0, shaping=False)
+    period = natural_period(NEMA17, 1.0, 0.4)
+    shaped = box_shaped(raw, period)
+    assert shaped.theta2 == pytest.approx(raw.theta2, abs=1e-9) and shaped.tf == pytest.approx(raw.tf + period)
+    assert np.abs(raw.continuity(2)).max() > 1e3  # the raw acceleration jumps
+    assert np.abs(shaped.continuity(2)).max() < 1e-6 * np.abs(raw.continuity(2)).max()
+    t = np.linspace(0, shaped.tf, 201)
+    window = np.linspace(-period, 0, 101)
+    samples = raw.flag((t[:, None] + window[None, :]).ravel()).theta.reshape(t.size, window.size)
+    mean = np.trapezoid(samples, window, axis=1) / period
+    np.testing.assert_allclose(shaped.flag(t).theta, mean, atol=1e-5)
+
+
+def test_a_tabulated_curve_is_followed_and_checked():
+    curve = tabulated([0.0, 50.0, 100.0], [0.2, 0.1, 0.0])
+    np.testing.assert_allclose(curve(np.array([0.0, 25.0, 100.0, 200.0])), [0.2, 0.15, 0.0, 0.0])
+    plan = open_loop_plan(NEMA17, 24.0, 1.0, 10.0, margin=1.0, pullout=curve, shaping=False)
+    f = plan.flag(np.linspace(0, plan.tf, 5001))
+    assert (np.abs(f.ddtheta) <= curve(np.abs(f.dtheta)) / NEMA17.J * (1 + 1e-9) + 1e-6).all()
+    with pytest.raises(ValueError, match="increasing speeds"):
+        tabulated([0.0, 0.0], [1.0, 1.0])
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    (dict(distance=0.0), "distance"), (dict(margin=1.5), "margin"), (dict(load=0.5), "cannot start"),
+    (dict(drive_kind="servo"), "drive_kind"),
+])
+def test_bad_input_is_refused(kwargs, match):
+    args = {"motor": NEMA17, "v_bus": 24.0, "current": 1.0, "distance": 1.0, **kwargs}
+    with pytest.raises(ValueError, match=match):
+        open_loop_plan(**args)
+
+
+def test_sample_of_the_plants_keeps_a_plan_and_loses_one_beyond_the_drive():
+    """A 1 rad plan at 0.4 of the pull-out torque is kept by the weakest, nominal and two other corners; a 5 rad
+    plan that cruises at 100 rad/s on the model's curve, where the drive no longer follows it, is lost."""
+    sample = [WEAKEST, {}, {"R": -0.1, "L": 0.1, "Km": 0.1, "J": -0.1, "B": -0.1},
+              {"R": 0.1, "L": -0.1, "Km": -0.1, "J": -0.1, "B": 0.1}]
+    kept = check_on_plants(NEMA17, open_loop_plan(NEMA17, 24.0, 1.0, 1.0, margin=0.4), 24.0, errors=sample)
+    assert kept.runs == 4 and kept.safe and kept.worst_error < np.pi / (2 * 50)
+    fast = open_loop_plan(NEMA17, 24.0, 1.0, 5.0, margin=0.6, w_max=100.0, drive_kind="foc_weakening")
+    assert not check_on_plants(NEMA17, fast, 24.0, errors=[WEAKEST]).safe
+
+
+@pytest.mark.slow
+def test_full_study_open_loop_against_the_best_trapezoid():
+    """On the 32 plants: both safe; the plan along the drive's measured curve shorter than the best trapezoid
+    (docs/curves.md, the table of benchmarks/pullout_open_loop.py)."""
+    curve = measured_pullout(NEMA17, 24.0, 1.0)
+    assert curve(np.array([0.0]))[0] == pytest.approx(pullout_torque(NEMA17, "chopper", 24.0, 1.0, 0.0)[0])
+    plan, info, check = best_open_loop(NEMA17, 24.0, 1.0, 1.0, pullout=curve)
+    trap, caps, tcheck = best_trapezoid(NEMA17, 24.0, 1.0, 1.0)
+    assert check.runs == tcheck.runs == 32 and check.safe and tcheck.safe
+    assert plan.tf < trap.tf
