@@ -30,16 +30,16 @@ DOCS = Path(__file__).resolve().parent.parent / "docs" / "api"
 #: The public modules, per page (a layer of the package), in the order a move flows through them.
 PUBLIC: dict[str, list[str]] = {
     "model": ["model.motor", "model.datasheet", "model.plant", "model.torque_model", "model.flat", "model.flat_dq",
-              "model.equilibria", "model.psi"],
+              "model.equilibria", "model.psi", "model.pullout"],
     "plan": ["plan.protocol", "plan.rest_to_rest", "plan.waypoints", "plan.time_optimal", "plan.sequence",
              "plan.piecewise", "plan.limits", "plan.feasibility", "plan.d_current", "plan.loss_aware",
-             "plan.copper", "plan.baselines", "plan.export"],
-    "control": ["control"],
+             "plan.copper", "plan.baselines", "plan.export", "plan.open_loop"],
+    "control": ["control", "control.feedforward", "control.build"],
     "loop": ["loop.drive", "loop.sensors", "loop.observers", "loop.reference", "loop.design"],
     "engine": ["engine.simulate", "engine.settings", "engine.result"],
     "studies": ["studies.scenario", "studies.scenario_file", "studies.batch", "studies.robustness", "studies.compare",
                 "studies.verify", "studies.identify", "studies.identify_result", "studies.excitation",
-                "studies.record", "studies.calibrate", "studies.executors"],
+                "studies.record", "studies.calibrate", "studies.executors", "studies.pullout", "studies.open_loop"],
     "interop": ["interop"],
     "validate": ["validate", "validate.limits", "validate.paths", "errors"],
 }
