@@ -28,12 +28,13 @@ import tempfile
 import time
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 from flatstep.cli.plan import scenario_on_drive
 from flatstep.model.datasheet import motor_from_table, uses_datasheet
 from flatstep.model.motor import MotorParams
 from flatstep.plan.limits import MotorLimits
+from flatstep.studies.scenario import Scenario
 from flatstep.studies.scenario_file import read_scenario_file
 from flatstep.studies.verify import check_on_drive, scenario_corners
 
@@ -96,15 +97,23 @@ def journey_file(name: str, table: dict[str, Any], i_max: float) -> str:
     return "\n".join(lines)
 
 
-def simulate_corners(path: Path) -> tuple[int, int, list[str]]:
-    """``flatstep simulate``'s scenario for the file on the nominal plant and each corner: (ok, runs, statuses)."""
-    scenario = scenario_on_drive(read_scenario_file(path))
+def simulate_corners(path: Path, scenario: Optional[Scenario] = None) -> tuple[int, int, list[str]]:
+    """``flatstep simulate``'s scenario for the file on the nominal plant and each corner: (ok, runs, statuses).
+
+    ``scenario``: the checked scenario to run (``None``: as ``flatstep simulate`` builds it, checking it again).
+    """
+    scenario = scenario_on_drive(read_scenario_file(path)) if scenario is None else scenario
     statuses = [sc.run().status for _, sc in scenario_corners(scenario, UNCERTAINTY)]
     return sum(s == "ok" for s in statuses), len(statuses), statuses
 
 
-def study_one(name: str, table: dict[str, Any], i_max: float, folder: Path, simulate: bool = True) -> dict[str, Any]:
-    """One motor's row: the check of ``flatstep plan`` and, for a verified plan, simulate on every plant."""
+def study_one(name: str, table: dict[str, Any], i_max: float, folder: Path, simulate: bool = True,
+              recheck: bool = True) -> dict[str, Any]:
+    """One motor's row: the check of ``flatstep plan`` and, for a verified plan, simulate on every plant.
+
+    ``recheck``: simulate builds its scenario as ``flatstep simulate`` does (checking the file again); without,
+    it runs the scenario the check returned (the same plan and law, half the time).
+    """
     path = folder / f"{name.replace(' ', '-')}.toml"
     path.write_text(journey_file(name, table, i_max))
     start = time.perf_counter()
@@ -119,16 +128,17 @@ def study_one(name: str, table: dict[str, Any], i_max: float, folder: Path, simu
         advice=info["advice"], check_seconds=time.perf_counter() - start, history=rounds)
     if simulate and info["verified"]:
         start = time.perf_counter()
-        ok, runs, statuses = simulate_corners(path)
+        ok, runs, statuses = simulate_corners(path, None if recheck else checked.scenario)
         row.update(simulate_ok=ok, simulate_runs=runs, simulate_statuses=statuses,
                    simulate_seconds=time.perf_counter() - start)
     return row
 
 
-def study(motors: list[tuple[str, dict[str, Any], float]], simulate: bool = True) -> list[dict[str, Any]]:
+def study(motors: list[tuple[str, dict[str, Any], float]], simulate: bool = True,
+          recheck: bool = True) -> list[dict[str, Any]]:
     """One row per motor (:func:`study_one`), the scenario files written in a temporary folder."""
     with tempfile.TemporaryDirectory() as tmp:
-        return [study_one(name, table, i_max, Path(tmp), simulate) for name, table, i_max in motors]
+        return [study_one(name, table, i_max, Path(tmp), simulate, recheck) for name, table, i_max in motors]
 
 
 def table(rows: list[dict[str, Any]]) -> str:
