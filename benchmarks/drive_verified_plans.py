@@ -6,7 +6,7 @@ the rated current-vector norm), a time-optimal plan, a 20 kHz drive on 24 V with
 current ADC, and the journey's controller (``[controller] design = true``: the sliding law with gains and observer
 designed for the motor, plan and drive). For each motor it prints:
 
-* what ``flatstep plan FILE`` reports (:func:`flatstep.studies.verify.check_on_drive`: the file's scenario on the
+* what ``flatstep plan FILE`` reports (:func:`flatstep.studies.backoff.check_on_drive`: the file's scenario on the
   nominal plant and the 16 corners of +-10 % on R, L, Km, J, backed off where a case is lost or faults): the plan's
   duration, verified or refused, the plans made, the worst error, and what binds;
 * for a verified plan, whether ``flatstep simulate FILE`` ends ok on every plant: the scenario
@@ -36,7 +36,8 @@ from flatstep.model.motor import MotorParams
 from flatstep.plan.limits import MotorLimits
 from flatstep.studies.scenario import Scenario
 from flatstep.studies.scenario_file import read_scenario_file
-from flatstep.studies.verify import check_on_drive, scenario_corners
+from flatstep.studies.backoff import check_on_drive
+from flatstep.studies.verify import scenario_corners
 
 DISTANCE = 62.83   # 10 revolutions [rad]
 V_BUS = 24.0

@@ -7,7 +7,8 @@ import pytest
 from flatstep.model.motor import MotorParams
 from flatstep.plan.limits import COMMUTATION_ANGLE, HOLD_FRACTION, MotorLimits
 from flatstep.plan.time_optimal import time_optimal
-from flatstep.studies.verify import ADVICE, drive_loop, plan_for_drive, plant_corners, verify_plan
+from flatstep.studies.backoff import plan_for_drive
+from flatstep.studies.verify import ADVICE, drive_loop, plant_corners, verify_plan
 
 RATE, COUNTS, V_BUS = 20000.0, 4000, 24.0
 #: A common NEMA 17: 1.68 A, 1.65 ohm, 2.8 mH, 0.44 N m holding, 68 g cm^2, 1.8 deg.

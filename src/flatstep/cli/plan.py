@@ -244,10 +244,10 @@ def verify_on_drive(pf: "ScenarioFile", report: dict[str, Any], skip: bool = Fal
     plant and load) on its plant and the corners of ``[limits] uncertainty``. A plan within its limits that the
     drive does not keep on every case is refused (``report["feasible"]`` set to false) with what binds and what to
     change; a time-optimal sequence is backed off first
-    (:func:`~flatstep.studies.verify.check_on_drive`). ``skip`` (``--no-verify``) says so and leaves the plan
+    (:func:`~flatstep.studies.backoff.check_on_drive`). ``skip`` (``--no-verify``) says so and leaves the plan
     unverified.
     """
-    from ..studies.verify import check_on_drive
+    from ..studies.backoff import check_on_drive
 
     if skip:
         report.update(duration=pf.plan.tf - pf.plan.t0, verify=dict(skipped=True))
@@ -288,12 +288,12 @@ def verify_on_drive(pf: "ScenarioFile", report: dict[str, Any], skip: bool = Fal
 def scenario_on_drive(sf: "ScenarioFile", skip: bool = False) -> "Scenario":
     """The file's scenario with the plan ``flatstep plan`` reports feasible: checked on the drive, backed off.
 
-    A plan made against ``[limits]`` runs only once the check of :func:`~flatstep.studies.verify.check_on_drive`
+    A plan made against ``[limits]`` runs only once the check of :func:`~flatstep.studies.backoff.check_on_drive`
     keeps it, with the file's own controller, on its plant and the corners of ``[limits] uncertainty`` (a time-optimal
     plan backed off as ``flatstep plan`` backs it off);
     a plan the drive would lose is refused with what binds. ``skip`` (``--no-verify``) runs the file's plan as it is.
     """
-    from ..studies.verify import check_on_drive
+    from ..studies.backoff import check_on_drive
 
     if skip or sf.limits is None:
         return sf.scenario
