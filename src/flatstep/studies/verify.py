@@ -26,7 +26,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from itertools import product
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import numpy as np
 
@@ -164,11 +164,10 @@ def drive_controller(motor: MotorParams, plan: PiecewisePlan, loop: DriveLoop,
     return FlatnessSMC(motor, plan, d.gains, "observer"), loop
 
 
-def _run(plant: MotorParams, plan: PiecewisePlan, controller: Controller, loop: DriveLoop,
-         errors: dict[str, float]) -> Case:
-    """One case on the C engine; a run that stops (non-finite state) is ``failed``."""
+def _case(errors: dict[str, float], run: Callable[[], Any]) -> Case:
+    """One case: ``run()`` on the C engine, its status, worst error and when it went wrong; a stop is ``failed``."""
     try:
-        r = simulate(plant, plan, controller, loop=loop, t_end=plan.tf + T_AFTER)
+        r = run()
     except RunError as exc:
         return Case(errors, "failed", math.inf, t_wrong=exc.t_fail)
     faults = int(r.meta.get("controller_faults", 0))
@@ -176,19 +175,17 @@ def _run(plant: MotorParams, plan: PiecewisePlan, controller: Controller, loop: 
     t_wrong = r.lost_at if r.lost_at is not None else first_fault
     return Case(errors, r.status, float(np.max(np.abs(r.theta_error))), r.lost_at, faults,
                 None if t_wrong is None else float(t_wrong))
+
+
+def _run(plant: MotorParams, plan: PiecewisePlan, controller: Controller, loop: DriveLoop,
+         errors: dict[str, float]) -> Case:
+    """One case of a bare plan on the drive ``loop``."""
+    return _case(errors, lambda: simulate(plant, plan, controller, loop=loop, t_end=plan.tf + T_AFTER))
 
 
 def _run_scenario(scenario: Scenario, errors: dict[str, float]) -> Case:
-    """One case as ``flatstep simulate`` runs it (:meth:`Scenario.run`); a run that stops is ``failed``."""
-    try:
-        r = scenario.run()
-    except RunError as exc:
-        return Case(errors, "failed", math.inf, t_wrong=exc.t_fail)
-    faults = int(r.meta.get("controller_faults", 0))
-    first_fault = r.meta.get("first_fault_time")
-    t_wrong = r.lost_at if r.lost_at is not None else first_fault
-    return Case(errors, r.status, float(np.max(np.abs(r.theta_error))), r.lost_at, faults,
-                None if t_wrong is None else float(t_wrong))
+    """One case as ``flatstep simulate`` runs it (:meth:`Scenario.run`)."""
+    return _case(errors, scenario.run)
 
 
 def scenario_corners(scenario: Scenario, uncertainty: float = 0.1) -> list[tuple[dict[str, float], Scenario]]:
