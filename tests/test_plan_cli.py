@@ -202,7 +202,7 @@ def test_the_papers_move_under_limits_shows_its_margins(cli, tmp_path):
     """rest_to_rest with [limits]: the margins of a waypoint plan, on the [drive] bus."""
     path = tmp_path / "r2r.toml"
     path.write_text("t_end = 0.1\n" + MOTOR + DRIVE + "[limits]\ni_max = 1.5\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\n"
-                    "rho2 = 1.0\nt0 = 0.01\ntf = 0.07\n")
+                    "rho2 = 1.0\nt0 = 0.01\ntf = 0.07\n[controller]\ndesign = true\n")  # the check runs this law
     run = cli(["plan", path, "--out", tmp_path / "o"])
     assert run.returncode == 0, run.stderr
     report = json.loads((tmp_path / "o" / "plan.json").read_text())

@@ -1,15 +1,14 @@
 """A plan the drive can follow: limits from the motor and the drive, the check on the drive, the back-off."""
 import json
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
 from flatstep.model.motor import MotorParams
 from flatstep.plan.limits import COMMUTATION_ANGLE, HOLD_FRACTION, MotorLimits
 from flatstep.plan.time_optimal import time_optimal
-from flatstep.studies.verify import ADVICE, drive_loop, plan_for_drive, plant_corners, verify_plan
+from flatstep.studies.backoff import plan_for_drive
+from flatstep.studies.verify import ADVICE, drive_loop, plant_corners, verify_plan
 
 RATE, COUNTS, V_BUS = 20000.0, 4000, 24.0
 #: A common NEMA 17: 1.68 A, 1.65 ohm, 2.8 mH, 0.44 N m holding, 68 g cm^2, 1.8 deg.
@@ -100,12 +99,13 @@ control_rate = 20000.0
 v_bus = 24.0
 [sensors]
 encoder_counts = 16384
-"""
+{controller}"""
+DESIGNED = "[controller]\ndesign = true\n"
 DERIVED = "i_hold = 0.504\nspeed_corner = 11.79\ntorque_angle_max = 0.8181\nv_use = 0.8182\nspeed_max = 60.0"
 
 
 def test_cli_json_verified(cli, tmp_path):
-    (tmp_path / "move.toml").write_text(MOVE.format(extra=DERIVED))
+    (tmp_path / "move.toml").write_text(MOVE.format(extra=DERIVED, controller=DESIGNED))
     run = cli(["plan", "move.toml", "--json"], cwd=tmp_path)
     assert run.returncode == 0, run.stderr
     report = json.loads(run.stdout)
@@ -113,10 +113,40 @@ def test_cli_json_verified(cli, tmp_path):
     assert report["verify"]["verified"] and len(report["verify"]["cases"]) == 17
     assert {c["status"] for c in report["verify"]["cases"]} == {"ok"}
     assert "verified on the drive" in run.stderr
+    # the check ran the file's own law on its drive: the designed sliding law through its observer
+    assert report["verify"]["controller"] == "smc (the file's gains, observer measurement)"
+    assert report["verify"]["plants"] == "17 plants (nominal and +-10 % on R, L, Km, J)"
+    assert report["verify"]["worst_error"] == max(c["max_abs_theta_error"] for c in report["verify"]["cases"])
+    # and 'flatstep simulate' runs that plan with that law: it ends ok
+    sim = cli(["simulate", "move.toml"], cwd=tmp_path)
+    assert sim.returncode == 0 and "status: ok" in sim.stdout, sim.stdout + sim.stderr
+
+
+def test_cli_checks_the_files_controller(cli, tmp_path):
+    """Without [controller] the law runs the default gains: the drive loses the move and the refusal says to design."""
+    (tmp_path / "move.toml").write_text(MOVE.format(extra=DERIVED, controller=""))
+    run = cli(["plan", "move.toml", "--json"], cwd=tmp_path)
+    report = json.loads(run.stdout)
+    assert run.returncode == 2 and not report["feasible"] and not report["verify"]["verified"]
+    assert report["verify"]["controller"] == "smc (default gains, model measurement)"
+    assert "[controller] design = true" in report["verify"]["advice"] and "binds" in run.stderr
+    sim = cli(["simulate", "move.toml"], cwd=tmp_path)  # simulate refuses what plan refuses, before any run
+    assert sim.returncode == 2 and "design = true" in sim.stderr
+
+
+def test_cli_uncertainty_from_limits(cli, tmp_path):
+    """[limits] uncertainty sets the corners the check runs (0: the plant only); out of range is bad input."""
+    (tmp_path / "move.toml").write_text(MOVE.format(extra=DERIVED + "\nuncertainty = 0.0", controller=DESIGNED))
+    report = json.loads(cli(["plan", "move.toml", "--json"], cwd=tmp_path).stdout)
+    assert report["verify"]["plants"] == "1 plant (nominal)" and len(report["verify"]["cases"]) == 1
+    assert report["verify"]["uncertainty"] == 0.0 and report["limits"]["uncertainty"] == 0.0
+    (tmp_path / "bad.toml").write_text(MOVE.format(extra="uncertainty = 0.6", controller=DESIGNED))
+    bad = cli(["plan", "bad.toml"], cwd=tmp_path)
+    assert bad.returncode == 2 and "limits.uncertainty" in bad.stderr and "0.6" in bad.stderr
 
 
 def test_cli_refuses_or_backs_off_and_no_verify(cli, tmp_path):
-    (tmp_path / "move.toml").write_text(MOVE.format(extra=""))
+    (tmp_path / "move.toml").write_text(MOVE.format(extra="", controller=DESIGNED))
     run = cli(["plan", "move.toml", "--json"], cwd=tmp_path)
     report = json.loads(run.stdout)
     v = report["verify"]
@@ -126,30 +156,3 @@ def test_cli_refuses_or_backs_off_and_no_verify(cli, tmp_path):
         assert run.returncode == 2 and not v["verified"] and v["binds"] in ADVICE and "binds" in run.stderr
     skipped = cli(["plan", "move.toml", "--no-verify"], cwd=tmp_path)
     assert skipped.returncode == 0 and "not verified on the drive (--no-verify)" in skipped.stdout
-
-
-def test_a_sample_of_datasheet_motors_is_verified_or_refused_with_what_binds():
-    """Datasheet motors (a NEMA 14 and a NEMA 17 whose first plan is backed off): 10 revolutions on 24 V, 20 kHz and
-    a 4000-count encoder; a plan reported verified keeps its move on all 17 plants."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from drive_verified_plans import file_motors, study
-
-    motors = Path(__file__).resolve().parents[1] / "examples" / "motors"
-    rows = study(file_motors([str(motors / "ldo-35sth52-1504ah.toml"), str(motors / "nidec-servo-kh4248-b95101.toml")]))
-    assert [r["status"] for r in rows] == ["verified", "verified"], rows
-    for r in rows:
-        assert r["bad"] == 0 and r["cases"] == 17 and r["worst_error"] < math.pi / 100 and r["duration"] > 0.5
-    assert rows[1]["rounds"] > 1 and rows[1]["history"][0]["status"] != "ok"  # the first plan was not kept
-
-
-@pytest.mark.slow
-def test_study_ten_revolutions():
-    """The study: no plan reported verified ends lost or faulted; each refusal says what binds."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from drive_verified_plans import builtin_motors, study
-
-    for row in study(builtin_motors()):
-        if row["status"] == "verified":
-            assert row["bad"] == 0 and row["cases"] == 17 and row["duration"] > 0
-        else:
-            assert row["binds"]

@@ -240,12 +240,14 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 def verify_on_drive(pf: "ScenarioFile", report: dict[str, Any], skip: bool = False) -> "ScenarioFile":
     """``flatstep plan``'s check: fill plan.json's ``duration`` and ``verify``, print one line, return the plan file.
 
-    A plan within its limits that the drive does not keep on every case is refused (``report["feasible"]`` set
-    to false) with what binds and what to change; a time-optimal sequence is backed off first
-    (:func:`~flatstep.studies.verify.check_on_drive`). ``skip`` (``--no-verify``) says so and leaves the plan
+    The check runs the file's scenario as ``flatstep simulate`` runs it (its controller, drive, sensors, observer,
+    plant and load) on its plant and the corners of ``[limits] uncertainty``. A plan within its limits that the
+    drive does not keep on every case is refused (``report["feasible"]`` set to false) with what binds and what to
+    change; a time-optimal sequence is backed off first
+    (:func:`~flatstep.studies.backoff.check_on_drive`). ``skip`` (``--no-verify``) says so and leaves the plan
     unverified.
     """
-    from ..studies.verify import check_on_drive
+    from ..studies.backoff import check_on_drive
 
     if skip:
         report.update(duration=pf.plan.tf - pf.plan.t0, verify=dict(skipped=True))
@@ -259,7 +261,7 @@ def verify_on_drive(pf: "ScenarioFile", report: dict[str, Any], skip: bool = Fal
                   steps=[dict(step=s, start=a, duration=d) for s, a, d in pf.steps])
     cases = info["cases"]
     bad = [c for c in cases if c["status"] != "ok"]
-    where = f"{len(cases)} plants (nominal and +-10 % on R, L, Km, J), {info['seconds']:.2f} s"
+    where = f"{info['controller']} on {info['plants']}, {info['seconds']:.2f} s"
     if info["verified"]:
         slower = (f"; backed off from {before:.6g} s to {pf.plan.tf - pf.plan.t0:.6g} s"
                   if info["backed_off"] else "")
@@ -286,18 +288,19 @@ def verify_on_drive(pf: "ScenarioFile", report: dict[str, Any], skip: bool = Fal
 def scenario_on_drive(sf: "ScenarioFile", skip: bool = False) -> "Scenario":
     """The file's scenario with the plan ``flatstep plan`` reports feasible: checked on the drive, backed off.
 
-    A plan made against ``[limits]`` runs only once the check of :func:`~flatstep.studies.verify.check_on_drive`
-    keeps it on the nominal and +-10 % plants (a time-optimal plan backed off as ``flatstep plan`` backs it off);
+    A plan made against ``[limits]`` runs only once the check of :func:`~flatstep.studies.backoff.check_on_drive`
+    keeps it, with the file's own controller, on its plant and the corners of ``[limits] uncertainty`` (a time-optimal
+    plan backed off as ``flatstep plan`` backs it off);
     a plan the drive would lose is refused with what binds. ``skip`` (``--no-verify``) runs the file's plan as it is.
     """
-    from ..studies.verify import check_on_drive
+    from ..studies.backoff import check_on_drive
 
     if skip or sf.limits is None:
         return sf.scenario
     checked, info = check_on_drive(sf, sf.planner)
     if not info["verified"]:
-        raise ValueError(f"{sf.path}: the plan is not kept on the drive ({len(info['cases'])} plants: nominal and "
-                         f"+-10 % on R, L, Km, J; worst |theta - theta*| {info['worst_error']:.3g} rad): "
+        raise ValueError(f"{sf.path}: the plan is not kept on the drive ({info['controller']} on {info['plants']}; "
+                         f"worst |theta - theta*| {info['worst_error']:.3g} rad): "
                          f"{info['binds']} binds: {info['advice']}; 'flatstep plan' shows the check, --no-verify "
                          "runs the plan anyway")
     if info["backed_off"]:
@@ -316,7 +319,8 @@ def add_plan_command(sub: Any) -> None:
                        "the worst use of each limit, write plan.png and plan.json; with --simulate, also run the "
                        "file's scenario on its drive ('flatstep simulate FILE.toml' runs it alone and prints the "
                        "run's summary and status). Exit 2 when the plan exceeds a limit, a path is refused, or the "
-                       "drive does not keep it on the nominal and +-10 % plants (the check; --no-verify skips it), 3 "
+                       "drive does not keep it with the file's controller on its plant and the corners of +-[limits] "
+                       "uncertainty (10 % by default) on R, L, Km, J (the check; --no-verify skips it), 3 "
                        "when the --simulate run loses the move, 4 when its controller faulted (as 'flatstep simulate "
                        "FILE.toml').")
     p.add_argument("file", help="a scenario file (TOML, docs/scenario-reference.md; examples/plans/*.toml): a "
@@ -326,7 +330,8 @@ def add_plan_command(sub: Any) -> None:
     p.add_argument("--simulate", action="store_true",
                    help="also run the file's scenario (its drive, sensors, observer and controller)")
     p.add_argument("--no-verify", action="store_true",
-                   help="skip the check on the drive (the plan on the nominal and +-10 %% plants; docs/planning.md)")
+                   help="skip the check on the drive (the file's scenario on its plant and the +-[limits] uncertainty "
+                        "corners; docs/planning.md)")
     p.add_argument("--json", action="store_true", help="print plan.json to stdout (the text goes to stderr)")
     add_force(p)
     p.set_defaults(func=cmd_plan)

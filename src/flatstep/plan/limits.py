@@ -87,13 +87,18 @@ class MotorLimits:
         Fraction of v_bus the plan's feedforward may use, in (0, 1]; the rest is the controller's to correct.
     speed_max, accel_max, jerk_max : float, optional
         Caps [rad/s, rad/s^2, rad/s^3].
+    uncertainty : float
+        The relative error :math:`\delta` of R, L, Km and J the plan must leave room for, in [0, 0.5): the check on
+        the drive (:mod:`flatstep.studies.verify`) runs the plan on the nominal plant and the :math:`2^4` corners of
+        :math:`\pm\delta` (0: the nominal plant only); :meth:`for_drive` derives the margins from it.
 
     Notes
     -----
     Every field is a number (not a bool, not a string) in its range of :mod:`flatstep.validate.ranges`:
     ``v_bus`` that of ``v_bus``, the currents that of ``current``, ``speed_corner`` and ``speed_max`` that of
     ``speed``, ``accel_max`` ``acceleration``, ``jerk_max`` ``jerk``, ``torque_angle_max`` ``torque_angle`` and
-    ``v_use`` ``fraction``; an :class:`~flatstep.validate.InputError` names the field otherwise.
+    ``v_use`` ``fraction``, ``uncertainty`` ``relative``; an :class:`~flatstep.validate.InputError` names the field
+    otherwise.
     """
 
     v_bus: float
@@ -106,11 +111,13 @@ class MotorLimits:
     speed_max: Optional[float] = None
     accel_max: Optional[float] = None
     jerk_max: Optional[float] = None
+    uncertainty: float = 0.1
 
     def __post_init__(self) -> None:
         # every field in its range of flatstep.validate.ranges (an InputError naming the field otherwise)
         for name, kind in (("v_bus", "v_bus"), ("i_max", "current"), ("i_hold", "current"),
-                           ("speed_corner", "speed"), ("torque_angle_max", "torque_angle"), ("v_use", "fraction")):
+                           ("speed_corner", "speed"), ("torque_angle_max", "torque_angle"), ("v_use", "fraction"),
+                           ("uncertainty", "relative")):
             object.__setattr__(self, name, check_quantity(kind, getattr(self, name), as_name=name))
         for name, kind in (("i_run", "current"), ("speed_max", "speed"), ("accel_max", "acceleration"),
                            ("jerk_max", "jerk")):
@@ -162,7 +169,7 @@ class MotorLimits:
         if count:
             speed = min(speed, ENCODER_COUNTS_PER_PERIOD * count * rate)
         return cls(v_bus=v_bus, i_max=i_max, i_hold=HOLD_FRACTION * i_max, speed_corner=motor.R / (motor.Nr * motor.L),
-                   torque_angle_max=angle, v_use=VOLTAGE_SHARE / (1 + delta), speed_max=speed)
+                   torque_angle_max=angle, v_use=VOLTAGE_SHARE / (1 + delta), speed_max=speed, uncertainty=delta)
 
     def floor(self, omega: ArrayLike) -> Array:
         """The across-axis current without torque: i_hold at rest, towards i_run at speed."""

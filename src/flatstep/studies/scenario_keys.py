@@ -92,6 +92,9 @@ _LIMIT_DOCS = {
     "speed_max": ("rad/s", "> 0", "speed cap of the margins (none: no cap)"),
     "accel_max": ("rad/s^2", "> 0", "acceleration cap of the margins (none: no cap)"),
     "jerk_max": ("rad/s^3", "> 0", "jerk cap of the margins (none: no cap)"),
+    "uncertainty": ("", "[0, 0.5)", "relative error of R, L, Km and J: flatstep plan checks the plan with the file's "
+                                    "controller and drive on the plant and the 16 corners of +-uncertainty "
+                                    "(0: the plant only; docs/planning.md section 7)"),
 }
 
 #: Every table's keys (``""``: the top level).

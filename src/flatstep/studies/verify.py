@@ -1,19 +1,22 @@
 r"""A plan the drive can follow: run it on the drive, on the nominal plant and on the corners of its uncertainty.
 
 A plan within its limits (:func:`~flatstep.plan.margins.plan_margins`) can still be lost on a sampled drive: the
-limits are a model, the drive samples, the encoder quantizes and the plant is not the model. :func:`verify_plan`
-runs the plan on the drive (the C engine, :func:`~flatstep.engine.simulate.simulate` with a
-:class:`~flatstep.loop.reference.DriveLoop`) on the nominal plant and on the :math:`2^4` corners of
-:math:`\pm\delta` on R, L, Km and J (the plant scaled as :func:`flatstep.studies.robustness.perturbed` scales it,
-the controller's model nominal). The plan is verified when every case ends ``ok``; otherwise the first case lost
-or faulted names the limit that binds where it went wrong (:func:`binding`).
+limits are a model, the drive samples, the encoder quantizes and the plant is not the model.
+:func:`verify_scenario` runs a scenario as ``flatstep simulate`` runs it (:meth:`Scenario.run
+<flatstep.studies.scenario.Scenario.run>`: its own controller, sensors, observer, plant effects, load and drive)
+on its plant and on the :math:`2^4` corners of :math:`\pm\delta` on that plant's R, L, Km and J (the
+controller's model nominal); :func:`verify_plan` does the same for a bare plan on a
+:class:`~flatstep.loop.reference.DriveLoop` with :func:`drive_controller`. The plan is verified when every case
+ends ``ok``; otherwise the first case lost or faulted names the limit that binds where it went wrong
+(:func:`binding`).
 
-:func:`plan_for_drive` plans, verifies and backs off: the binding limit is tightened (:data:`BACK_OFF`) and the
-plan re-planned, at most :data:`ROUNDS` times; then it refuses, naming the limit and what to change.
+:mod:`flatstep.studies.backoff` plans, checks and backs off: the binding limit is tightened and the plan re-planned;
+then it refuses, naming the limit and what to change.
 
-The controller, when none is given, is :func:`drive_controller`: the flatness + sliding-mode law with the gains and
-the observer of :func:`~flatstep.loop.design.design_gains` for the drive. It is the law measured here to track
-a segment table on the C engine; the other laws refuse a :class:`~flatstep.plan.piecewise.PiecewisePlan` there.
+A scenario file is checked with its own controller (:func:`~flatstep.studies.backoff.check_on_drive`): the plan
+``flatstep plan`` reports feasible is the plan ``flatstep simulate`` runs, with the same law, on the same drive. A
+bare plan without a controller (:func:`verify_plan`) is checked with :func:`drive_controller`: the flatness +
+sliding-mode law with the gains and the observer of :func:`~flatstep.loop.design.design_gains` for the drive.
 """
 from __future__ import annotations
 
@@ -28,7 +31,7 @@ from typing import Any, Callable, Optional
 import numpy as np
 
 from ..control.protocol import Controller
-from ..control.smc import FlatnessSMC
+from ..control.smc import FlatnessSMC, SMCGains
 from ..engine.simulate import simulate
 from ..errors import RunError
 from ..loop.design import design_gains
@@ -39,23 +42,21 @@ from ..model.motor import MotorParams
 from ..plan.limits import COMMUTATION_ANGLE, MotorLimits
 from ..plan.piecewise import PiecewisePlan
 from ..validate import check_finite
+from .scenario import Scenario
 
 #: The parameters the uncertainty scales, as :mod:`flatstep.studies.robustness` names them.
 PARAMETERS = ("R", "L", "Km", "J")
 #: The time run after the plan's end [s], for the rotor to settle (a lost arrival shows there).
 T_AFTER = 0.02
-#: Back-off rounds of :func:`plan_for_drive` before it refuses.
-ROUNDS = 3
-#: How each binding limit is tightened in a round: (the :class:`MotorLimits` field, its factor).
-BACK_OFF = {"commutation rate": ("speed_max", 0.8), "voltage at speed": ("v_use", 0.85),
-            "torque angle": ("torque_angle_max", 0.85), "current": ("torque_angle_max", 0.85),
-            "tracking on the drive": ("speed_max", 0.8)}
 #: What to change when a limit binds.
 ADVICE = {"commutation rate": "raise the drive's control rate, or lower speed_max",
           "voltage at speed": "raise v_bus, or lower v_use or speed_max",
           "torque angle": "lower torque_angle_max or accel_max, or raise i_max",
           "current": "raise i_max (a motor and drive rated for more current), or lower accel_max",
           "tracking on the drive": "raise the control rate, use a finer encoder, or lower speed_max"}
+#: Added to the advice when the scenario's sliding law runs the default gains (the paper's, for its motor in
+#: continuous time), not gains designed for this motor and drive.
+DESIGN_ADVICE = "; the law runs the default gains: design them for this motor and drive ([controller] design = true)"
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,17 @@ class Verdict:
     binds: Optional[str] = None
     advice: Optional[str] = None
     rounds: list[dict[str, Any]] = field(default_factory=list)
+    #: the law the cases ran (a scenario's controller type, or ``drive_controller``'s)
+    controller: str = "smc (gains and observer designed for the drive)"
+    #: the relative error of R, L, Km and J of the corners
+    uncertainty: float = 0.1
+
+    @property
+    def plants(self) -> str:
+        """The plants the cases ran, in words: ``17 plants (nominal and +-10 % on R, L, Km, J)``."""
+        if self.uncertainty == 0:
+            return "1 plant (nominal)"
+        return f"{len(self.cases)} plants (nominal and +-{100 * self.uncertainty:g} % on {', '.join(PARAMETERS)})"
 
     @property
     def worst_error(self) -> float:
@@ -107,9 +119,10 @@ class Verdict:
 
     def as_dict(self) -> dict[str, Any]:
         """The verdict for JSON (plan.json's ``verify``)."""
-        return dict(verified=self.verified, status=self.status, worst_error=self.worst_error, binds=self.binds,
-                    advice=self.advice, seconds=self.seconds, cases=[c.as_dict() for c in self.cases],
-                    rounds=self.rounds)
+        return dict(verified=self.verified, status=self.status, controller=self.controller, plants=self.plants,
+                    uncertainty=self.uncertainty, worst_error=self.worst_error if self.cases else None,
+                    binds=self.binds, advice=self.advice, seconds=self.seconds,
+                    cases=[c.as_dict() for c in self.cases], rounds=self.rounds)
 
 
 def plant_corners(motor: MotorParams, uncertainty: float = 0.1) -> list[tuple[dict[str, float], MotorParams]]:
@@ -151,11 +164,10 @@ def drive_controller(motor: MotorParams, plan: PiecewisePlan, loop: DriveLoop,
     return FlatnessSMC(motor, plan, d.gains, "observer"), loop
 
 
-def _run(plant: MotorParams, plan: PiecewisePlan, controller: Controller, loop: DriveLoop,
-         errors: dict[str, float]) -> Case:
-    """One case on the C engine; a run that stops (non-finite state) is ``failed``."""
+def _case(errors: dict[str, float], run: Callable[[], Any]) -> Case:
+    """One case: ``run()`` on the C engine, its status, worst error and when it went wrong; a stop is ``failed``."""
     try:
-        r = simulate(plant, plan, controller, loop=loop, t_end=plan.tf + T_AFTER)
+        r = run()
     except RunError as exc:
         return Case(errors, "failed", math.inf, t_wrong=exc.t_fail)
     faults = int(r.meta.get("controller_faults", 0))
@@ -163,6 +175,73 @@ def _run(plant: MotorParams, plan: PiecewisePlan, controller: Controller, loop: 
     t_wrong = r.lost_at if r.lost_at is not None else first_fault
     return Case(errors, r.status, float(np.max(np.abs(r.theta_error))), r.lost_at, faults,
                 None if t_wrong is None else float(t_wrong))
+
+
+def _run(plant: MotorParams, plan: PiecewisePlan, controller: Controller, loop: DriveLoop,
+         errors: dict[str, float]) -> Case:
+    """One case of a bare plan on the drive ``loop``."""
+    return _case(errors, lambda: simulate(plant, plan, controller, loop=loop, t_end=plan.tf + T_AFTER))
+
+
+def _run_scenario(scenario: Scenario, errors: dict[str, float]) -> Case:
+    """One case as ``flatstep simulate`` runs it (:meth:`Scenario.run`)."""
+    return _case(errors, scenario.run)
+
+
+def scenario_corners(scenario: Scenario, uncertainty: float = 0.1) -> list[tuple[dict[str, float], Scenario]]:
+    """The scenario on its own plant, then on the :math:`2^4` corners of +-``uncertainty`` on that plant's R, L, Km, J.
+
+    The plant keeps its effects and load; the controller keeps its model (``scenario.motor``) nominal.
+    """
+    plant = scenario.simulated_plant
+    return [(err, scenario if not err else replace(scenario, plant=replace(plant, motor=m)))
+            for err, m in plant_corners(plant.motor, uncertainty)]
+
+
+def controller_label(scenario: Scenario) -> str:
+    """The scenario's law in words: its controller type, measurement, and for the sliding laws whose gains."""
+    if "smc" not in scenario.controller_type:
+        return f"{scenario.controller_type} (tuned for the drive by rule, {scenario.measurement} measurement)"
+    gains = "default gains" if scenario.gains == SMCGains() else "the file's gains"
+    return f"{scenario.controller_type} ({gains}, {scenario.measurement} measurement)"
+
+
+def verify_scenario(scenario: Scenario, uncertainty: float = 0.1, limits: Optional[MotorLimits] = None,
+                    workers: Optional[int] = None) -> Verdict:
+    """Run ``scenario`` as ``flatstep simulate`` runs it, on its plant and on the corners of ``uncertainty``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The run: plan, controller (type, gains, measurement, known torques), drive loop, sensors, observer, plant
+        (effects and load) and horizon, exactly as :meth:`Scenario.run` simulates it.
+    uncertainty : float
+        The relative error of the plant's R, L, Km and J (0.1: +-10 %; 0: the plant only).
+    limits : MotorLimits, optional
+        The limits the plan was made with, to name the one that binds.
+    workers : int, optional
+        Threads running the cases (the C runs release the GIL); default: the CPUs, at most 2.
+
+    Returns
+    -------
+    Verdict
+        Verified when every case ends ``ok``; otherwise what binds and what to change.
+    """
+    start = time.perf_counter()
+    corners = scenario_corners(scenario, uncertainty)
+    n = workers or min(2, os.cpu_count() or 1)
+    with ThreadPoolExecutor(max_workers=n) as pool:
+        cases = list(pool.map(lambda c: _run_scenario(c[1], c[0]), corners))
+    verified = all(c.status == "ok" for c in cases)
+    binds = advice = None
+    if not verified:
+        plan = scenario.plan.to_table()
+        binds = binding(plan, scenario.motor, scenario.loop, limits, cases)
+        advice = ADVICE[binds]
+        if scenario.gains == SMCGains() and "smc" in scenario.controller_type:
+            advice += DESIGN_ADVICE
+    return Verdict(verified, cases, time.perf_counter() - start, binds, advice,
+                   controller=controller_label(scenario), uncertainty=uncertainty)
 
 
 def verify_plan(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, controller: Optional[Controller] = None,
@@ -193,9 +272,7 @@ def verify_plan(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, contro
         Verified when every case ends ``ok``; otherwise what binds and what to change.
     """
     start = time.perf_counter()
-    if controller is None:
-        controller, loop = drive_controller(motor, plan, loop, uncertainty)
-    ctrl = controller
+    ctrl, loop = drive_controller(motor, plan, loop, uncertainty) if controller is None else (controller, loop)
     corners = plant_corners(motor, uncertainty)
     n = workers or min(2, os.cpu_count() or 1)
     with ThreadPoolExecutor(max_workers=n) as pool:
@@ -205,10 +282,12 @@ def verify_plan(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, contro
     if not verified:
         binds = binding(plan, motor, loop, limits, cases)
         advice = ADVICE[binds]
-    return Verdict(verified, cases, time.perf_counter() - start, binds, advice)
+    label = "smc (gains and observer designed for the drive)" if controller is None else type(ctrl).__name__
+    return Verdict(verified, cases, time.perf_counter() - start, binds, advice, controller=label,
+                   uncertainty=uncertainty)
 
 
-def binding(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, limits: Optional[MotorLimits],
+def binding(plan: PiecewisePlan, motor: MotorParams, loop: Optional[DriveLoop], limits: Optional[MotorLimits],
             cases: list[Case]) -> str:
     r"""The limit that binds where the first case went wrong (one of :data:`ADVICE`'s keys).
 
@@ -227,161 +306,13 @@ def binding(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, limits: Op
     if torque_ratio >= 0.9 * math.sin(alpha):
         return "torque angle"
     speed = float(np.max(np.abs(f.dtheta)))
-    angle = motor.Nr * speed * loop.control_period
-    if angle >= 0.9 * COMMUTATION_ANGLE:
+    if loop is not None and motor.Nr * speed * loop.control_period >= 0.9 * COMMUTATION_ANGLE:
         return "commutation rate"
-    v_bus = limits.v_bus if limits is not None else (loop.drive.v_bus if loop.drive is not None else math.inf)
+    drive = loop.drive if loop is not None else None
+    v_bus = limits.v_bus if limits is not None else (drive.v_bus if drive is not None else math.inf)
     emf = motor.Km * speed + motor.Nr * speed * motor.L * float(np.max(f.rho)) + motor.R * float(np.max(f.rho))
     if emf >= 0.75 * v_bus:
         return "voltage at speed"
     if limits is not None and float(np.max(f.rho)) >= 0.95 * limits.i_max:
         return "current"
     return "tracking on the drive"
-
-
-def back_off(limits: MotorLimits, binds: str, plan: PiecewisePlan) -> MotorLimits:
-    """The limits with the binding one tightened by its :data:`BACK_OFF` factor.
-
-    A speed cap is taken from the plan's peak speed where that is lower (a cap above it would change nothing).
-    """
-    name, factor = BACK_OFF[binds]
-    value = getattr(limits, name)
-    if name == "speed_max":
-        t = np.linspace(plan.t0, plan.tf, 4001)
-        peak = float(np.max(np.abs(plan.flag(t).dtheta)))
-        value = peak if value is None else min(value, peak)
-    return replace(limits, **{name: value * factor})
-
-
-def tighter(limits: MotorLimits, other: MotorLimits) -> MotorLimits:
-    """``limits`` with the torque angle, bus fraction and speed cap of ``other`` where those are tighter."""
-    caps = [c for c in (limits.speed_max, other.speed_max) if c is not None]
-    return replace(limits, torque_angle_max=min(limits.torque_angle_max, other.torque_angle_max),
-                   v_use=min(limits.v_use, other.v_use), speed_max=min(caps) if caps else None)
-
-
-def plan_for_drive(replan: Callable[[MotorLimits], PiecewisePlan], motor: MotorParams, limits: MotorLimits,
-                   loop: DriveLoop, uncertainty: float = 0.1, rounds: int = ROUNDS,
-                   controller: Optional[Callable[[PiecewisePlan], Controller]] = None,
-                   derived: Optional[MotorLimits] = None,
-                   ) -> tuple[Optional[PiecewisePlan], MotorLimits, Verdict]:
-    """Plan with ``limits``, verify on the drive, back off the binding limit and re-plan, ``rounds`` times at most.
-
-    Parameters
-    ----------
-    replan : callable
-        ``replan(limits) -> PiecewisePlan``: the planner (e.g. ``lambda lim: time_optimal(d, motor, lim)``); a
-        ValueError means no plan within those limits.
-    motor : MotorParams
-        The nominal motor.
-    limits : MotorLimits
-        The first limits (e.g. :meth:`MotorLimits.for_drive`).
-    loop : DriveLoop
-        The drive.
-    uncertainty : float
-        The relative error of R, L, Km and J.
-    rounds : int
-        Back-off rounds after the first plan.
-    controller : callable, optional
-        ``controller(plan) -> Controller`` (the scenario's law); default :func:`drive_controller`.
-    derived : MotorLimits, optional
-        The limits derived for this drive (:meth:`MotorLimits.for_drive`): when the first plan fails, the second
-        is made within the :func:`tighter` of both, before the binding limit is backed off.
-
-    Returns
-    -------
-    plan, limits, verdict
-        The verified plan and its limits, or ``None``, the last limits and the last verdict (what binds).
-    """
-    history: list[dict[str, Any]] = []
-    plan: Optional[PiecewisePlan] = None
-    verdict = Verdict(False, [], 0.0)
-    for k in range(rounds + 1):
-        try:
-            plan = replan(limits)
-        except ValueError as exc:
-            history.append(dict(round=k, refused=str(exc)))
-            return None, limits, replace(verdict, rounds=history)
-        verdict = verify_plan(plan, motor, loop, None if controller is None else controller(plan), uncertainty,
-                              limits)
-        history.append(dict(round=k, duration=plan.tf - plan.t0, status=verdict.status, binds=verdict.binds,
-                            worst_error=verdict.worst_error, seconds=verdict.seconds))
-        if verdict.verified:
-            return plan, limits, replace(verdict, rounds=history)
-        if k < rounds:
-            assert verdict.binds is not None  # an unverified verdict names what binds
-            both = tighter(limits, derived) if derived is not None else limits
-            limits = both if k == 0 and both != limits else back_off(limits, verdict.binds, plan)
-    return None, limits, replace(verdict, rounds=history)
-
-
-def replan_steps(plan: PiecewisePlan, steps: list[tuple[str, float, float]], motor: MotorParams,
-                 ) -> Callable[[MotorLimits], tuple[PiecewisePlan, list[tuple[str, float, float]]]]:
-    """A planner that makes a time-optimal sequence's moves and dwells again under other limits.
-
-    ``steps`` are a plan file's (label, start, duration): a ``dwell`` holds its angle as long; any other step is a
-    move from the plan's angle at its start to its angle at its end (a move through via points included: the
-    time-optimal planner makes it one move).
-    """
-    from ..plan.time_optimal import time_optimal
-
-    ends = plan.theta_deriv(np.array([[s, s + d] for _, s, d in steps]).ravel(), 0).reshape(-1, 2)
-
-    def make(limits: MotorLimits) -> tuple[PiecewisePlan, list[tuple[str, float, float]]]:
-        parts, out, t = [], [], plan.t0
-        for (label, _, duration), (a, b) in zip(steps, ends, strict=True):
-            if label.startswith("dwell"):
-                part = PiecewisePlan.hold(float(a), limits.i_hold, t, t + duration)
-            else:
-                part = time_optimal(float(b - a), motor, limits, theta1=float(a), t0=t)
-            parts.append(part)
-            out.append((label, t, part.tf - part.t0))
-            t = part.tf
-        return PiecewisePlan.concatenate(parts), out
-
-    return make
-
-
-#: The control rate [Hz] of the drive a file without one is checked on.
-DEFAULT_CONTROL_RATE = 20e3
-
-
-def check_on_drive(pf: Any, planner: str, uncertainty: float = 0.1) -> tuple[Any, dict[str, Any]]:
-    """A plan file's plan checked on its drive, and backed off when it is a time-optimal sequence.
-
-    The first plan is the file's; the second is made within the file's limits tightened to those derived for the drive
-    (:meth:`MotorLimits.for_drive`, ``derived`` of :func:`plan_for_drive`), then the binding limit is backed off.
-
-    The drive is the file's (its ``[drive]``, ``[sensors]`` and ``[observer]``; a file without a drive is checked
-    on a :data:`DEFAULT_CONTROL_RATE` drive with its ``[drive] v_bus`` and :class:`~flatstep.loop.sensors.Sensors`'
-    defaults). Returns the plan file with the verified plan (or
-    the file's own, unverified) and plan.json's ``verify`` entry.
-    """
-    assert pf.limits is not None, "the check runs a plan on the drive of its [limits] bus"
-    loop = pf.scenario.loop or DriveLoop.at(DEFAULT_CONTROL_RATE, substeps=4, drive=Drive(v_bus=pf.limits.v_bus),
-                                            sensors=Sensors())
-    if planner != "time_optimal":
-        verdict = verify_plan(pf.plan, pf.motor, loop, uncertainty=uncertainty, limits=pf.limits)
-        return pf, dict(verdict.as_dict(), backed_off=False)
-    made: dict[str, Any] = {}
-    make = replan_steps(pf.plan, pf.steps, pf.motor)
-
-    def replan(limits: MotorLimits) -> PiecewisePlan:
-        made["plan"], made["steps"] = make(limits) if limits is not pf.limits else (pf.plan, pf.steps)
-        return made["plan"]
-
-    counts = loop.sensors.encoder_counts if loop.sensors is not None else None
-    derived = MotorLimits.for_drive(pf.motor, v_bus=pf.limits.v_bus, i_max=pf.limits.i_max,
-                                    control_rate=1.0 / loop.control_period, encoder_counts=counts,
-                                    uncertainty=uncertainty)
-    plan, limits, verdict = plan_for_drive(replan, pf.motor, pf.limits, loop, uncertainty, derived=derived)
-    info = dict(verdict.as_dict(), backed_off=len(verdict.rounds) > 1)
-    if plan is None:
-        info["suggested_limits"] = derived.as_dict()
-        return pf, info
-    info["limits"] = limits.as_dict()
-    if plan is pf.plan:
-        return pf, info
-    scenario = replace(pf.scenario, plan=plan, t_end=max(pf.scenario.t_end, plan.tf + (pf.scenario.t_end - pf.plan.tf)))
-    return replace(pf, scenario=scenario, limits=limits, steps=made["steps"]), info
-
