@@ -58,6 +58,7 @@ from ..validate import InputError, check_integer, check_positive, check_quantity
 from .identify_checks import atypical, check_estimates, check_noise_share, check_resistance, check_units
 from .identify_ls import Fit, fit
 from .identify_result import Identification
+from .identify_separable import check_separable
 from .record import Recording, read_recording
 
 #: A recording is refused when one of these is known to no better than +-this fraction (at the confidence level).
@@ -67,6 +68,9 @@ MAX_REL_HALF_WIDTH = 0.5
 MOVING_COUNTS = 2.0
 #: The fewest (thinned) rows per estimated parameter a fit accepts.
 ROWS_PER_PARAMETER = 10
+#: The method's systematic floor: a relative standard error every estimate carries beyond the fit's own (what
+#: the method leaves with exact sensors, docs/identification.md), J, B and the load's in units of Km.
+FLOOR = {"R": 0.002, "L": 0.005, "Km": 0.005, "J": 0.01, "B": 0.05, "load_torque": 0.01}
 #: Rounds of the electrical fit's noise-bias compensation (module docstring).
 NOISE_ITERATIONS = 2
 HINT = ("record a run that moves the rotor back and forth and changes the current norm, such as the move sequence "
@@ -104,16 +108,42 @@ def _unit_noise_gram(sos: np.ndarray, Ts: float, cut: int) -> np.ndarray:
     return g @ g.T
 
 
-def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool) -> tuple[Fit, dict[str, float]]:
+def encoder_step(theta: np.ndarray) -> float:
+    """The encoder's count [rad]: the smallest step of the recorded angle (0 for an angle that never steps)."""
+    steps = np.abs(np.diff(theta))
+    return float(steps[steps > 1e-12].min()) if np.any(steps > 1e-12) else 0.0
+
+
+def moving_samples(rec: Recording, fc: float) -> np.ndarray:
+    """Per period, whether the encoder resolves the rotor's motion (its speed, filtered at ``fc``).
+
+    The filtered angle's speed must exceed :data:`MOVING_COUNTS` counts per cutoff period; the periods are
+    widened by one filter settling time (3 periods of ``fc``).
+
+    At rest (or hunting across a count edge) the recorded angle's steps are the encoder's quantization, not a
+    motion: a back-emf or a speed made of them is an error in a regressor, which biases least squares.
+    """
+    sos, _ = _filtered(rec, fc)
+    omega = np.gradient(sosfiltfilt(sos, rec.theta), rec.period)
+    moving = np.abs(omega) >= MOVING_COUNTS * encoder_step(rec.theta) * fc
+    width = math.ceil(3.0 / (fc * rec.period))
+    widened = np.convolve(moving.astype(float), np.ones(2 * width + 1), mode="same") > 0
+    return widened[:-1]
+
+
+def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool,
+                moving: np.ndarray) -> tuple[Fit, dict[str, float]]:
     """The electrical fit of (R, L, Km[, va_offset, vb_offset]) (module docstring), with the noise bias removed.
 
-    Also returns the current noise's share of the power of the filtered R and L regressors
+    ``moving`` marks the periods whose motion the encoder resolves (:func:`moving_samples`); elsewhere the
+    back-emf term is taken as zero (the encoder's toggling is not a motion). Also returns the current noise's
+    share of the power of the filtered R and L regressors
     (:func:`~flatstep.studies.identify_checks.check_noise_share`), estimated whether or not it is compensated.
     """
     sos, rows = _filtered(rec, fc)
     Ts, blocks, raw = rec.period, [], []
     for i, c, v in ((rec.ia, np.cos(Nr * rec.theta), rec.va), (rec.ib, np.sin(Nr * rec.theta), rec.vb)):
-        terms = np.array([0.5 * (i[1:] + i[:-1]), np.diff(i) / Ts, np.diff(c) / (Ts * Nr), v[:-1]])
+        terms = np.array([0.5 * (i[1:] + i[:-1]), np.diff(i) / Ts, moving * np.diff(c) / (Ts * Nr), v[:-1]])
         f = sosfiltfilt(sos, terms, axis=-1)[:, rows]
         blocks.append((f[:3].T, f[3]))
         raw.append(terms)
@@ -122,7 +152,7 @@ def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: b
         names += ["va_offset", "vb_offset"]
         ones = np.ones((blocks[0][1].size, 1))
         blocks = [(np.hstack([X, ones * (k == 0), ones * (k == 1)]), y) for k, (X, y) in enumerate(blocks)]
-    result = fit(blocks, names, lags=8, source=rec.source, hint=HINT)
+    result = plain = fit(blocks, names, lags=8, source=rec.source, hint=HINT)
     unit = _unit_noise_gram(sos, Ts, rows.start)
     still = np.diff(rec.theta) == 0  # periods without an encoder step: no quantization step in the back-emf term
     X = np.concatenate([b[0] for b in blocks])
@@ -144,7 +174,8 @@ def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: b
             result = fit(blocks, names, lags=8, source=rec.source, hint=HINT, noise_gram=gram)
         elif compensate:
             break
-    return result, share
+    shift = result.values - plain.values  # the correction is as uncertain as it is large (closed loop)
+    return replace(result, covariance=result.covariance + np.outer(shift, shift)), share
 
 
 def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool, harmonic: int,
@@ -164,9 +195,7 @@ def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool,
     f = sosfiltfilt(sos, np.array(list(raw.values())), axis=-1)
     terms.update({k: f[j] for j, k in enumerate(raw) if k != "iq"})
     X = np.column_stack([v[rows] for v in terms.values()])
-    steps = np.abs(np.diff(rec.theta))
-    q = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
-    moving = np.abs(omega[rows]) >= MOVING_COUNTS * q * fc
+    moving = np.abs(omega[rows]) >= MOVING_COUNTS * encoder_step(rec.theta) * fc
     if np.count_nonzero(moving) < ROWS_PER_PARAMETER * X.shape[1]:
         row_time = (rows.step or 1) * rec.period
         need, moved = ROWS_PER_PARAMETER * X.shape[1] * row_time, np.count_nonzero(moving) * row_time
@@ -174,6 +203,12 @@ def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool,
                          f"{1e3 / fc:.3g} ms) during only {moved:.3g} s of the recording; {list(terms)} need at least "
                          f"{need:.3g} s of motion: not exciting enough; {HINT}")
     return fit([(X[moving], f[0][rows][moving])], list(terms), lags=8, source=rec.source, hint=HINT)
+
+
+def _with_floor(result: Fit) -> Fit:
+    """``result`` with the method's systematic floor (:data:`FLOOR`) added to its estimates' variances."""
+    floor = np.array([FLOOR.get(n, 0.0) for n in result.names]) * np.abs(result.values)
+    return replace(result, covariance=result.covariance + np.diag(floor**2))
 
 
 def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = False, coulomb: bool = False,
@@ -220,13 +255,18 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
                          "mechanical)")
     fc_e, fc_m = (check_quantity("rate", b, as_name="bandwidth") for b in bandwidth)
     check_units(rec)
-    elec, share = _electrical(rec, Nr, fc_e, offsets, noise_compensation)
+    elec, share = _electrical(rec, Nr, fc_e, offsets, noise_compensation, moving_samples(rec, fc_m))
     check_noise_share(share, rec.source)
+    check_separable(elec, rec.source, HINT)
     mech = _mechanical(rec, Nr, fc_m, detent, coulomb, harmonic, coulomb_speed)
+    check_separable(mech, rec.source, HINT)
+    elec, mech = _with_floor(elec), _with_floor(mech)
     km, var_km = elec.values[2], elec.covariance[2, 2]
     values = dict(zip(elec.names, elec.values, strict=True))
     var = dict(zip(elec.names, np.diag(elec.covariance), strict=True))
     p, cov = mech.values, mech.covariance
+    values.update({f"{k}/Km": v for k, v in zip(mech.names[:3], p, strict=False)})
+    var.update({f"{k}/Km": v for k, v in zip(mech.names[:3], np.diag(cov), strict=False)})
     cov_phys = km**2 * cov + np.outer(p, p) * var_km  # q = Km p, with Km's variance (delta method)
     values.update(zip(mech.names, km * p, strict=True))
     var.update(zip(mech.names, np.diag(cov_phys), strict=True))

@@ -9,7 +9,8 @@ from ..model.motor import MotorParams
 
 #: Unit of each parameter an identification may report.
 UNITS = {"R": "ohm", "L": "H", "Km": "V s/rad", "J": "kg m^2", "B": "N m s/rad", "load_torque": "N m",
-         "va_offset": "V", "vb_offset": "V", "detent_torque": "N m", "detent_phase": "rad", "coulomb_torque": "N m"}
+         "va_offset": "V", "vb_offset": "V", "J/Km": "A s^2/rad", "B/Km": "A s/rad",
+         "load_torque/Km": "A", "detent_torque": "N m", "detent_phase": "rad", "coulomb_torque": "N m"}
 MOTOR_KEYS = ("R", "L", "Km", "J", "B")
 
 
