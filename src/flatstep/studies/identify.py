@@ -50,7 +50,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 from statistics import NormalDist
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 
@@ -132,16 +132,17 @@ def moving_samples(rec: Recording, fc: float) -> np.ndarray:
 
 
 def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool,
-                moving: np.ndarray) -> tuple[Fit, dict[str, float]]:
+                moving: Optional[np.ndarray] = None) -> tuple[Fit, dict[str, float]]:
     """The electrical fit of (R, L, Km[, va_offset, vb_offset]) (module docstring), with the noise bias removed.
 
-    ``moving`` marks the periods whose motion the encoder resolves (:func:`moving_samples`); elsewhere the
-    back-emf term is taken as zero (the encoder's toggling is not a motion). Also returns the current noise's
-    share of the power of the filtered R and L regressors
+    ``moving`` marks the periods whose motion the encoder resolves (:func:`moving_samples`; ``None``: all);
+    elsewhere the back-emf term is taken as zero (the encoder's toggling is not a motion). Also returns the
+    current noise's share of the power of the filtered R and L regressors
     (:func:`~flatstep.studies.identify_checks.check_noise_share`), estimated whether or not it is compensated.
     """
     sos, rows = _filtered(rec, fc)
     Ts, blocks, raw = rec.period, [], []
+    moving = np.ones(rec.t.size - 1, dtype=bool) if moving is None else moving
     for i, c, v in ((rec.ia, np.cos(Nr * rec.theta), rec.va), (rec.ib, np.sin(Nr * rec.theta), rec.vb)):
         terms = np.array([0.5 * (i[1:] + i[:-1]), np.diff(i) / Ts, moving * np.diff(c) / (Ts * Nr), v[:-1]])
         f = sosfiltfilt(sos, terms, axis=-1)[:, rows]
