@@ -82,6 +82,8 @@ ROWS_PER_PARAMETER = 10
 #: The method's systematic floor: a relative standard error every estimate carries beyond the fit's own (what
 #: the method leaves with exact sensors, docs/identification.md), J, B and the load's in units of Km.
 FLOOR = {"R": 0.002, "L": 0.005, "Km": 0.005, "J": 0.01, "B": 0.05, "load_torque": 0.01}
+#: The load's floor in absolute terms: this fraction of the torque the recording's rms current norm makes.
+LOAD_FLOOR = 0.002
 #: Rounds of the electrical fit's noise-bias compensation (module docstring).
 NOISE_ITERATIONS = 2
 HINT = ("record a run that moves the rotor back and forth and changes the current norm, such as the move sequence "
@@ -222,6 +224,10 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
     p, cov = mech.values, mech.covariance
     values.update({f"{k}/Km": v for k, v in zip(mech.names[:3], p, strict=False)})
     var.update({f"{k}/Km": v for k, v in zip(mech.names[:3], np.diag(cov), strict=False)})
+    k_load = mech.names.index("load_torque")
+    cov = cov.copy()
+    cov[k_load, k_load] += (LOAD_FLOOR * float(np.sqrt(np.mean(rec.ia**2 + rec.ib**2)))) ** 2  # a zero load too
+    var["load_torque/Km"] = cov[k_load, k_load]
     cov_phys = km**2 * cov + np.outer(p, p) * var_km  # q = Km p, with Km's variance (delta method)
     values.update(zip(mech.names, km * p, strict=True))
     var.update(zip(mech.names, np.diag(cov_phys), strict=True))

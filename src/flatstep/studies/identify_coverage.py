@@ -31,12 +31,12 @@ from .scenario_file import load_scenario
 #: The example drives the grid's plants sit on (the controller's model is the file's motor).
 DRIVES = {"nema17": "nema17-20khz.toml", "paper": "drive-20khz-14bit.toml"}
 #: The parameters whose intervals are checked, with the plant's attribute of each.
-CHECKED = ("R", "L", "Km", "J", "B", "load_torque")
+CHECKED = ("R", "L", "Km", "J", "B", "load_torque", "J/Km", "B/Km", "load_torque/Km")
 #: Refusal reasons: the first pattern a message matches names it.
 REASONS = (("cannot be separated", "not separable"), ("ill-conditioned", "ill-conditioned"),
            ("rotor moves", "too little motion"), ("intervals are", "wide intervals"),
            ("current noise makes up", "current noise"), ("shifted", "misaligned"),
-           ("range flatstep accepts", "out of range"), ("impossible", "impossible"))
+           ("range flatstep accepts", "out of range"), ("interval", "negative friction"))
 
 
 @dataclass(frozen=True)
@@ -125,6 +125,7 @@ def run_case(case: Case, **options: Any) -> dict[str, Any]:
         return {**row, "status": "refused", "reason": reason(str(exc)), "message": str(exc)}
     if any("one direction" in n for n in result.notes) and plant.effects is not None:
         truth["load_torque"] += plant.effects.coulomb_torque * math.copysign(1.0, case.move)  # as the note says
+    truth.update({f"{k}/Km": truth[k] / truth["Km"] for k in ("J", "B", "load_torque")})
     row.update(status="flagged" if result.flags else "accepted", flags=list(result.flags),
                errors={k: result.estimates[k] / v - 1.0 if v else result.estimates[k] - v for k, v in truth.items()},
                sigma={k: abs(result.estimates[k] - v) / result.std[k] if result.std[k] > 0 else math.inf
@@ -149,7 +150,8 @@ def coverage_table(rows: list[dict[str, Any]], confidence: Optional[float] = 0.9
         lines.append(f"{'|error|/std, 95th pct':<24}" + "".join(
             f"{np.percentile([r['sigma'][k] for r in accepted], 95):>12.3g}" for k in CHECKED))
         lines.append(f"{'|error|, 95th pct':<24}" + "".join(
-            f"{np.percentile([abs(r['errors'][k]) for r in accepted], 95):>12.2%}" for k in CHECKED[:5]))
+            f"{np.percentile([abs(r['errors'][k]) for r in accepted], 95):>12.2%}"
+            if not k.startswith("load") else f"{'-':>12}" for k in CHECKED))  # a zero load has no relative error
     why: dict[str, int] = {}
     for r in refused:
         why[r["reason"]] = why.get(r["reason"], 0) + 1
