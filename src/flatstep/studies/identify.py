@@ -58,6 +58,7 @@ from ..validate import InputError, check_integer, check_positive, check_quantity
 from .identify_checks import atypical, check_estimates, check_noise_share, check_resistance, check_units
 from .identify_detect import check_alignment, confirm_clipping, dead_time_flag, effect_flags
 from .identify_ls import Fit, fit
+from .identify_quantization import electrical_quantization
 from .identify_result import Identification
 from .identify_separable import check_separable
 from .identify_terms import (
@@ -135,7 +136,9 @@ def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: b
         elif compensate:
             break
     shift = result.values - plain.values  # the correction is as uncertain as it is large (closed loop)
-    return replace(result, covariance=result.covariance + np.outer(shift, shift)), share
+    steps = electrical_quantization(rec.theta, (rec.ia, rec.ib), Nr, Ts, sos, rows, keep,
+                                    optional(moving, rec.t.size - 1), blocks, result.values, result.gram)
+    return replace(result, covariance=result.covariance + np.outer(shift, shift) + np.diag(steps)), share
 
 
 def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool, harmonic: int,
