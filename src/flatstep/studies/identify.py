@@ -83,8 +83,8 @@ ROWS_PER_PARAMETER = 10
 #: The method's systematic floor: a relative standard error every estimate carries beyond the fit's own (what
 #: the method leaves with exact sensors, docs/identification.md), J, B and the load's in units of Km.
 FLOOR = {"R": 0.002, "L": 0.005, "Km": 0.005, "J": 0.01, "B": 0.05, "load_torque": 0.01}
-#: The load's floor in absolute terms: this fraction of the torque the recording's rms current norm makes.
-LOAD_FLOOR = 0.002
+#: The load's floor in absolute terms: this fraction of the torque of the recording's rms current norm.
+LOAD_FLOOR = 0.0005
 #: Rounds of the electrical fit's noise-bias compensation (module docstring).
 NOISE_ITERATIONS = 2
 HINT = ("record a run that moves the rotor back and forth and changes the current norm, such as the move sequence "

@@ -141,17 +141,17 @@ def coverage_table(rows: list[dict[str, Any]], confidence: Optional[float] = 0.9
     refused = [r for r in rows if r["status"] == "refused"]
     lines = [f"{len(rows)} recordings: {len(accepted)} accepted, {len(flagged)} flagged, {len(refused)} refused "
              f"({len(refused) / max(len(rows), 1):.0%})"]
-    lines.append(f"{'':<24}" + "".join(f"{k:>12}" for k in CHECKED))
+    lines.append(f"{'':<24}" + "".join(f"{k:>15}" for k in CHECKED))
     for label, group in (("covered (accepted)", accepted), ("covered (flagged)", flagged)):
         if group:
             lines.append(f"{label:<24}" + "".join(
-                f"{sum(r['covered'][k] for r in group) / len(group):>12.1%}" for k in CHECKED))
+                f"{sum(r['covered'][k] for r in group) / len(group):>15.1%}" for k in CHECKED))
     if accepted:
         lines.append(f"{'|error|/std, 95th pct':<24}" + "".join(
-            f"{np.percentile([r['sigma'][k] for r in accepted], 95):>12.3g}" for k in CHECKED))
+            f"{np.percentile([r['sigma'][k] for r in accepted], 95):>15.3g}" for k in CHECKED))
         lines.append(f"{'|error|, 95th pct':<24}" + "".join(
-            f"{np.percentile([abs(r['errors'][k]) for r in accepted], 95):>12.2%}"
-            if not k.startswith("load") else f"{'-':>12}" for k in CHECKED))  # a zero load has no relative error
+            f"{np.percentile([abs(r['errors'][k]) for r in accepted], 95):>15.2%}"
+            if not k.startswith("load") else f"{'-':>15}" for k in CHECKED))  # a zero load has no relative error
     why: dict[str, int] = {}
     for r in refused:
         why[r["reason"]] = why.get(r["reason"], 0) + 1

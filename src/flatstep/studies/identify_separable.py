@@ -60,7 +60,7 @@ def check_separable(fit: Fit, source: str, hint: str) -> None:
     what = SEPARATE.get(frozenset({a, b}), GENERIC)
     raise ValueError(f"{source}: {a} and {b} cannot be separated in this recording (variance inflation "
                      f"{fit.vif[worst]:.3g} > {VIF_MAX:g}: their regressors have nearly the same shape): only "
-                     f"{a} + {c:.4g} {b} = {value:.6g} is determined (+-{std / abs(value) if value else math.inf:.2%}"
-                     f" at one standard error, {a} alone +-{alone / abs(fit.values[i]) if fit.values[i] else 0:.2%}, "
-                     f"before the regressors' errors are multiplied by {math.sqrt(fit.vif[worst]):.3g}); to separate "
-                     f"them, {what}; {hint}")
+                     f"{a} + {c:.4g} {b} = {value:.6g} is determined (standard error "
+                     f"{std / abs(value) if value else math.inf:.2%}; {a} alone shows "
+                     f"{alone / abs(fit.values[i]) if fit.values[i] else 0:.2%}, but any error in the regressors is "
+                     f"multiplied by {math.sqrt(fit.vif[worst]):.3g} on it); to separate them, {what}; {hint}")
