@@ -59,3 +59,15 @@ def test_a_current_at_the_adc_full_scale_is_left_out():
     assert result.settings["clipped_samples"] > 100
     lo, hi = result.interval("R")
     assert lo <= plant.motor.R <= hi and abs(result.estimates["R"] / plant.motor.R - 1) < 0.005
+
+
+def test_the_command_line_warns_of_a_left_out_effect_and_exits_2(cli, tmp_path):
+    run = cli(["identify", "--excite", str(EXAMPLES / "nema17-cogging.toml"), "--record", "cog.csv", "--noise",
+               "0.005", "--out", "motor.toml"], cwd=tmp_path)
+    assert run.returncode == 2, run.stderr
+    warnings = [line for line in run.stderr.splitlines() if line.startswith("flatstep: warning: ")]
+    assert len(warnings) == 2 and "give --detent" in warnings[0] and "give --coulomb" in warnings[1]
+    toml = (tmp_path / "motor.toml").read_text()
+    assert toml.count("# flagged: ") == 2 and "[motor]" in toml  # written, with the flags, for the user to judge
+    clean = cli(["identify", "cog.csv", "--detent", "--coulomb"], cwd=tmp_path)
+    assert clean.returncode == 0 and "detent_torque" in clean.stdout and not clean.stderr
