@@ -29,7 +29,7 @@ from typing import Optional
 import numpy as np
 
 from .identify_ls import fit
-from .identify_terms import Blocks, electrical_blocks, filtered, kept_rows, mechanical_terms, moving_rows
+from .identify_terms import Blocks, electrical_blocks, filtered, kept_rows, mechanical_terms, moving_rows, sosfiltfilt
 from .record import Recording
 
 #: Left-out candidates of a full-scale ADC are confirmed when the electrical residual drops below this fraction.
@@ -72,7 +72,11 @@ def confirm_clipping(rec: Recording, Nr: int, fc: float, offsets: bool, moving: 
 def check_alignment(rec: Recording, Nr: int, fc: float, offsets: bool, moving: np.ndarray,
                     keep: np.ndarray) -> dict[int, float]:
     """The electrical residual rms per shift of the voltage columns; refuse a log that fits best misaligned."""
-    scan = {s: _rms(electrical_blocks(rec, Nr, fc, offsets, moving, keep, shift=s)[0]) for s in SHIFTS}
+    blocks, _, raw, sos, rows = electrical_blocks(rec, Nr, fc, offsets, moving, keep)
+    voltages = [sosfiltfilt(sos, terms[3]) for terms in raw]  # each phase's filtered voltage, read at shifted rows
+    scan = {s: _rms([(X, v[rows.start + s:rows.stop + s:rows.step][keep]) for (X, _), v in zip(blocks, voltages,
+                                                                                               strict=True)])
+            for s in SHIFTS}
     best = min(scan, key=lambda s: scan[s])
     if best != 0 and scan[best] < ALIGN_RATIO * scan[0]:
         shown = ", ".join(f"{s:+d}: {v:.3g} V" for s, v in scan.items())

@@ -52,7 +52,9 @@ def encoder_step(theta: np.ndarray) -> float:
 
 def _widen(mask: np.ndarray, width: int) -> np.ndarray:
     """``mask`` true within ``width`` samples of any true sample."""
-    return np.convolve(mask.astype(float), np.ones(2 * width + 1), mode="same") > 0.5
+    count = np.concatenate([[0], np.cumsum(mask, dtype=np.int64)])
+    index = np.arange(mask.size)
+    return count[np.minimum(index + width + 1, mask.size)] - count[np.maximum(index - width, 0)] > 0
 
 
 def moving_samples(rec: Recording, fc: float) -> np.ndarray:
