@@ -25,11 +25,17 @@ linear in :math:`(J, B, \tau, T_d\cos\varphi_d, T_d\sin\varphi_d, T_c)/K_m` (the
 parameters, so they hold for the filtered terms as they do for the raw ones, while the ADC noise, the encoder's
 quantization and the differences' noise are removed above the cutoff. :math:`\dot\theta, \ddot\theta` are the
 derivatives of the filtered angle. At rest, an encoder that toggles between two counts makes a motion that is
-not there, of which the filtered derivatives make speeds and accelerations: the mechanical fit keeps only the rows
-where the filtered speed exceeds :data:`MOVING_COUNTS` counts per cutoff period (a choice on a regressor, which
-does not bias least squares). The filter's start-up is cut off at both ends, the rows are thinned to four
-per cutoff period, and the covariance allows for the residuals' correlation (:mod:`.identify_ls`). The
-mechanical estimates carry the uncertainty of :math:`K_m` too (delta method).
+not there, of which the filtered derivatives make a back emf, speeds and accelerations: where the encoder does
+not resolve a motion of :data:`MOVING_COUNTS` counts per cutoff period, the electrical fit takes the back emf as
+zero and the mechanical fit leaves the rows out (:mod:`.identify_terms`; a choice on a regressor, which does not
+bias least squares), and rows near a current at the ADC's full scale are left out of both. The filter's start-up
+is cut off at both ends, the rows are thinned to four per cutoff period, and the covariance allows for the
+residuals' correlation (:mod:`.identify_ls`).
+
+**Intervals.** To the fits' covariance are added the noise compensation's correction (as uncertain as it is
+large), the encoder's and the ADC's steps (:mod:`.identify_quantization`) and the method's floor
+(:data:`FLOOR`, :data:`LOAD_FLOOR`). The mechanical estimates carry the uncertainty of :math:`K_m` too (delta
+method); J/Km, B/Km and load/Km are reported without it.
 
 **Current noise.** Noise in a regressor biases its estimate towards zero (errors in variables): the ADC noise in
 the current differences lowers L, and Km, correlated with L through the q-axis, rises. The electrical fit removes
@@ -42,7 +48,9 @@ it over-corrects.
 **What the data cannot support** is refused, and what is atypical of a stepping motor flagged
 (:mod:`.identify_checks`): values beyond any motor's in the recording's units (before the fit), the current
 noise's share of the R and L regressors, estimates outside their ranges, a fitted R far from the raw
-``sum(v i) / sum(i^2)``.
+``sum(v i) / sum(i^2)``. A pair of estimates the recording cannot separate is refused with the combination it
+determines (:mod:`.identify_separable`); a shifted voltage log is refused, a dead time, a detent torque or a
+Coulomb friction left out of the model flagged (:mod:`.identify_detect`).
 """
 from __future__ import annotations
 
