@@ -71,3 +71,24 @@ def test_the_command_line_warns_of_a_left_out_effect_and_exits_2(cli, tmp_path):
     assert toml.count("# flagged: ") == 2 and "[motor]" in toml  # written, with the flags, for the user to judge
     clean = cli(["identify", "cog.csv", "--detent", "--coulomb"], cwd=tmp_path)
     assert clean.returncode == 0 and "detent_torque" in clean.stdout and not clean.stderr
+
+
+def test_a_coarser_encoder_widens_the_electrical_intervals_through_its_steps(nema_recording):
+    from flatstep.studies.identify_ls import fit
+    from flatstep.studies.identify_quantization import electrical_quantization
+    from flatstep.studies.identify_terms import electrical_blocks, filtered, kept_rows, moving_samples
+
+    def km_variance(rec):
+        moving = moving_samples(rec, 100.0)
+        _, rows = filtered(rec, 200.0)
+        keep = kept_rows(np.zeros(rec.t.size, dtype=bool), rows, rows.start)
+        blocks, names, _, sos, rows = electrical_blocks(rec, 50, 200.0, True, moving, keep)
+        result = fit(blocks, names, lags=8, source="s", hint="h")
+        var = electrical_quantization(rec.theta, (rec.ia, rec.ib), 50, rec.period, sos, rows, keep, moving, blocks,
+                                      result.values, result.gram)
+        return var[2] / result.values[2] ** 2
+
+    q = 2 * np.pi / 1024  # 16 times the 14-bit encoder's count
+    coarse = replace(nema_recording, theta=q * np.round(nema_recording.theta / q))
+    fine, rough = km_variance(nema_recording), km_variance(coarse)
+    assert 0 < fine < 1e-6 and rough > 10 * fine  # (3e-4)^2 of Km at 14 bits; the steps' share grows with them
