@@ -27,3 +27,18 @@ def test_a_case_is_recorded_identified_and_tabulated():
 ])
 def test_refusals_are_named_by_their_cause(message, name):
     assert reason(message) == name
+
+
+def test_a_one_way_move_says_its_load_includes_the_coulomb_friction():
+    from flatstep.studies.identify import identify
+    from flatstep.studies.identify_coverage import recording
+
+    case = cases(6)[5]  # the paper's drive, -5.6 rad, detent and Coulomb friction
+    rec, plant = recording(case)
+    result = identify(rec, Nr=50)
+    (note,) = result.notes
+    assert "one direction only (negative)" in note and "load_torque includes the Coulomb friction" in note
+    assert "give --detent" in result.flags[0]
+    with_coulomb = plant.constant_load - plant.effects.coulomb_torque  # what a negative move sees as its load
+    lo, hi = identify(rec, Nr=50, detent=True).interval("load_torque")
+    assert lo <= with_coulomb <= hi
