@@ -267,8 +267,9 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
     wide = {k: result.relative_half_width(k) for k in CORE if not result.relative_half_width(k) <= MAX_REL_HALF_WIDTH}
     if wide:
         shown = ", ".join(f"{k} +-{w:.0%}" for k, w in wide.items())
+        left_out = "".join(f"; {flag}" for flag in flags)  # a term left out widens them too: say which
         raise ValueError(f"{rec.source}: not exciting enough: the {confidence:.0%} intervals are {shown} (at most "
-                         f"+-{MAX_REL_HALF_WIDTH:.0%} accepted); {HINT}")
+                         f"+-{MAX_REL_HALF_WIDTH:.0%} accepted){left_out}; {HINT}")
     check_estimates(result.estimates, {k: result.interval(k) for k in result.estimates}, rec.source, confidence)
     check_resistance(rec, result.estimates["R"])
     return replace(result, flags=atypical(result.estimates) + tuple(flags))

@@ -34,7 +34,8 @@ DRIVES = {"nema17": "nema17-20khz.toml", "paper": "drive-20khz-14bit.toml"}
 CHECKED = ("R", "L", "Km", "J", "B", "load_torque", "J/Km", "B/Km", "load_torque/Km")
 #: Refusal reasons: the first pattern a message matches names it.
 REASONS = (("cannot be separated", "not separable"), ("ill-conditioned", "ill-conditioned"),
-           ("rotor moves", "too little motion"), ("intervals are", "wide intervals"),
+           ("rotor moves", "too little motion"), ("not modelled", "wide intervals, a left-out term named"),
+           ("intervals are", "wide intervals"),
            ("current noise makes up", "current noise"), ("shifted", "misaligned"),
            ("range flatstep accepts", "out of range"), ("interval", "negative friction"))
 
