@@ -52,6 +52,8 @@ def _identify(args: argparse.Namespace, data: Any, truth: Optional[MotorParams] 
         rate = 1.0 / result.settings["period"]
         print(f"{result.source}: {result.settings['samples']} samples at {rate:.6g} Hz, Nr = {result.Nr}")
         print(result.table(truth))
+        for note in result.notes:
+            print(f"note: {note}")
     for flag in result.flags:
         print(f"flatstep: warning: {result.source}: {flag}", file=sys.stderr)
     if args.out:

@@ -25,11 +25,17 @@ linear in :math:`(J, B, \tau, T_d\cos\varphi_d, T_d\sin\varphi_d, T_c)/K_m` (the
 parameters, so they hold for the filtered terms as they do for the raw ones, while the ADC noise, the encoder's
 quantization and the differences' noise are removed above the cutoff. :math:`\dot\theta, \ddot\theta` are the
 derivatives of the filtered angle. At rest, an encoder that toggles between two counts makes a motion that is
-not there, of which the filtered derivatives make speeds and accelerations: the mechanical fit keeps only the rows
-where the filtered speed exceeds :data:`MOVING_COUNTS` counts per cutoff period (a choice on a regressor, which
-does not bias least squares). The filter's start-up is cut off at both ends, the rows are thinned to four
-per cutoff period, and the covariance allows for the residuals' correlation (:mod:`.identify_ls`). The
-mechanical estimates carry the uncertainty of :math:`K_m` too (delta method).
+not there, of which the filtered derivatives make a back emf, speeds and accelerations: where the encoder does
+not resolve a motion of :data:`MOVING_COUNTS` counts per cutoff period, the electrical fit takes the back emf as
+zero and the mechanical fit leaves the rows out (:mod:`.identify_terms`; a choice on a regressor, which does not
+bias least squares), and rows near a current at the ADC's full scale are left out of both. The filter's start-up
+is cut off at both ends, the rows are thinned to four per cutoff period, and the covariance allows for the
+residuals' correlation (:mod:`.identify_ls`).
+
+**Intervals.** To the fits' covariance are added the noise compensation's correction (as uncertain as it is
+large), the encoder's and the ADC's steps (:mod:`.identify_quantization`) and the method's floor
+(:data:`FLOOR`, :data:`LOAD_FLOOR`). The mechanical estimates carry the uncertainty of :math:`K_m` too (delta
+method); J/Km, B/Km and load/Km are reported without it.
 
 **Current noise.** Noise in a regressor biases its estimate towards zero (errors in variables): the ADC noise in
 the current differences lowers L, and Km, correlated with L through the q-axis, rises. The electrical fit removes
@@ -42,7 +48,9 @@ it over-corrects.
 **What the data cannot support** is refused, and what is atypical of a stepping motor flagged
 (:mod:`.identify_checks`): values beyond any motor's in the recording's units (before the fit), the current
 noise's share of the R and L regressors, estimates outside their ranges, a fitted R far from the raw
-``sum(v i) / sum(i^2)``.
+``sum(v i) / sum(i^2)``. A pair of estimates the recording cannot separate is refused with the combination it
+determines (:mod:`.identify_separable`); a shifted voltage log is refused, a dead time, a detent torque or a
+Coulomb friction left out of the model flagged (:mod:`.identify_detect`).
 """
 from __future__ import annotations
 
@@ -50,50 +58,45 @@ import math
 from dataclasses import replace
 from pathlib import Path
 from statistics import NormalDist
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 
 from ..validate import InputError, check_integer, check_positive, check_quantity
 from .identify_checks import atypical, check_estimates, check_noise_share, check_resistance, check_units
+from .identify_detect import check_alignment, confirm_clipping, dead_time_flag, effect_flags
 from .identify_ls import Fit, fit
+from .identify_quantization import electrical_quantization
 from .identify_result import Identification
+from .identify_separable import check_separable
+from .identify_terms import (
+    MOVING_COUNTS,
+    clipped_samples,
+    electrical_blocks,
+    filtered,
+    kept_rows,
+    mechanical_terms,
+    moving_rows,
+    moving_samples,
+    optional,
+    sosfiltfilt,
+)
 from .record import Recording, read_recording
 
 #: A recording is refused when one of these is known to no better than +-this fraction (at the confidence level).
 CORE = ("R", "L", "Km", "J", "B")
 MAX_REL_HALF_WIDTH = 0.5
-#: The mechanical fit keeps the rows where the filtered speed exceeds this many encoder counts per cutoff period.
-MOVING_COUNTS = 2.0
 #: The fewest (thinned) rows per estimated parameter a fit accepts.
 ROWS_PER_PARAMETER = 10
+#: The method's systematic floor: a relative standard error every estimate carries beyond the fit's own (what
+#: the method leaves with exact sensors, docs/identification.md), J, B and the load's in units of Km.
+FLOOR = {"R": 0.002, "L": 0.005, "Km": 0.005, "J": 0.01, "B": 0.05, "load_torque": 0.01}
+#: The load's floor in absolute terms: this fraction of the torque of the recording's rms current norm.
+LOAD_FLOOR = 0.0005
 #: Rounds of the electrical fit's noise-bias compensation (module docstring).
 NOISE_ITERATIONS = 2
 HINT = ("record a run that moves the rotor back and forth and changes the current norm, such as the move sequence "
         "of 'flatstep identify --excite SCENARIO --record DATA.csv' (docs/identification.md)")
-
-
-def sosfiltfilt(sos: np.ndarray, x: np.ndarray, axis: int = -1) -> np.ndarray:
-    """:func:`scipy.signal.sosfiltfilt`, imported when first used (scipy.signal takes a second to import)."""
-    from scipy.signal import sosfiltfilt as filtfilt
-
-    return filtfilt(sos, x, axis=axis)
-
-
-def _filtered(rec: Recording, fc: float) -> tuple[np.ndarray, slice]:
-    """The filter's ``sos`` at ``fc`` and the rows kept: the start-up cut off, four rows per cutoff period."""
-    fs = 1.0 / rec.period
-    if not fc < 0.25 * fs:
-        raise ValueError(f"{rec.source}: bandwidth {fc!r} Hz must be below a quarter of the sampling rate "
-                         f"({fs:.6g} Hz)")
-    cut, step = math.ceil(3.0 * fs / fc), max(1, int(fs / (4.0 * fc)))
-    need = 2 * cut + 40 * step
-    if rec.t.size < need:
-        raise ValueError(f"{rec.source}: {rec.duration:.4g} s ({rec.t.size} rows) is too short for a {fc:g} Hz "
-                         f"bandwidth: at least {need * rec.period:.4g} s ({need} rows) at this sampling rate")
-    from scipy.signal import butter
-
-    return butter(4, fc, fs=fs, output="sos"), slice(cut, rec.t.size - 1 - cut, step)
 
 
 def _unit_noise_gram(sos: np.ndarray, Ts: float, cut: int) -> np.ndarray:
@@ -104,25 +107,21 @@ def _unit_noise_gram(sos: np.ndarray, Ts: float, cut: int) -> np.ndarray:
     return g @ g.T
 
 
-def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool) -> tuple[Fit, dict[str, float]]:
+def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: bool,
+                moving: Optional[np.ndarray] = None, bad: Optional[np.ndarray] = None) -> tuple[Fit, dict[str, float]]:
     """The electrical fit of (R, L, Km[, va_offset, vb_offset]) (module docstring), with the noise bias removed.
 
-    Also returns the current noise's share of the power of the filtered R and L regressors
+    ``moving`` marks the periods whose motion the encoder resolves (:func:`.identify_terms.moving_samples`;
+    ``None``: all), elsewhere the back-emf term is taken as zero (the encoder's toggling is not a motion); rows
+    near a ``bad`` sample are left out (:func:`.identify_terms.clipped_samples`). Also returns the current
+    noise's share of the power of the filtered R and L regressors
     (:func:`~flatstep.studies.identify_checks.check_noise_share`), estimated whether or not it is compensated.
     """
-    sos, rows = _filtered(rec, fc)
-    Ts, blocks, raw = rec.period, [], []
-    for i, c, v in ((rec.ia, np.cos(Nr * rec.theta), rec.va), (rec.ib, np.sin(Nr * rec.theta), rec.vb)):
-        terms = np.array([0.5 * (i[1:] + i[:-1]), np.diff(i) / Ts, np.diff(c) / (Ts * Nr), v[:-1]])
-        f = sosfiltfilt(sos, terms, axis=-1)[:, rows]
-        blocks.append((f[:3].T, f[3]))
-        raw.append(terms)
-    names = ["R", "L", "Km"]
-    if offsets:
-        names += ["va_offset", "vb_offset"]
-        ones = np.ones((blocks[0][1].size, 1))
-        blocks = [(np.hstack([X, ones * (k == 0), ones * (k == 1)]), y) for k, (X, y) in enumerate(blocks)]
-    result = fit(blocks, names, lags=8, source=rec.source, hint=HINT)
+    sos, rows = filtered(rec, fc)
+    keep = kept_rows(np.zeros(rec.t.size, dtype=bool) if bad is None else bad, rows, rows.start)
+    blocks, names, raw, sos, rows = electrical_blocks(rec, Nr, fc, offsets, optional(moving, rec.t.size - 1), keep)
+    Ts = rec.period
+    result = plain = fit(blocks, names, lags=8, source=rec.source, hint=HINT)
     unit = _unit_noise_gram(sos, Ts, rows.start)
     still = np.diff(rec.theta) == 0  # periods without an encoder step: no quantization step in the back-emf term
     X = np.concatenate([b[0] for b in blocks])
@@ -144,36 +143,32 @@ def _electrical(rec: Recording, Nr: int, fc: float, offsets: bool, compensate: b
             result = fit(blocks, names, lags=8, source=rec.source, hint=HINT, noise_gram=gram)
         elif compensate:
             break
-    return result, share
+    shift = result.values - plain.values  # the correction is as uncertain as it is large (closed loop)
+    steps = electrical_quantization(rec.theta, (rec.ia, rec.ib), Nr, Ts, sos, rows, keep,
+                                    optional(moving, rec.t.size - 1), blocks, result.values, result.gram)
+    return replace(result, covariance=result.covariance + np.outer(shift, shift) + np.diag(steps)), share
 
 
 def _mechanical(rec: Recording, Nr: int, fc: float, detent: bool, coulomb: bool, harmonic: int,
-                coulomb_speed: float) -> Fit:
+                coulomb_speed: float, bad: np.ndarray) -> Fit:
     """The mechanical fit, in units of Km: (J, B, load_torque[, detent a, b][, coulomb_torque]) / Km."""
-    sos, rows = _filtered(rec, fc)
-    th = rec.theta
-    th_f = sosfiltfilt(sos, th)
-    iq = rec.ib * np.cos(Nr * th) - rec.ia * np.sin(Nr * th)
-    omega = np.gradient(th_f, rec.period)
-    terms = {"J": np.gradient(omega, rec.period), "B": omega, "load_torque": np.ones_like(th)}
-    raw = {"iq": iq}
-    if detent:
-        raw.update(detent_a=np.sin(harmonic * Nr * th), detent_b=np.cos(harmonic * Nr * th))
-    if coulomb:
-        raw["coulomb_torque"] = np.tanh(omega / coulomb_speed)
-    f = sosfiltfilt(sos, np.array(list(raw.values())), axis=-1)
-    terms.update({k: f[j] for j, k in enumerate(raw) if k != "iq"})
-    X = np.column_stack([v[rows] for v in terms.values()])
-    steps = np.abs(np.diff(rec.theta))
-    q = float(steps[steps > 0].min()) if np.any(steps > 0) else 0.0
-    moving = np.abs(omega[rows]) >= MOVING_COUNTS * q * fc
+    extra = (["detent_a", "detent_b"] if detent else []) + (["coulomb_torque"] if coulomb else [])
+    terms, iq, omega, rows = mechanical_terms(rec, Nr, fc, extra, harmonic, coulomb_speed)
+    X = np.column_stack(list(terms.values()))
+    moving = moving_rows(omega, rec.theta, fc) & kept_rows(bad, rows, rows.start)
     if np.count_nonzero(moving) < ROWS_PER_PARAMETER * X.shape[1]:
         row_time = (rows.step or 1) * rec.period
         need, moved = ROWS_PER_PARAMETER * X.shape[1] * row_time, np.count_nonzero(moving) * row_time
         raise ValueError(f"{rec.source}: the rotor moves (faster than {MOVING_COUNTS:g} encoder counts per "
                          f"{1e3 / fc:.3g} ms) during only {moved:.3g} s of the recording; {list(terms)} need at least "
                          f"{need:.3g} s of motion: not exciting enough; {HINT}")
-    return fit([(X[moving], f[0][rows][moving])], list(terms), lags=8, source=rec.source, hint=HINT)
+    return fit([(X[moving], iq[moving])], list(terms), lags=8, source=rec.source, hint=HINT)
+
+
+def _with_floor(result: Fit) -> Fit:
+    """``result`` with the method's systematic floor (:data:`FLOOR`) added to its estimates' variances."""
+    floor = np.array([FLOOR.get(n, 0.0) for n in result.names]) * np.abs(result.values)
+    return replace(result, covariance=result.covariance + np.diag(floor**2))
 
 
 def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = False, coulomb: bool = False,
@@ -220,13 +215,30 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
                          "mechanical)")
     fc_e, fc_m = (check_quantity("rate", b, as_name="bandwidth") for b in bandwidth)
     check_units(rec)
-    elec, share = _electrical(rec, Nr, fc_e, offsets, noise_compensation)
+    moving = moving_samples(rec, fc_m)
+    bad = confirm_clipping(rec, Nr, fc_e, offsets, moving, clipped_samples(rec))
+    _, rows = filtered(rec, fc_e)
+    scan = check_alignment(rec, Nr, fc_e, offsets, moving, kept_rows(bad, rows, rows.start))
+    elec, share = _electrical(rec, Nr, fc_e, offsets, noise_compensation, moving, bad)
     check_noise_share(share, rec.source)
-    mech = _mechanical(rec, Nr, fc_m, detent, coulomb, harmonic, coulomb_speed)
+    check_separable(elec, rec.source, HINT)
+    mech = _mechanical(rec, Nr, fc_m, detent, coulomb, harmonic, coulomb_speed, bad)
+    check_separable(mech, rec.source, HINT)
+    modelled = (["detent_a", "detent_b"] if detent else []) + (["coulomb_torque"] if coulomb else [])
+    flags, notes = effect_flags(rec, Nr, fc_m, modelled, harmonic, coulomb_speed, bad, float(elec.values[2]))
+    dead = dead_time_flag(rec, Nr, fc_e, offsets, moving, kept_rows(bad, rows, rows.start), float(elec.values[0]))
+    flags += [dead] if dead else []
+    elec, mech = _with_floor(elec), _with_floor(mech)
     km, var_km = elec.values[2], elec.covariance[2, 2]
     values = dict(zip(elec.names, elec.values, strict=True))
     var = dict(zip(elec.names, np.diag(elec.covariance), strict=True))
     p, cov = mech.values, mech.covariance
+    values.update({f"{k}/Km": v for k, v in zip(mech.names[:3], p, strict=False)})
+    var.update({f"{k}/Km": v for k, v in zip(mech.names[:3], np.diag(cov), strict=False)})
+    k_load = mech.names.index("load_torque")
+    cov = cov.copy()
+    cov[k_load, k_load] += (LOAD_FLOOR * float(np.sqrt(np.mean(rec.ia**2 + rec.ib**2)))) ** 2  # a zero load too
+    var["load_torque/Km"] = cov[k_load, k_load]
     cov_phys = km**2 * cov + np.outer(p, p) * var_km  # q = Km p, with Km's variance (delta method)
     values.update(zip(mech.names, km * p, strict=True))
     var.update(zip(mech.names, np.diag(cov_phys), strict=True))
@@ -248,12 +260,16 @@ def identify(data: Union[Recording, str, Path], *, Nr: int = 50, detent: bool = 
                             settings={"bandwidth": [fc_e, fc_m], "offsets": offsets,
                                       "noise_compensation": noise_compensation, "detent_harmonic": harmonic,
                                       "coulomb_speed": coulomb_speed, "samples": int(rec.t.size),
-                                      "period": rec.period, "noise_share": share})
+                                      "period": rec.period, "noise_share": share,
+                                      "clipped_samples": int(np.count_nonzero(bad)),
+                                      "alignment_rms": {str(k): v for k, v in scan.items()}},
+                            notes=tuple(notes))
     wide = {k: result.relative_half_width(k) for k in CORE if not result.relative_half_width(k) <= MAX_REL_HALF_WIDTH}
     if wide:
         shown = ", ".join(f"{k} +-{w:.0%}" for k, w in wide.items())
+        left_out = "".join(f"; {flag}" for flag in flags)  # a term left out widens them too: say which
         raise ValueError(f"{rec.source}: not exciting enough: the {confidence:.0%} intervals are {shown} (at most "
-                         f"+-{MAX_REL_HALF_WIDTH:.0%} accepted); {HINT}")
+                         f"+-{MAX_REL_HALF_WIDTH:.0%} accepted){left_out}; {HINT}")
     check_estimates(result.estimates, {k: result.interval(k) for k in result.estimates}, rec.source, confidence)
     check_resistance(rec, result.estimates["R"])
-    return replace(result, flags=atypical(result.estimates))
+    return replace(result, flags=atypical(result.estimates) + tuple(flags))

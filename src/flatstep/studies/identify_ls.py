@@ -25,13 +25,19 @@ COND_MAX = 1e4
 
 @dataclass(frozen=True)
 class Fit:
-    """A least-squares fit: estimates, their covariance, the residuals' rms and the regressors' conditioning."""
+    """A least-squares fit: estimates, their covariance, the residuals' rms and the regressors' conditioning.
+
+    ``vif`` holds each estimate's variance inflation: the diagonal of :math:`(X_s^TX_s)^{-1}` for the regressors
+    ``X_s`` scaled to unit columns (1 for a column orthogonal to the others); ``gram`` is :math:`X^TX`.
+    """
 
     names: tuple[str, ...]
     values: Array
     covariance: Array
     residual_rms: float
     condition: float
+    vif: Array
+    gram: Array
 
 
 def _cond_or_refuse(X: Array, names: Sequence[str], source: str, hint: str) -> float:
@@ -90,4 +96,6 @@ def fit(blocks: Sequence[tuple[Array, Array]], names: Sequence[str], *, lags: in
             c = g[lag:].T @ g[:-lag]
             meat += (1.0 - lag / (lags + 1.0)) * (c + c.T)
     rms = float(np.sqrt(np.mean((y - X @ p) ** 2)))
-    return Fit(tuple(names), p, XtX_inv @ meat @ XtX_inv, rms, cond)
+    norms = np.linalg.norm(X, axis=0)
+    vif = np.diag(np.linalg.inv((X / norms).T @ (X / norms))).copy()
+    return Fit(tuple(names), p, XtX_inv @ meat @ XtX_inv, rms, cond, vif, X.T @ X)

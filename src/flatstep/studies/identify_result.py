@@ -9,7 +9,8 @@ from ..model.motor import MotorParams
 
 #: Unit of each parameter an identification may report.
 UNITS = {"R": "ohm", "L": "H", "Km": "V s/rad", "J": "kg m^2", "B": "N m s/rad", "load_torque": "N m",
-         "va_offset": "V", "vb_offset": "V", "detent_torque": "N m", "detent_phase": "rad", "coulomb_torque": "N m"}
+         "va_offset": "V", "vb_offset": "V", "J/Km": "A s^2/rad", "B/Km": "A s/rad",
+         "load_torque/Km": "A", "detent_torque": "N m", "detent_phase": "rad", "coulomb_torque": "N m"}
 MOTOR_KEYS = ("R", "L", "Km", "J", "B")
 
 
@@ -38,8 +39,11 @@ class Identification:
     settings : dict
         The identification's settings (bandwidths, switches, samples, sampling period, the current noise's share).
     flags : tuple of str
-        What is atypical of a stepping motor (:func:`~flatstep.studies.identify_checks.atypical`); empty when
-        nothing is.
+        What is atypical of a stepping motor (:func:`~flatstep.studies.identify_checks.atypical`) or in the
+        recording and not modelled (:mod:`~flatstep.studies.identify_detect`); empty when nothing is.
+    notes : tuple of str
+        What an estimate means on this recording (a load that includes the Coulomb friction of a motion in one
+        direction).
     """
 
     estimates: dict[str, float]
@@ -52,6 +56,7 @@ class Identification:
     source: str
     settings: dict[str, Any]
     flags: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
 
     def interval(self, name: str) -> tuple[float, float]:
         """The confidence interval of ``name``."""
@@ -92,7 +97,7 @@ class Identification:
     def as_toml(self) -> str:
         """A ``[motor]`` table for a scenario file, the intervals as comments (and the effects as a comment)."""
         lines = [f"# identified from {self.source} ({self.confidence:.0%} intervals in the comments)"]
-        lines += [f"# flagged: {flag}" for flag in self.flags] + ["[motor]"]
+        lines += [f"# flagged: {flag}" for flag in self.flags] + [f"# note: {n}" for n in self.notes] + ["[motor]"]
         for name in MOTOR_KEYS:
             value = self.estimates[name]
             note = f"  # [{self.interval(name)[0]:.6g}, {self.interval(name)[1]:.6g}] {UNITS[name]}"
@@ -113,4 +118,5 @@ class Identification:
                 "intervals": {k: list(self.interval(k)) for k in self.estimates},
                 "relative_half_width": {k: self.relative_half_width(k) for k in self.estimates},
                 "units": {k: UNITS[k] for k in self.estimates}, "residual_rms": self.residual_rms,
-                "condition": self.condition, "settings": self.settings, "flags": list(self.flags)}
+                "condition": self.condition, "settings": self.settings, "flags": list(self.flags),
+                "notes": list(self.notes)}
