@@ -39,7 +39,8 @@ PUBLIC: dict[str, list[str]] = {
     "engine": ["engine.simulate", "engine.settings", "engine.result"],
     "studies": ["studies.scenario", "studies.scenario_file", "studies.batch", "studies.robustness", "studies.compare",
                 "studies.verify", "studies.backoff", "studies.identify", "studies.identify_coverage",
-                "studies.identify_result", "studies.excitation", "studies.record", "studies.calibrate", "studies.executors", "studies.pullout", "studies.open_loop"],
+                "studies.identify_result", "studies.excitation", "studies.record", "studies.calibrate",
+                "studies.executors", "studies.pullout", "studies.open_loop"],
     "interop": ["interop"],
     "validate": ["validate", "validate.limits", "validate.paths", "errors"],
 }
