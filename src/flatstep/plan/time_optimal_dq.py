@@ -1,0 +1,137 @@
+r"""The fastest rest-to-rest move in the d-q flat outputs :math:`(\theta, i_d)`, with field weakening where it pays.
+
+This module is the readable reference; csrc/time_optimal_dq.c runs the same algorithm (``engine="c"``, the
+default) and the two agree on the planned durations to rounding (tests/test_time_optimal_dq.py).
+
+**Stages.** :mod:`~flatstep.plan.time_optimal_dq_envelope` gives, at each speed, the largest and the smallest
+torque current over the d current within the bus share :math:`\kappa\,v_{use}v_{bus}` and ``i_max`` (closed form:
+two discs in the current plane), hence the acceleration envelope :math:`a_\pm(\omega)` and its d currents;
+:mod:`~flatstep.plan.time_optimal_dq_profile` smooths the bang-bang move on it and its d current by a box of
+width :math:`w` (twice), fits both as a table and measures the voltages of the d-q flat inverse on it, the
+:math:`L\dot i` terms included.
+
+**Search.** :math:`1 - \kappa` is the bus the inductance needs on top of the steady voltages. For each width
+(multiples of :math:`L/R`, :data:`DEFAULT_WIDTHS`), :math:`\kappa` is driven to the table's worst margin 0 by the
+secant, then regula falsi, in at most :data:`SEARCH` tables; the shortest feasible table of all widths wins.
+
+**Limits.** The bus :math:`|v| \le v_{use}v_{bus}` (``voltage="phase"``: the inscribed circle of each phase's
+:math:`\pm v_{use}v_{bus}`, met once per electrical turn; ``"vector"``: the norm itself), :math:`|i| \le i_{max}`,
+the speed cap: the least of ``limits.speed_max`` and the commutation cap :math:`N_r\omega \le 2\pi\,s_e f_c`
+(:data:`ELECTRICAL_SHARE` :math:`s_e` of the control rate :math:`f_c`: at least :math:`1/s_e` control periods per
+electrical turn, so that a sampled drive still commutates). The torque-angle cap and ``i_hold`` belong to the
+paper's :math:`(\rho, \theta)` law and are not used: the d-q law has no singularity.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple, Optional
+
+from ..model.motor import MotorParams
+from ..validate import InputError, check_choice
+from .arguments import check_angle, check_limits, check_motor
+from .limits import MotorLimits
+from .time_optimal_dq_envelope import dq_envelope
+from .time_optimal_dq_profile import DQTable, dq_margins, dq_table
+
+__all__ = ["DEFAULT_WIDTHS", "ELECTRICAL_SHARE", "DQCandidate", "plan_dq_move", "speed_cap"]
+#: The largest electrical frequency over the control rate (csrc/time_optimal_dq.h ``TOD_ELECTRICAL_SHARE``).
+ELECTRICAL_SHARE = 0.1
+#: The smoothing widths tried, in units of L / R.
+DEFAULT_WIDTHS = (0.2, 0.35, 0.5, 0.75, 1.0)
+#: Tables tried per width.
+SEARCH = 7
+#: Of i_max and of the speed cap, the share the envelope is planned at (the fit may cross it by a little).
+CAP_PLAN = 0.995
+_S_TOL = 0.003  # a feasible table within 0.3 % of the limit ends a width's search
+VOLTAGES = ("phase", "vector")
+
+
+class DQCandidate(NamedTuple):
+    """A table the search kept: duration [s], bus share kappa, width [s], margins and the table."""
+
+    tf: float
+    kappa: float
+    width: float
+    margins: dict[str, float]
+    table: DQTable
+
+
+def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> float:
+    """The speed cap [rad/s]: ``limits.speed_max`` and :data:`ELECTRICAL_SHARE` of ``control_rate`` [Hz] (module doc)."""
+    cap = ELECTRICAL_SHARE * 2.0 * math.pi * control_rate / motor.Nr
+    return min(cap, limits.speed_max) if limits.speed_max else cap
+
+
+def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float,
+         width: float) -> tuple[float, Optional[DQCandidate]]:
+    """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
+    try:
+        env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CAP_PLAN * limits.i_max, CAP_PLAN * cap)
+        table = dq_table(d, env, width)
+    except ValueError:
+        return math.inf, None
+    mg = dq_margins(table, motor, limits.v_use * limits.v_bus, limits.i_max, cap)
+    return mg["worst"], DQCandidate(float(table.breaks[-1]), kappa, width, mg, table)
+
+
+def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float) -> Optional[DQCandidate]:
+    """The shortest feasible table at ``width``: the secant on kappa from 1, then regula falsi once bracketed."""
+    best: Optional[DQCandidate] = None
+    lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
+    k, k_prev, s_prev = 1.0, math.nan, math.nan
+    for _ in range(SEARCH):
+        s, c = _try(d, motor, limits, cap, k, width)
+        aim = s + 0.5 * _S_TOL
+        if c is not None and s <= 0:
+            if best is None or c.tf < best.tf:
+                best = c
+            lo, s_lo = k, aim
+            if k >= 1.0 or s > -_S_TOL:
+                break
+        else:
+            hi, s_hi = k, aim
+        if not math.isnan(s_lo) and math.isfinite(s_hi):
+            k_next = lo + (hi - lo) * s_lo / (s_lo - s_hi)
+            k_next = min(max(k_next, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
+        elif math.isfinite(aim) and math.isfinite(s_prev) and aim != s_prev:
+            k_next = k - aim * (k - k_prev) / (aim - s_prev)
+            k_next = min(max(k_next, 0.5 * k), 1.5 * k)
+        elif math.isfinite(aim):
+            k_next = k / (1.0 + aim)
+        else:
+            k_next = 0.5 * (lo + hi)
+        k_prev, s_prev, k = k, aim, min(k_next, 1.0)
+        if k < 0.05 or hi - lo < 1e-4:
+            break
+    return best
+
+
+def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, voltage: str = "phase",
+                 control_rate: float = 20000.0, widths: Optional[tuple[float, ...]] = None) -> DQCandidate:
+    """The shortest feasible field-weakening table over ``distance`` != 0 [rad] (module docstring).
+
+    Raises
+    ------
+    InputError
+        An argument out of range.
+    ValueError
+        When no width and bus share give a feasible table.
+    """
+    d = abs(check_angle(distance, "distance"))
+    check_motor(motor)
+    check_limits(limits)
+    check_choice("voltage", voltage, VOLTAGES)
+    if not (isinstance(control_rate, (int, float)) and math.isfinite(control_rate) and control_rate > 0):
+        raise InputError("control_rate", control_rate, f"control_rate={control_rate!r}: the drive's control rate "
+                         "is a number of Hz > 0")
+    if d == 0:
+        raise InputError("distance", distance, "distance=0 rad: a move needs a distance; a rest is a dwell")
+    cap = speed_cap(motor, limits, control_rate)
+    best: Optional[DQCandidate] = None
+    for k in widths or DEFAULT_WIDTHS:
+        c = search_kappa(d, motor, limits, cap, k * motor.L / motor.R)
+        if c is not None and (best is None or c.tf < best.tf):
+            best = c
+    if best is None:
+        raise ValueError(f"no feasible field-weakening plan of {distance} rad within {limits}: raise v_bus or i_max")
+    return best
