@@ -26,14 +26,19 @@ from __future__ import annotations
 import math
 from typing import NamedTuple, Optional
 
+import numpy as np
+
 from ..model.motor import MotorParams
 from ..validate import InputError, check_choice
-from .arguments import check_angle, check_limits, check_motor
+from .arguments import check_angle, check_limits, check_motor, check_t0
+from .d_current import DCurrentPlan
 from .limits import MotorLimits
+from .piecewise import NCOEF, PiecewisePlan
 from .time_optimal_dq_envelope import dq_envelope
 from .time_optimal_dq_profile import DQTable, dq_margins, dq_table
 
-__all__ = ["DEFAULT_WIDTHS", "ELECTRICAL_SHARE", "DQCandidate", "plan_dq_move", "speed_cap"]
+__all__ = ["DEFAULT_WIDTHS", "ELECTRICAL_SHARE", "DQCandidate", "DQPlan", "plan_dq_move", "speed_cap",
+           "time_optimal_dq"]
 #: The largest electrical frequency over the control rate (csrc/time_optimal_dq.h ``TOD_ELECTRICAL_SHARE``).
 ELECTRICAL_SHARE = 0.1
 #: The smoothing widths tried, in units of L / R.
@@ -135,3 +140,43 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     if best is None:
         raise ValueError(f"no feasible field-weakening plan of {distance} rad within {limits}: raise v_bus or i_max")
     return best
+
+
+class DQPlan(NamedTuple):
+    """A field-weakening move: the plan of theta (the plan protocol's object) and the planned d current.
+
+    The d-q law tracks both: ``DQSMC(motor, plan, gains, d_current=d_current)``. The plan's rho channel holds
+    ``i_max``, the current bound (the d-q law does not read it; the paper's law does not track these plans).
+    """
+
+    plan: PiecewisePlan
+    d_current: DCurrentPlan
+    found: DQCandidate
+
+
+def time_optimal_dq(distance: float, motor: MotorParams, limits: MotorLimits, *, theta1: float = 0.0,
+                    t0: float = 0.0, voltage: str = "phase", control_rate: float = 20000.0,
+                    widths: Optional[tuple[float, ...]] = None) -> DQPlan:
+    """The shortest feasible field-weakening move over ``distance`` [rad] from ``theta1`` at ``t0`` (module docstring).
+
+    Raises
+    ------
+    InputError
+        An argument out of range, before any planning.
+    ValueError
+        When no width and bus share give a feasible table.
+    """
+    d = check_angle(distance, "distance")
+    theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
+    c = plan_dq_move(d, motor, limits, voltage=voltage, control_rate=control_rate, widths=widths)
+    tb = c.table
+    sign = 1.0 if d >= 0 else -1.0
+    theta = sign * tb.theta
+    theta[:, -1] += theta1
+    rho = np.zeros((tb.theta.shape[0], NCOEF))
+    rho[:, -1] = limits.i_max
+    breaks = tb.breaks + t0
+    plan = PiecewisePlan(breaks, theta, rho)
+    d_current = DCurrentPlan(t0=t0, tf=float(breaks[-1]), knot_t=tuple(breaks), knot_id=tuple(tb.i_d),
+                             knot_did=tuple(tb.di_d))
+    return DQPlan(plan, d_current, c)

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..model.motor import MotorParams
+from .d_current import hermite_cubic
 from .envelope import Envelope
 from .piecewise import horner_rows
 from .segments import hermite_rows
@@ -36,19 +37,6 @@ class DQTable(NamedTuple):
     theta: Array
     i_d: Array
     di_d: Array
-
-
-def hermite_cubic(t: Array, knots: Array, value: Array, slope: Array) -> tuple[Array, Array]:
-    """The cubic Hermite interpolant through ``(value, slope)`` at ``knots`` and its derivative at ``t``, held outside."""
-    t = np.clip(np.asarray(t, dtype=float), knots[0], knots[-1])
-    i = np.clip(np.searchsorted(knots, t, side="right") - 1, 0, knots.size - 2)
-    h = knots[i + 1] - knots[i]
-    s = (t - knots[i]) / h
-    p0, p1, m0, m1 = value[i], value[i + 1], slope[i] * h, slope[i + 1] * h
-    s2, s3 = s * s, s * s * s
-    y = (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1
-    dy = ((6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * m0 + (-6 * s2 + 6 * s) * p1 + (3 * s2 - 2 * s) * m1) / h
-    return y, dy
 
 
 def dq_table(distance: float, env: DQEnvelope, width: float) -> DQTable:
