@@ -28,6 +28,8 @@ from .time_optimal_dq_envelope import DQEnvelope
 Array = NDArray[np.float64]
 #: Samples per segment of the margin check (tau = j / CHECK, and the end).
 CHECK = 8
+#: The d current's extra centred box, in smoothing widths either side.
+ID_SPREAD = 4
 
 
 class DQTable(NamedTuple):
@@ -57,6 +59,12 @@ def dq_table(distance: float, env: DQEnvelope, width: float) -> DQTable:
     i_d = np.where(braking, np.interp(speed, env.omega, env.id_minus), np.interp(speed, env.omega, env.id_plus))
     i_d[-1] = 0.0
     i_d = _box(_box(i_d, n_box), n_box)
+    # a centred running mean more, of ID_SPREAD widths either side, narrowed towards the ends so that the d
+    # current still starts and ends at rest: the d current changes slower than the torque current
+    j = np.arange(i_d.size)
+    half = np.minimum(np.minimum(j, i_d.size - 1 - j), ID_SPREAD * n_box)
+    csum = np.concatenate([[0.0], np.cumsum(i_d)])
+    i_d = (csum[j + half + 1] - csum[j - half]) / (2 * half + 1)
     speed = _box(_box(speed, n_box), n_box)
     inc = 0.5 * (speed[1:] + speed[:-1]) * dt
     r = min(r, speed.size - 1)
