@@ -42,7 +42,7 @@ __all__ = ["DEFAULT_WIDTHS", "ELECTRICAL_SHARE", "DQCandidate", "DQPlan", "plan_
 #: The largest electrical frequency over the control rate (csrc/time_optimal_dq.h ``TOD_ELECTRICAL_SHARE``).
 ELECTRICAL_SHARE = 0.1
 #: The smoothing widths tried, in units of L / R.
-DEFAULT_WIDTHS = (0.2, 0.35, 0.5, 0.75, 1.0)
+DEFAULT_WIDTHS = (0.15, 0.25, 0.35, 0.5, 0.75)
 #: Tables tried per width.
 SEARCH = 7
 #: Of i_max and of the speed cap, the share the envelope is planned at (the fit may cross it by a little).
@@ -52,11 +52,12 @@ VOLTAGES = ("phase", "vector")
 
 
 class DQCandidate(NamedTuple):
-    """A table the search kept: duration [s], bus share kappa, width [s], margins and the table."""
+    """A table the search kept: duration [s], bus share kappa, width [s], box passes, margins and the table."""
 
     tf: float
     kappa: float
     width: float
+    passes: int
     margins: dict[str, float]
     table: DQTable
 
@@ -67,25 +68,26 @@ def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> f
     return min(cap, limits.speed_max) if limits.speed_max else cap
 
 
-def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float,
-         width: float) -> tuple[float, Optional[DQCandidate]]:
+def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float,
+         passes: int) -> tuple[float, Optional[DQCandidate]]:
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
     try:
         env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CAP_PLAN * limits.i_max, CAP_PLAN * cap)
-        table = dq_table(d, env, width)
+        table = dq_table(d, env, width, passes)
     except ValueError:
         return math.inf, None
     mg = dq_margins(table, motor, limits.v_use * limits.v_bus, limits.i_max, cap)
-    return mg["worst"], DQCandidate(float(table.breaks[-1]), kappa, width, mg, table)
+    return mg["worst"], DQCandidate(float(table.breaks[-1]), kappa, width, passes, mg, table)
 
 
-def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float) -> Optional[DQCandidate]:
+def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float,
+                 passes: int) -> Optional[DQCandidate]:
     """The shortest feasible table at ``width``: the secant on kappa from 1, then regula falsi once bracketed."""
     best: Optional[DQCandidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
     k, k_prev, s_prev = 1.0, math.nan, math.nan
     for _ in range(SEARCH):
-        s, c = _try(d, motor, limits, cap, k, width)
+        s, c = _try(d, motor, limits, cap, k, width, passes)
         aim = s + 0.5 * _S_TOL
         if c is not None and s <= 0:
             if best is None or c.tf < best.tf:
@@ -133,10 +135,11 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
         raise InputError("distance", distance, "distance=0 rad: a move needs a distance; a rest is a dwell")
     cap = speed_cap(motor, limits, control_rate)
     best: Optional[DQCandidate] = None
-    for k in widths or DEFAULT_WIDTHS:
-        c = search_kappa(d, motor, limits, cap, k * motor.L / motor.R)
-        if c is not None and (best is None or c.tf < best.tf):
-            best = c
+    for passes in (1, 2):
+        for k in widths or DEFAULT_WIDTHS:
+            c = search_kappa(d, motor, limits, cap, k * motor.L / motor.R, passes)
+            if c is not None and (best is None or c.tf < best.tf):
+                best = c
     if best is None:
         raise ValueError(f"no feasible field-weakening plan of {distance} rad within {limits}: raise v_bus or i_max")
     return best

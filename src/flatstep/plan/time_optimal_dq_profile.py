@@ -41,7 +41,7 @@ class DQTable(NamedTuple):
     di_d: Array
 
 
-def dq_table(distance: float, env: DQEnvelope, width: float) -> DQTable:
+def dq_table(distance: float, env: DQEnvelope, width: float, passes: int = 2) -> DQTable:
     """The bang-bang move on ``env`` over ``distance`` > 0 and its d current, smoothed by ``width`` [s], as a table.
 
     The sampling, the cut of a long cruise and the knots are those of :func:`flatstep.plan.smoothing.smoothed_table`.
@@ -58,14 +58,16 @@ def dq_table(distance: float, env: DQEnvelope, width: float) -> DQTable:
     # the d current of the side: the envelope's top while speeding up and cruising, its bottom while braking
     i_d = np.where(braking, np.interp(speed, env.omega, env.id_minus), np.interp(speed, env.omega, env.id_plus))
     i_d[-1] = 0.0
-    i_d = _box(_box(i_d, n_box), n_box)
+    for _ in range(passes):
+        i_d = _box(i_d, n_box)
     # a centred running mean more, of ID_SPREAD widths either side, narrowed towards the ends so that the d
     # current still starts and ends at rest: the d current changes slower than the torque current
     j = np.arange(i_d.size)
     half = np.minimum(np.minimum(j, i_d.size - 1 - j), ID_SPREAD * n_box)
     csum = np.concatenate([[0.0], np.cumsum(i_d)])
     i_d = (csum[j + half + 1] - csum[j - half]) / (2 * half + 1)
-    speed = _box(_box(speed, n_box), n_box)
+    for _ in range(passes):
+        speed = _box(speed, n_box)
     inc = 0.5 * (speed[1:] + speed[:-1]) * dt
     r = min(r, speed.size - 1)
     cruise = speed[r] if k else 0.0
@@ -73,7 +75,7 @@ def dq_table(distance: float, env: DQEnvelope, width: float) -> DQTable:
     if not (covered > 0 and math.isfinite(covered)):
         raise ValueError(f"the smoothed profile of {distance:g} rad at width {width:g} s covers no angle")
     scale = distance / covered
-    knots = _knots(speed.size - 1 + k, (b.t1 + 2 * width) / dt + 4, (b.t1 + b.cruise) / dt - 4, b.cruise > 0)
+    knots = _knots(speed.size - 1 + k, (b.t1 + passes * width) / dt + 4, (b.t1 + b.cruise) / dt - 4, b.cruise > 0)
     at = np.where(knots < r, knots, np.where(knots >= r + k, knots - k, r))
     sums = np.where(at[1:] > at[:-1], np.add.reduceat(inc, np.minimum(at[:-1], inc.size - 1)), 0.0)
     cut = np.clip(knots[1:], r, r + k) - np.clip(knots[:-1], r, r + k)
