@@ -18,10 +18,10 @@ import argparse
 import math
 import time
 from dataclasses import replace
-import tomllib
 from pathlib import Path
 
 import numpy as np
+import tomllib
 
 from flatstep.bench.collocation import minimum_time
 from flatstep.control.dq_smc import DQFlatnessSMC
@@ -61,6 +61,7 @@ def track(m: MotorParams, fw: object, v_bus: float) -> tuple[str, float]:
 
 
 def main() -> None:
+    """Print one row per motor, bus and move."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--motors", nargs="+", default=["nema17", "ldo-42sth60-2004mac", "sanyo-103h5208-5240"])
     ap.add_argument("--bus", nargs="+", type=float, default=[12.0, 24.0])

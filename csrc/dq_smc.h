@@ -54,11 +54,11 @@ enum { DQ_SMC_ID_KNOTS = 72 };
 // with the paper's psi of eq. (17) and the planned speed theta*' (flatstep.plan.d_current); with n_knots >= 2 the
 // cubic Hermite table through (knot_id, knot_did) at the times knot_t (held outside) replaces the psi term.
 struct dq_smc_current {
-    fs_real i_d1, i_d2;       // start and end d current [A]
-    fs_real t0, tf;           // start and end of the change [s]; read only when i_d2 != i_d1
-    fs_real weakening;        // k_w >= 0 [A s/rad]: field weakening per rad/s above weakening_speed
-    fs_real weakening_speed;  // >= 0 [rad/s]
-    uint32_t n_knots;         // 0 (no table) or 2..DQ_SMC_ID_KNOTS
+    fs_real i_d1, i_d2;                 // start and end d current [A]
+    fs_real t0, tf;                     // start and end of the change [s]; read only when i_d2 != i_d1
+    fs_real weakening;                  // k_w >= 0 [A s/rad]: field weakening per rad/s above weakening_speed
+    fs_real weakening_speed;            // >= 0 [rad/s]
+    uint32_t n_knots;                   // 0 (no table) or 2..DQ_SMC_ID_KNOTS
     fs_real knot_t[DQ_SMC_ID_KNOTS];    // rising times [s]
     fs_real knot_id[DQ_SMC_ID_KNOTS];   // d current at the knots [A]
     fs_real knot_did[DQ_SMC_ID_KNOTS];  // its rate at the knots [A/s]

@@ -81,11 +81,12 @@ class DCurrentPlan:
             return
         arrays = [np.asarray(getattr(self, k), dtype=float) for k in ("knot_t", "knot_id", "knot_did")]
         if not (2 <= n <= MAX_KNOTS and all(a.shape == (n,) for a in arrays)):
+            sizes = [len(getattr(self, k)) for k in ("knot_t", "knot_id", "knot_did")]
             raise InputError("knot_t", self.knot_t, f"a d-current table has 2 to {MAX_KNOTS} knots, with as many "
-                             f"values and rates (got {[len(getattr(self, k)) for k in ('knot_t', 'knot_id', 'knot_did')]})")
+                             f"values and rates (got {sizes})")
         if not (all(np.all(np.isfinite(a)) for a in arrays) and np.all(np.diff(arrays[0]) > 0)):
             raise InputError("knot_t", self.knot_t, "a d-current table's knots must be finite, at rising times")
-        for k, a in zip(("knot_t", "knot_id", "knot_did"), arrays):
+        for k, a in zip(("knot_t", "knot_id", "knot_did"), arrays, strict=True):
             object.__setattr__(self, k, tuple(float(x) for x in a))
 
     def flag(self, t: ArrayLike, dtheta: ArrayLike = 0.0,

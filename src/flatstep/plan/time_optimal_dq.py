@@ -10,9 +10,10 @@ two discs in the current plane), hence the acceleration envelope :math:`a_\pm(\o
 width :math:`w` (twice), fits both as a table and measures the voltages of the d-q flat inverse on it, the
 :math:`L\dot i` terms included.
 
-**Search.** :math:`1 - \kappa` is the bus the inductance needs on top of the steady voltages. For each width
-(multiples of :math:`L/R`, :data:`DEFAULT_WIDTHS`), :math:`\kappa` is driven to the table's worst margin 0 by the
-secant, then regula falsi, in at most :data:`SEARCH` tables; the shortest feasible table of all widths wins.
+**Search.** :math:`1 - \kappa` is the bus the inductance needs on top of the steady voltages. For one and two box
+passes and each width (multiples of the current's rise time :math:`L i_{max}/(v_{use}v_{bus})`,
+:data:`DEFAULT_WIDTHS`), :math:`\kappa` is driven to the table's worst margin 0 by the secant, then regula falsi,
+in at most :data:`SEARCH` tables; the shortest feasible table of all wins.
 
 **Limits.** The bus :math:`|v| \le v_{use}v_{bus}` (``voltage="phase"``: the inscribed circle of each phase's
 :math:`\pm v_{use}v_{bus}`, met once per electrical turn; ``"vector"``: the norm itself), :math:`|i| \le i_{max}`,
@@ -40,9 +41,9 @@ from .time_optimal_dq_profile import DQTable, dq_margins, dq_table
 __all__ = ["DEFAULT_WIDTHS", "ELECTRICAL_SHARE", "DQCandidate", "DQPlan", "plan_dq_move", "speed_cap",
            "time_optimal_dq"]
 #: The largest electrical frequency over the control rate (csrc/time_optimal_dq.h ``TOD_ELECTRICAL_SHARE``).
-ELECTRICAL_SHARE = 0.1
-#: The smoothing widths tried, in units of L / R.
-DEFAULT_WIDTHS = (0.15, 0.25, 0.35, 0.5, 0.75)
+ELECTRICAL_SHARE = 0.05
+#: The smoothing widths tried, in units of the current's rise time L i_max / (v_use v_bus).
+DEFAULT_WIDTHS = (0.75, 1.0, 1.5, 2.0, 3.0)
 #: Tables tried per width.
 SEARCH = 7
 #: Of i_max and of the speed cap, the share the envelope is planned at (the fit may cross it by a little).
@@ -63,7 +64,7 @@ class DQCandidate(NamedTuple):
 
 
 def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> float:
-    """The speed cap [rad/s]: ``limits.speed_max`` and :data:`ELECTRICAL_SHARE` of ``control_rate`` [Hz] (module doc)."""
+    """The speed cap [rad/s]: ``limits.speed_max`` and :data:`ELECTRICAL_SHARE` of ``control_rate`` [Hz] (module)."""
     cap = ELECTRICAL_SHARE * 2.0 * math.pi * control_rate / motor.Nr
     return min(cap, limits.speed_max) if limits.speed_max else cap
 
@@ -134,10 +135,11 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     if d == 0:
         raise InputError("distance", distance, "distance=0 rad: a move needs a distance; a rest is a dwell")
     cap = speed_cap(motor, limits, control_rate)
+    rise = motor.L * limits.i_max / (limits.v_use * limits.v_bus)
     best: Optional[DQCandidate] = None
     for passes in (1, 2):
         for k in widths or DEFAULT_WIDTHS:
-            c = search_kappa(d, motor, limits, cap, k * motor.L / motor.R, passes)
+            c = search_kappa(d, motor, limits, cap, k * rise, passes)
             if c is not None and (best is None or c.tf < best.tf):
                 best = c
     if best is None:
@@ -149,7 +151,8 @@ class DQPlan(NamedTuple):
     """A field-weakening move: the plan of theta (the plan protocol's object) and the planned d current.
 
     The d-q law tracks both: ``DQSMC(motor, plan, gains, d_current=d_current)``. The plan's rho channel holds
-    ``i_max``, the current bound (the d-q law does not read it; the paper's law does not track these plans).
+    ``2 i_max``, above any current the plan asks for (the d-q law does not read it; the paper's law does not
+    track these plans).
     """
 
     plan: PiecewisePlan
@@ -177,7 +180,7 @@ def time_optimal_dq(distance: float, motor: MotorParams, limits: MotorLimits, *,
     theta = sign * tb.theta
     theta[:, -1] += theta1
     rho = np.zeros((tb.theta.shape[0], NCOEF))
-    rho[:, -1] = limits.i_max
+    rho[:, -1] = 2.0 * limits.i_max
     breaks = tb.breaks + t0
     plan = PiecewisePlan(breaks, theta, rho)
     d_current = DCurrentPlan(t0=t0, tf=float(breaks[-1]), knot_t=tuple(breaks), knot_id=tuple(tb.i_d),

@@ -47,7 +47,7 @@ class DQEnvelope(NamedTuple):
 
 
 def best_currents(omega: float, motor: MotorParams, v: float, i_max: float) -> tuple[float, float, float, float]:
-    """``(i_d+, i_q+, i_d-, i_q-)`` [A]: the largest and the smallest torque current at ``omega`` >= 0 (module docstring).
+    """``(i_d+, i_q+, i_d-, i_q-)`` [A]: the largest and the smallest torque current at ``omega`` >= 0 (module doc).
 
     ``i_q+ < i_q-`` (nan) when the discs do not meet: the speed cannot be held.
     """
