@@ -10,10 +10,10 @@ two discs in the current plane), hence the acceleration envelope :math:`a_\pm(\o
 width :math:`w` (twice), fits both as a table and measures the voltages of the d-q flat inverse on it, the
 :math:`L\dot i` terms included.
 
-**Search.** :math:`1 - \kappa` is the bus the inductance needs on top of the steady voltages. For one and two box
-passes and each width (multiples of the current's rise time :math:`L i_{max}/(v_{use}v_{bus})`,
-:data:`DEFAULT_WIDTHS`), :math:`\kappa` is driven to the table's worst margin 0 by the secant, then regula falsi,
-in at most :data:`SEARCH` tables; the shortest feasible table of all wins.
+**Search.** :math:`1 - \kappa` is the bus the inductance needs on top of the steady voltages. For each width
+(multiples of the current's rise time :math:`L i_{max}/(v_{use}v_{bus})`, :data:`DEFAULT_WIDTHS`), :math:`\kappa`
+is driven to the table's worst margin 0 by the secant, then regula falsi, in at most :data:`SEARCH` tables; the
+shortest feasible table of all wins.
 
 **Limits.** The bus :math:`|v| \le v_{use}v_{bus}` (``voltage="phase"``: the inscribed circle of each phase's
 :math:`\pm v_{use}v_{bus}`, met once per electrical turn; ``"vector"``: the norm itself), :math:`|i| \le i_{max}`,
@@ -53,12 +53,11 @@ VOLTAGES = ("phase", "vector")
 
 
 class DQCandidate(NamedTuple):
-    """A table the search kept: duration [s], bus share kappa, width [s], box passes, margins and the table."""
+    """A table the search kept: duration [s], bus share kappa, width [s], margins and the table."""
 
     tf: float
     kappa: float
     width: float
-    passes: int
     margins: dict[str, float]
     table: DQTable
 
@@ -69,26 +68,25 @@ def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> f
     return min(cap, limits.speed_max) if limits.speed_max else cap
 
 
-def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float,
-         passes: int) -> tuple[float, Optional[DQCandidate]]:
+def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float) -> tuple[float, Optional[DQCandidate]]:
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
     try:
         env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CAP_PLAN * limits.i_max, CAP_PLAN * cap)
-        table = dq_table(d, env, width, passes)
+        table = dq_table(d, env, width, motor)
     except ValueError:
         return math.inf, None
     mg = dq_margins(table, motor, limits.v_use * limits.v_bus, limits.i_max, cap)
-    return mg["worst"], DQCandidate(float(table.breaks[-1]), kappa, width, passes, mg, table)
+    return mg["worst"], DQCandidate(float(table.breaks[-1]), kappa, width, mg, table)
 
 
-def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float,
-                 passes: int) -> Optional[DQCandidate]:
+def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float,
+                 width: float) -> Optional[DQCandidate]:
     """The shortest feasible table at ``width``: the secant on kappa from 1, then regula falsi once bracketed."""
     best: Optional[DQCandidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
     k, k_prev, s_prev = 1.0, math.nan, math.nan
     for _ in range(SEARCH):
-        s, c = _try(d, motor, limits, cap, k, width, passes)
+        s, c = _try(d, motor, limits, cap, k, width)
         aim = s + 0.5 * _S_TOL
         if c is not None and s <= 0:
             if best is None or c.tf < best.tf:
@@ -137,11 +135,10 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     cap = speed_cap(motor, limits, control_rate)
     rise = motor.L * limits.i_max / (limits.v_use * limits.v_bus)
     best: Optional[DQCandidate] = None
-    for passes in (1, 2):
-        for k in widths or DEFAULT_WIDTHS:
-            c = search_kappa(d, motor, limits, cap, k * rise, passes)
-            if c is not None and (best is None or c.tf < best.tf):
-                best = c
+    for k in widths or DEFAULT_WIDTHS:
+        c = search_kappa(d, motor, limits, cap, k * rise)
+        if c is not None and (best is None or c.tf < best.tf):
+            best = c
     if best is None:
         raise ValueError(f"no feasible field-weakening plan of {distance} rad within {limits}: raise v_bus or i_max")
     return best

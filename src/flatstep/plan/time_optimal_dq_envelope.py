@@ -31,7 +31,7 @@ from ..model.motor import MotorParams
 
 Array = NDArray[np.float64]
 #: Speed-grid points of the envelope (csrc/time_optimal_dq.h ``TOD_GRID``).
-GRID = 160
+GRID = 192
 #: Bisection halvings for the speed where no torque is left (csrc/time_optimal_dq.h ``TOD_PROBE``).
 PROBE = 48
 

@@ -21,8 +21,8 @@ from ..model.motor import MotorParams
 from .d_current import hermite_cubic
 from .envelope import Envelope
 from .piecewise import horner_rows
-from .segments import hermite_rows
-from .smoothing import _box, _gradient, _knots, timing
+from .limits import MotorLimits
+from .smoothing import _box, _gradient, smoothed_table, timing
 from .time_optimal_dq_envelope import DQEnvelope
 
 Array = NDArray[np.float64]
@@ -30,6 +30,8 @@ Array = NDArray[np.float64]
 CHECK = 8
 #: The d current's extra centred box, in smoothing widths either side.
 ID_SPREAD = 4
+# smoothed_table's rho rows need limits; the d-q table does not read them
+_ANY_LIMITS = MotorLimits(v_bus=24.0, i_max=1.0)
 
 
 class DQTable(NamedTuple):
@@ -41,12 +43,16 @@ class DQTable(NamedTuple):
     di_d: Array
 
 
-def dq_table(distance: float, env: DQEnvelope, width: float, passes: int = 2) -> DQTable:
+def dq_table(distance: float, env: DQEnvelope, width: float, motor: MotorParams) -> DQTable:
     """The bang-bang move on ``env`` over ``distance`` > 0 and its d current, smoothed by ``width`` [s], as a table.
 
-    The sampling, the cut of a long cruise and the knots are those of :func:`flatstep.plan.smoothing.smoothed_table`.
+    Theta's rows are :func:`flatstep.plan.smoothing.smoothed_table`'s (csrc/time_optimal_table.c's in C); the d
+    current is sampled, cut and boxed as its speed is, then spread by a centred running mean of ``ID_SPREAD``
+    widths either side (narrowed towards the ends, where it is 0 at rest): it changes slower than the torque
+    current. Its knots are theta's.
     """
     speed_env = Envelope(env.omega, env.a_plus, env.a_minus)
+    table = smoothed_table(distance, speed_env, width, motor, _ANY_LIMITS)
     b, dt, n_box, n, r, k = timing(distance, speed_env, width)
     total = b.t1 + b.cruise + b.t2
     i = np.arange(n - k)
@@ -58,43 +64,17 @@ def dq_table(distance: float, env: DQEnvelope, width: float, passes: int = 2) ->
     # the d current of the side: the envelope's top while speeding up and cruising, its bottom while braking
     i_d = np.where(braking, np.interp(speed, env.omega, env.id_minus), np.interp(speed, env.omega, env.id_plus))
     i_d[-1] = 0.0
-    for _ in range(passes):
-        i_d = _box(i_d, n_box)
-    # a centred running mean more, of ID_SPREAD widths either side, narrowed towards the ends so that the d
-    # current still starts and ends at rest: the d current changes slower than the torque current
+    i_d = _box(_box(i_d, n_box), n_box)
     j = np.arange(i_d.size)
     half = np.minimum(np.minimum(j, i_d.size - 1 - j), ID_SPREAD * n_box)
     csum = np.concatenate([[0.0], np.cumsum(i_d)])
     i_d = (csum[j + half + 1] - csum[j - half]) / (2 * half + 1)
-    for _ in range(passes):
-        speed = _box(speed, n_box)
-    inc = 0.5 * (speed[1:] + speed[:-1]) * dt
-    r = min(r, speed.size - 1)
-    cruise = speed[r] if k else 0.0
-    covered = float(np.sum(inc) + k * dt * cruise)
-    if not (covered > 0 and math.isfinite(covered)):
-        raise ValueError(f"the smoothed profile of {distance:g} rad at width {width:g} s covers no angle")
-    scale = distance / covered
-    knots = _knots(speed.size - 1 + k, (b.t1 + passes * width) / dt + 4, (b.t1 + b.cruise) / dt - 4, b.cruise > 0)
+    r = min(r, i_d.size - 1)
+    knots = np.rint(table.breaks / dt).astype(np.intp)  # the breaks are knot indices times dt
     at = np.where(knots < r, knots, np.where(knots >= r + k, knots - k, r))
-    sums = np.where(at[1:] > at[:-1], np.add.reduceat(inc, np.minimum(at[:-1], inc.size - 1)), 0.0)
-    cut = np.clip(knots[1:], r, r + k) - np.clip(knots[:-1], r, r + k)
-    step = (sums + cut * dt * cruise) * scale
-    angle = np.concatenate([[0.0], np.cumsum(step)])
-    step[-1] = distance - angle[-2]
-    speed = speed * scale
-    acc = _gradient(speed, dt)
-    jerk = _gradient(acc, dt)
-    state = np.column_stack([angle, speed[at], acc[at], jerk[at]])
-    state[0, 1:] = state[-1, 1:] = 0.0
-    h = np.diff(knots) * dt
-    start, end = state[:-1].copy(), state[1:].copy()
-    start[:, 0], end[:, 0] = 0.0, step
-    rows = hermite_rows(start, end, h)
-    rows[:, -1] += angle[:-1]
     id_k, did_k = i_d[at], _gradient(i_d, dt)[at]
     did_k[0] = did_k[-1] = 0.0
-    return DQTable(np.concatenate([[0.0], np.cumsum(h)]), rows, id_k, did_k)
+    return DQTable(table.breaks, table.theta, id_k, did_k)
 
 
 def dq_margins(table: DQTable, motor: MotorParams, v_limit: float, i_max: float, speed_max: float,
