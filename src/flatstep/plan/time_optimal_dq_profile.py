@@ -11,7 +11,6 @@ inductance needs :math:`L\dot i` on top, which :func:`dq_margins` measures on th
 """
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -20,8 +19,8 @@ from numpy.typing import NDArray
 from ..model.motor import MotorParams
 from .d_current import hermite_cubic
 from .envelope import Envelope
-from .piecewise import horner_rows
 from .limits import MotorLimits
+from .piecewise import horner_rows
 from .smoothing import _box, _gradient, smoothed_table, timing
 from .time_optimal_dq_envelope import DQEnvelope
 
