@@ -31,10 +31,13 @@ import numpy as np
 
 from ..model.motor import MotorParams
 from ..validate import InputError, check_choice
-from .arguments import check_angle, check_limits, check_motor, check_t0
+from ..validate.limits import MAX_PLAN_SAMPLES
+from .arguments import check_angle, check_engine, check_limits, check_motor, check_t0
 from .d_current import DCurrentPlan
+from .envelope import Envelope
 from .limits import MotorLimits
 from .piecewise import NCOEF, PiecewisePlan
+from .smoothing import timing
 from .time_optimal_dq_envelope import dq_envelope
 from .time_optimal_dq_profile import DQTable, dq_margins, dq_table
 
@@ -72,6 +75,8 @@ def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: f
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
     try:
         env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CAP_PLAN * limits.i_max, CAP_PLAN * cap)
+        if timing(d, Envelope(env.omega, env.a_plus, env.a_minus), width).n > MAX_PLAN_SAMPLES:
+            return math.inf, None
         table = dq_table(d, env, width, motor)
     except ValueError:
         return math.inf, None
@@ -113,7 +118,8 @@ def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float,
 
 
 def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, voltage: str = "phase",
-                 control_rate: float = 20000.0, widths: Optional[tuple[float, ...]] = None) -> DQCandidate:
+                 control_rate: float = 20000.0, widths: Optional[tuple[float, ...]] = None,
+                 engine: str = "python") -> DQCandidate:
     """The shortest feasible field-weakening table over ``distance`` != 0 [rad] (module docstring).
 
     Raises
@@ -132,6 +138,12 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
                          "is a number of Hz > 0")
     if d == 0:
         raise InputError("distance", distance, "distance=0 rad: a move needs a distance; a rest is a dwell")
+    check_engine(engine)
+    if engine == "c" and widths is None:
+        from .time_optimal_dq_c import plan_table
+
+        table, margins, kappa, width = plan_table(d, motor, limits, control_rate)
+        return DQCandidate(float(table.breaks[-1]), kappa, width, margins, table)
     cap = speed_cap(motor, limits, control_rate)
     rise = motor.L * limits.i_max / (limits.v_use * limits.v_bus)
     best: Optional[DQCandidate] = None
@@ -159,7 +171,7 @@ class DQPlan(NamedTuple):
 
 def time_optimal_dq(distance: float, motor: MotorParams, limits: MotorLimits, *, theta1: float = 0.0,
                     t0: float = 0.0, voltage: str = "phase", control_rate: float = 20000.0,
-                    widths: Optional[tuple[float, ...]] = None) -> DQPlan:
+                    widths: Optional[tuple[float, ...]] = None, engine: str = "c") -> DQPlan:
     """The shortest feasible field-weakening move over ``distance`` [rad] from ``theta1`` at ``t0`` (module docstring).
 
     Raises
@@ -171,7 +183,7 @@ def time_optimal_dq(distance: float, motor: MotorParams, limits: MotorLimits, *,
     """
     d = check_angle(distance, "distance")
     theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
-    c = plan_dq_move(d, motor, limits, voltage=voltage, control_rate=control_rate, widths=widths)
+    c = plan_dq_move(d, motor, limits, voltage=voltage, control_rate=control_rate, widths=widths, engine=engine)
     tb = c.table
     sign = 1.0 if d >= 0 else -1.0
     theta = sign * tb.theta
