@@ -21,6 +21,7 @@ struct tod_search {
     fs_real *s;          // TO_SUM_LEN: running sums
     struct tod_result *out;
     bool found;
+    fs_real start, width_tf, width_kappa;  // the next search's first kappa; the last width's best
 };
 
 size_t time_optimal_dq_work_len(void)
@@ -66,17 +67,17 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
     struct to_move mv;
     struct to_work *w = &s->w;
     fs_real t, total, speed, *x = s->x, *y = s->y;
-    size_t i, len, half, at, r, k, nk = w->tr.n + 1;
+    size_t i, len, half, at, r, k, nk = w->tr.n + 1, j_acc = 0, j_dec = TO_GRID - 2, j_id = 0;
     to_bang_bang(s->d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
     for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt, as the speed
         t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
         if (t <= mv.t1)
-            speed = to_interp(t, w->tacc, w->omega, TO_GRID);
+            speed = to_interp_walk(t, w->tacc, w->omega, TO_GRID, &j_acc);
         else if (t < mv.t1 + mv.cruise)
             speed = mv.w_peak;
         else
-            speed = to_interp(total - t, w->tdec, w->omega, TO_GRID);
+            speed = to_interp_walk(total - t, w->tdec, w->omega, TO_GRID, &j_dec);
         if (i == mv.n - mv.k - 1)
             speed = 0;
         // the d current of the side: the top while speeding up and cruising, the bottom while braking
@@ -188,6 +189,8 @@ static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
     out->tables++;
     g = margins(s, kid, kdid);
     tf = s->w.breaks[s->w.tr.n];
+    if (g.worst <= 0 && tf < s->width_tf)
+        s->width_tf = tf, s->width_kappa = kappa;
     if (g.worst <= 0 && (!s->found || tf < out->breaks[out->n])) {
         s->found = true;
         out->n = s->w.tr.n;
@@ -200,12 +203,14 @@ static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
     return g.worst;
 }
 
-// Returns nothing; the secant on kappa from 1, then regula falsi once bracketed (time_optimal_dq.search_kappa).
+// Returns nothing; the secant on kappa from s->start, then regula falsi once bracketed (time_optimal_dq.search_kappa);
+// s->width_tf and s->width_kappa are the width's shortest feasible table's duration and bus share (inf and 0: none).
 static void search_kappa(struct tod_search *s, fs_real width)
 {
     const fs_real nan = (fs_real)NAN;
-    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = 1, k_prev = nan, s_prev = nan, x, aim, next;
+    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = s->start, k_prev = nan, s_prev = nan, x, aim, next;
     int it;
+    s->width_tf = (fs_real)INFINITY, s->width_kappa = 0;
     for (it = 0; it < TOD_SEARCH; it++) {
         x = try_table(s, k, width);
         aim = x + FS_C(0.5) * TOD_S_TOL;
@@ -231,13 +236,38 @@ static void search_kappa(struct tod_search *s, fs_real width)
     }
 }
 
+// Returns the duration of width i's shortest feasible table (inf when none); the next width's search starts at its
+// kappa (time_optimal_dq.plan_dq_move's run).
+static fs_real run_width(struct tod_search *s, const fs_real *widths, long i)
+{
+    search_kappa(s, widths[i]);
+    if (s->width_tf < (fs_real)INFINITY)
+        s->start = s->width_kappa;
+    return s->width_tf;
+}
+
+// Returns true when a width beyond the one before i was shorter; walks by step while the duration falls.
+static bool walk(struct tod_search *s, const fs_real *widths, long i, long step, fs_real f)
+{
+    bool better = false;
+    fs_real fi;
+    for (; i >= 0 && i < TOD_WIDTHS; i += step) {
+        fi = run_width(s, widths, i);
+        if (fi < f)
+            better = true, f = fi;
+        else if (f < (fs_real)INFINITY)
+            break;
+    }
+    return better;
+}
+
 int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *lim, fs_real distance, fs_real *work,
                          size_t work_len, struct tod_result *out)
 {
     static const fs_real WIDTHS[TOD_WIDTHS] = {FS_C(0.75), 1, FS_C(1.5), 2, 3};
     struct tod_search s;
     struct to_limits any = {24, 1, FS_C(0.3), FS_C(0.3), 10, FS_C(1.2), FS_C(0.9), 0, 0, 0};
-    fs_real sign = distance < 0 ? -1 : 1, rise;
+    fs_real sign = distance < 0 ? -1 : 1, rise, widths[TOD_WIDTHS], f0;
     size_t i, k;
     out->n = 0, out->tables = 0;
     if (!motor_params_valid(m) || !fs_isfinite(distance) || distance == 0
@@ -263,7 +293,12 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
         return TOD_ESTART;
     rise = m->L * lim->i_max / (lim->v_use * lim->v_bus);
     for (i = 0; i < TOD_WIDTHS; i++)
-        search_kappa(&s, WIDTHS[i] * rise);
+        widths[i] = WIDTHS[i] * rise;
+    // from the middle width down while the duration falls, then up unless down found a shorter table
+    s.start = 1;
+    f0 = run_width(&s, widths, TOD_WIDTHS / 2);
+    if (!walk(&s, widths, TOD_WIDTHS / 2 - 1, -1, f0) || !(f0 < (fs_real)INFINITY))
+        walk(&s, widths, TOD_WIDTHS / 2 + 1, 1, f0);
     if (!s.found) {
         out->n = 0;
         return TOD_ENOPLAN;

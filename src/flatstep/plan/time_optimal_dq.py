@@ -12,8 +12,9 @@ width :math:`w` (twice), fits both as a table and measures the voltages of the d
 
 **Search.** :math:`1 - \kappa` is the bus the inductance needs on top of the steady voltages. For each width
 (multiples of the current's rise time :math:`L i_{max}/(v_{use}v_{bus})`, :data:`DEFAULT_WIDTHS`), :math:`\kappa`
-is driven to the table's worst margin 0 by the secant, then regula falsi, in at most :data:`SEARCH` tables; the
-shortest feasible table of all wins.
+is driven to the table's worst margin 0 by the secant, then regula falsi, in at most :data:`SEARCH` tables,
+from the bus share the previous width found. The widths are walked from the middle one down while the duration
+falls, then up unless the way down found a shorter table; the shortest feasible table wins.
 
 **Limits.** The bus :math:`|v| \le v_{use}v_{bus}` (``voltage="phase"``: the inscribed circle of each phase's
 :math:`\pm v_{use}v_{bus}`, met once per electrical turn; ``"vector"``: the norm itself), :math:`|i| \le i_{max}`,
@@ -84,12 +85,12 @@ def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: f
     return mg["worst"], DQCandidate(float(table.breaks[-1]), kappa, width, mg, table)
 
 
-def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float,
-                 width: float) -> Optional[DQCandidate]:
-    """The shortest feasible table at ``width``: the secant on kappa from 1, then regula falsi once bracketed."""
+def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float,
+                 start: float = 1.0) -> Optional[DQCandidate]:
+    """The shortest feasible table at ``width``: the secant on kappa from ``start``, then regula falsi once bracketed."""
     best: Optional[DQCandidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
-    k, k_prev, s_prev = 1.0, math.nan, math.nan
+    k, k_prev, s_prev = start, math.nan, math.nan
     for _ in range(SEARCH):
         s, c = _try(d, motor, limits, cap, k, width)
         aim = s + 0.5 * _S_TOL
@@ -146,11 +147,36 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
         return DQCandidate(float(table.breaks[-1]), kappa, width, margins, table)
     cap = speed_cap(motor, limits, control_rate)
     rise = motor.L * limits.i_max / (limits.v_use * limits.v_bus)
+    ws = sorted(k * rise for k in (widths or DEFAULT_WIDTHS))
     best: Optional[DQCandidate] = None
-    for k in widths or DEFAULT_WIDTHS:
-        c = search_kappa(d, motor, limits, cap, k * rise)
-        if c is not None and (best is None or c.tf < best.tf):
+    start = 1.0
+
+    def run(i: int) -> float:
+        nonlocal best, start
+        c = search_kappa(d, motor, limits, cap, ws[i], start)
+        if c is None:
+            return math.inf
+        start = c.kappa  # the next width's search starts at this one's bus share
+        if best is None or c.tf < best.tf:
             best = c
+        return c.tf
+
+    def walk(i: int, step: int, f: float) -> bool:
+        """Whether a width beyond ws[i - step] was shorter; walks while the duration falls."""
+        better = False
+        while 0 <= i < len(ws):
+            fi = run(i)
+            if fi < f:
+                better, f = True, fi
+            elif f < math.inf:
+                break
+            i += step
+        return better
+
+    i0 = len(ws) // 2
+    f0 = run(i0)
+    if not walk(i0 - 1, -1, f0) or f0 == math.inf:  # an infeasible middle width: both ways
+        walk(i0 + 1, 1, f0)
     if best is None:
         raise ValueError(f"no feasible field-weakening plan of {distance} rad within {limits}: raise v_bus or i_max")
     return best
