@@ -12,11 +12,12 @@ static bool positive(fs_real x)
 void dq_smc_params_default(struct dq_smc_params *p)
 {
     struct smc_params sp;
-    struct dq_smc_current none = {0, 0, 0, 1, 0, 0};
+    struct dq_smc_current none = {0};  // i_d* = 0, no table
     struct torque_model tm = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
     smc_params_default(&sp);
     p->motor = sp.motor;
     p->plan = sp.plan;
+    none.tf = 1;
     p->current = none;
     p->gains = sp.gains;
     p->torques = tm;

@@ -81,8 +81,7 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
         if (i == mv.n - mv.k - 1)
             speed = 0;
         // the d current of the side: the top while speeding up and cruising, the bottom while braking
-        x[i] = t >= mv.t1 + mv.cruise ? to_interp(speed, w->omega, s->idm, TO_GRID)
-                                      : to_interp(speed, w->omega, s->idp, TO_GRID);
+        x[i] = to_interp_walk(speed, w->omega, t >= mv.t1 + mv.cruise ? s->idm : s->idp, TO_GRID, &j_id);
     }
     x[mv.n - mv.k - 1] = 0;
     len = box(x, mv.n - mv.k, mv.n_box, s->s, y);
