@@ -72,7 +72,8 @@ def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> f
     return min(cap, limits.speed_max) if limits.speed_max else cap
 
 
-def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float) -> tuple[float, Optional[DQCandidate]]:
+def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float,
+         width: float) -> tuple[float, Optional[DQCandidate]]:
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
     try:
         env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CAP_PLAN * limits.i_max, CAP_PLAN * cap)
@@ -87,7 +88,7 @@ def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: f
 
 def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float,
                  start: float = 1.0) -> Optional[DQCandidate]:
-    """The shortest feasible table at ``width``: the secant on kappa from ``start``, then regula falsi once bracketed."""
+    """The shortest feasible table at ``width``: the secant on kappa from ``start``, then regula falsi in a bracket."""
     best: Optional[DQCandidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
     k, k_prev, s_prev = start, math.nan, math.nan
