@@ -136,3 +136,43 @@ def test_plan_tracked_by_the_dq_law_on_a_20khz_drive() -> None:
     i_d = np.cos(NEMA17.Nr * r.theta) * r.ia + np.sin(NEMA17.Nr * r.theta) * r.ib
     k = int(np.argmax(r.omega))
     assert i_d[k] < -0.2
+
+
+_FILE = """
+[motor]
+preset = "nema17"
+[drive]
+v_bus = 24.0
+control_rate = 20000.0
+[limits]
+i_max = 1.0
+v_use = 0.84
+[plan]
+planner = "time_optimal"
+field_weakening = true
+waypoints = [0.5, {last}]
+[controller]
+type = "{ctrl}"
+"""
+
+
+def test_scenario_file_plans_field_weakening_for_the_dq_law(tmp_path: object) -> None:
+    from pathlib import Path
+
+    from flatstep.studies.scenario_file import read_scenario_file
+
+    p = Path(str(tmp_path)) / "fw.toml"
+    p.write_text(_FILE.format(last=1.5, ctrl="dq_smc"))
+    sf = read_scenario_file(p)
+    direct = time_optimal_dq(1.0, NEMA17, limits(24.0), theta1=0.5)
+    assert sf.scenario.plan.tf == pytest.approx(direct.plan.tf, rel=1e-12)
+    assert sf.scenario.d_current.knot_id == direct.d_current.knot_id
+    p.write_text(_FILE.format(last=1.5, ctrl="smc"))
+    with pytest.raises(ValueError, match="fw.toml:controller: a field-weakening plan is tracked by a dq_smc"):
+        read_scenario_file(p)
+    p.write_text(_FILE.format(last="1.5, 2.5", ctrl="dq_smc"))
+    with pytest.raises(ValueError, match="plan.waypoints: field_weakening plans one move"):
+        read_scenario_file(p)
+    p.write_text(_FILE.format(last=1.5, ctrl="dq_smc").replace("field_weakening = true", 'voltage = "phase"'))
+    with pytest.raises(ValueError, match="plan.voltage: the bus limit is chosen for a field-weakening plan"):
+        read_scenario_file(p)

@@ -37,7 +37,8 @@ from .arguments import check_angle, check_engine, check_limits, check_motor, che
 from .d_current import DCurrentPlan
 from .envelope import Envelope
 from .limits import MotorLimits
-from .piecewise import NCOEF, PiecewisePlan
+from .piecewise import PiecewisePlan, horner_rows
+from .segments import hermite_rows
 from .smoothing import timing
 from .time_optimal_dq_envelope import dq_envelope
 from .time_optimal_dq_profile import DQTable, dq_margins, dq_table
@@ -54,6 +55,8 @@ SEARCH = 7
 CAP_PLAN = 0.995
 _S_TOL = 0.003  # a feasible table within 0.3 % of the limit ends a width's search
 VOLTAGES = ("phase", "vector")
+#: The control rate [Hz] the speed cap follows when none is given.
+DEFAULT_RATE = 20000.0
 
 
 class DQCandidate(NamedTuple):
@@ -120,7 +123,7 @@ def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, 
 
 
 def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, voltage: str = "phase",
-                 control_rate: float = 20000.0, widths: Optional[tuple[float, ...]] = None,
+                 control_rate: float = DEFAULT_RATE, widths: Optional[tuple[float, ...]] = None,
                  engine: str = "python") -> DQCandidate:
     """The shortest feasible field-weakening table over ``distance`` != 0 [rad] (module docstring).
 
@@ -184,11 +187,11 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
 
 
 class DQPlan(NamedTuple):
-    """A field-weakening move: the plan of theta (the plan protocol's object) and the planned d current.
+    r"""A field-weakening move: the plan of theta (the plan protocol's object) and the planned d current.
 
     The d-q law tracks both: ``DQSMC(motor, plan, gains, d_current=d_current)``. The plan's rho channel holds
-    ``2 i_max``, above any current the plan asks for (the d-q law does not read it; the paper's law does not
-    track these plans).
+    the planned current magnitude :math:`\sqrt{i_q^2 + i_d^2 + i_{hold}^2}` (floored by ``i_hold``, so that the
+    paper's flat maps stay defined and the move starts from a holding current; the d-q law does not read it).
     """
 
     plan: PiecewisePlan
@@ -196,8 +199,21 @@ class DQPlan(NamedTuple):
     found: DQCandidate
 
 
+def _rho_rows(tb: DQTable, motor: MotorParams, i_hold: float) -> np.ndarray:
+    """Hermite rows of the planned current magnitude hypot(i_q, i_d, i_hold) and its rate through the knots."""
+    m = motor
+    hs = np.diff(tb.breaks)
+    seg = np.append(np.arange(hs.size), hs.size - 1)
+    tau = np.append(np.zeros(hs.size), 1.0)
+    w, acc, jerk = (horner_rows(tb.theta, seg, tau, k) / hs[seg] ** k for k in (1, 2, 3))
+    i_q, di_q = (m.J * acc + m.B * w) / m.Km, (m.J * jerk + m.B * acc) / m.Km
+    rho = np.sqrt(i_q * i_q + tb.i_d * tb.i_d + i_hold * i_hold)
+    state = np.column_stack([rho, (i_q * di_q + tb.i_d * tb.di_d) / rho, 0 * rho, 0 * rho])
+    return hermite_rows(state[:-1], state[1:], hs)
+
+
 def time_optimal_dq(distance: float, motor: MotorParams, limits: MotorLimits, *, theta1: float = 0.0,
-                    t0: float = 0.0, voltage: str = "phase", control_rate: float = 20000.0,
+                    t0: float = 0.0, voltage: str = "phase", control_rate: float = DEFAULT_RATE,
                     widths: Optional[tuple[float, ...]] = None, engine: str = "c") -> DQPlan:
     """The shortest feasible field-weakening move over ``distance`` [rad] from ``theta1`` at ``t0`` (module docstring).
 
@@ -215,10 +231,8 @@ def time_optimal_dq(distance: float, motor: MotorParams, limits: MotorLimits, *,
     sign = 1.0 if d >= 0 else -1.0
     theta = sign * tb.theta
     theta[:, -1] += theta1
-    rho = np.zeros((tb.theta.shape[0], NCOEF))
-    rho[:, -1] = 2.0 * limits.i_max
     breaks = tb.breaks + t0
-    plan = PiecewisePlan(breaks, theta, rho)
+    plan = PiecewisePlan(breaks, theta, _rho_rows(tb, motor, limits.i_hold))
     d_current = DCurrentPlan(t0=t0, tf=float(breaks[-1]), knot_t=tuple(breaks), knot_id=tuple(tb.i_d),
                              knot_did=tuple(tb.di_d))
     return DQPlan(plan, d_current, c)
