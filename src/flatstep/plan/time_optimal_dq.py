@@ -55,6 +55,8 @@ SEARCH = 7
 CAP_PLAN = 0.995
 _S_TOL = 0.003  # a feasible table within 0.3 % of the limit ends a width's search
 VOLTAGES = ("phase", "vector")
+#: Of i_max, the least floor of the plan's rho channel (DQPlan).
+RHO_FLOOR = 0.1
 #: The control rate [Hz] the speed cap follows when none is given.
 DEFAULT_RATE = 20000.0
 
@@ -190,8 +192,9 @@ class DQPlan(NamedTuple):
     r"""A field-weakening move: the plan of theta (the plan protocol's object) and the planned d current.
 
     The d-q law tracks both: ``DQSMC(motor, plan, gains, d_current=d_current)``. The plan's rho channel holds
-    the planned current magnitude :math:`\sqrt{i_q^2 + i_d^2 + i_{hold}^2}` (floored by ``i_hold``, so that the
-    paper's flat maps stay defined and the move starts from a holding current; the d-q law does not read it).
+    the planned current magnitude :math:`\sqrt{i_q^2 + i_d^2 + f^2}`, floored by :math:`f` the larger of ``i_hold``
+    and :data:`RHO_FLOOR` ``i_max`` (the paper's flat maps stay defined between the knots, and the move starts
+    from a holding current; the d-q law does not read it).
     """
 
     plan: PiecewisePlan
@@ -232,7 +235,7 @@ def time_optimal_dq(distance: float, motor: MotorParams, limits: MotorLimits, *,
     theta = sign * tb.theta
     theta[:, -1] += theta1
     breaks = tb.breaks + t0
-    plan = PiecewisePlan(breaks, theta, _rho_rows(tb, motor, limits.i_hold))
+    plan = PiecewisePlan(breaks, theta, _rho_rows(tb, motor, max(limits.i_hold, RHO_FLOOR * limits.i_max)))
     d_current = DCurrentPlan(t0=t0, tf=float(breaks[-1]), knot_t=tuple(breaks), knot_id=tuple(tb.i_d),
                              knot_did=tuple(tb.di_d))
     return DQPlan(plan, d_current, c)
