@@ -34,7 +34,7 @@ from ..model.motor import MotorParams
 from ..validate import InputError, check_choice
 from ..validate.limits import MAX_PLAN_SAMPLES
 from .arguments import check_angle, check_engine, check_limits, check_motor, check_t0
-from .d_current import DCurrentPlan
+from .d_current import DCurrentPlan, hermite_cubic
 from .envelope import Envelope
 from .limits import MotorLimits
 from .piecewise import PiecewisePlan, horner_rows
@@ -192,8 +192,8 @@ class DQPlan(NamedTuple):
     r"""A field-weakening move: the plan of theta (the plan protocol's object) and the planned d current.
 
     The d-q law tracks both: ``DQSMC(motor, plan, gains, d_current=d_current)``. The plan's rho channel holds
-    the planned current magnitude :math:`\sqrt{i_q^2 + i_d^2 + f^2}`, floored by :math:`f` the larger of ``i_hold``
-    and :data:`RHO_FLOOR` ``i_max`` (the paper's flat maps stay defined between the knots, and the move starts
+    a bound on the planned current magnitude :math:`\sqrt{i_q^2 + i_d^2 + f^2}`, :math:`f` the larger of
+    ``i_hold`` and :data:`RHO_FLOOR` ``i_max`` (so that the paper's flat maps stay defined and the move starts
     from a holding current; the d-q law does not read it).
     """
 
@@ -202,16 +202,22 @@ class DQPlan(NamedTuple):
     found: DQCandidate
 
 
-def _rho_rows(tb: DQTable, motor: MotorParams, i_hold: float) -> np.ndarray:
-    """Hermite rows of the planned current magnitude hypot(i_q, i_d, i_hold) and its rate through the knots."""
+def _rho_rows(tb: DQTable, motor: MotorParams, floor: float, samples: int = 16) -> np.ndarray:
+    """Rows of the plan's rho channel: at each knot the largest hypot(i_q, i_d, floor) over its two segments.
+
+    Each segment then rises or falls monotonically between its knots (its three derivatives are 0 there), so the
+    channel stays above the planned current magnitude sampled at ``samples`` points per segment.
+    """
     m = motor
     hs = np.diff(tb.breaks)
-    seg = np.append(np.arange(hs.size), hs.size - 1)
-    tau = np.append(np.zeros(hs.size), 1.0)
-    w, acc, jerk = (horner_rows(tb.theta, seg, tau, k) / hs[seg] ** k for k in (1, 2, 3))
-    i_q, di_q = (m.J * acc + m.B * w) / m.Km, (m.J * jerk + m.B * acc) / m.Km
-    rho = np.sqrt(i_q * i_q + tb.i_d * tb.i_d + i_hold * i_hold)
-    state = np.column_stack([rho, (i_q * di_q + tb.i_d * tb.di_d) / rho, 0 * rho, 0 * rho])
+    seg = np.repeat(np.arange(hs.size), samples)
+    tau = np.tile(np.arange(samples) / (samples - 1.0), hs.size)
+    w, acc = (horner_rows(tb.theta, seg, tau, k) / hs[seg] ** k for k in (1, 2))
+    i_d, _ = hermite_cubic(tb.breaks[seg] + tau * hs[seg], tb.breaks, tb.i_d, tb.di_d)
+    i_q = (m.J * acc + m.B * w) / m.Km
+    peak = np.max(np.sqrt(i_q * i_q + i_d * i_d + floor * floor).reshape(hs.size, samples), axis=1)
+    rho = np.maximum(np.append(peak, peak[-1]), np.insert(peak, 0, peak[0]))
+    state = np.column_stack([rho, 0 * rho, 0 * rho, 0 * rho])
     return hermite_rows(state[:-1], state[1:], hs)
 
 
