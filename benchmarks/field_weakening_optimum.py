@@ -8,7 +8,7 @@ ratio, the C planner's time (median of 5 calls), and the plan run by the d-q law
 angle error during the move.
 
     .venv/bin/python benchmarks/field_weakening_optimum.py [--motors nema17 ldo-42sth60-2004mac ...]
-        [--bus 12 24] [--distances 0.3 1 5 20] [--grid 200]
+        [--bus 12 24] [--distances 0.3 1 5 20] [--grid 200] [--counts 4000]
 
 Needs the bench extra (CasADi). Motors are the ``nema17`` preset (at 1 A) or the stems of examples/motors/*.toml
 (at their rated current norm).
@@ -49,11 +49,11 @@ def motor(name: str) -> tuple[MotorParams, float]:
     return model.params, model.rated_rho
 
 
-def track(m: MotorParams, fw: object, v_bus: float) -> tuple[str, float]:
+def track(m: MotorParams, fw: object, v_bus: float, counts: int = 4000) -> tuple[str, float]:
     """The d-q law's run of the plan on the 20 kHz drive: its status and the largest |theta error| [rad] in the move."""
     plan, d_current = fw.plan, fw.d_current  # type: ignore[attr-defined]
-    loop = drive_loop(v_bus, RATE, 4000)
-    d = design_gains(m, plan, control_period=loop.control_period, v_bus=v_bus, encoder_counts=4000,
+    loop = drive_loop(v_bus, RATE, counts)
+    d = design_gains(m, plan, control_period=loop.control_period, v_bus=v_bus, encoder_counts=counts,
                      current_step=4 / 4096)
     loop = loop if loop.observer is not None else replace(loop, observer=d.observer)
     ctrl = DQFlatnessSMC(m, plan, d.gains, "observer", d_current=d_current)
@@ -79,6 +79,7 @@ def main() -> None:
     ap.add_argument("--bus", nargs="+", type=float, default=[12.0, 24.0])
     ap.add_argument("--distances", nargs="+", type=float, default=[0.1, 0.3, 1.0, 5.0, 20.0])
     ap.add_argument("--grid", type=int, default=200)
+    ap.add_argument("--counts", type=int, default=4000, help="encoder counts per revolution (default 4000)")
     a = ap.parse_args()
     print(f"{'motor':22s} {'bus':>4s} {'rad':>5s} {'plan ms':>9s} {'opt ms':>9s} {'ratio':>6s} {'cap':>5s} "
           f"{'w_pk':>5s} {'id_min':>6s} {'plan us':>8s} {'status':>7s} {'err mrad':>8s}")
@@ -92,7 +93,7 @@ def main() -> None:
                 plan_us = plan_time(dist, m, limits)
                 opt = minimum_time(dist, m, MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE,
                                                         speed_max=cap), voltage="vector", grid=a.grid)
-                status, err = track(m, fw, v_bus)
+                status, err = track(m, fw, v_bus, a.counts)
                 tf = fw.plan.tf - fw.plan.t0
                 print(f"{name:22s} {v_bus:4.0f} {dist:5.1f} {tf * 1e3:9.3f} {opt.tf * 1e3:9.3f} {tf / opt.tf:6.3f} "
                       f"{cap:5.0f} {fw.found.margins['speed_peak']:5.0f} {fw.found.margins['i_d_min']:6.2f} "
