@@ -1,14 +1,14 @@
 """The field-weakening planner against the true optimum, and its plans tracked on a 20 kHz drive.
 
 For each motor, bus and move: the planned duration of :func:`flatstep.plan.time_optimal_dq.time_optimal_dq`, the
-minimum time of the same problem by direct collocation (:func:`flatstep.bench.collocation.minimum_time`, vector
-bus, i_d free, the planner's speed cap, rest at i_d = i_hold = 0.01 i_max, the planner's rest being i_d = 0), their
+minimum time of the same problem by direct collocation (:func:`flatstep.bench.collocation.minimum_time`, the
+``--voltage`` bus, i_d free, the planner's speed cap, rest at i_d = i_hold = 0.01 i_max, the planner's rest being i_d = 0), their
 ratio, the C planner's time (median of 5 calls), and the plan run by the d-q law (designed gains, observer,
 4000-count encoder, 12-bit current ADC) on the nominal plant on the C engine at 20 kHz: its status and the largest
 angle error during the move.
 
     .venv/bin/python benchmarks/field_weakening_optimum.py [--motors nema17 ldo-42sth60-2004mac ...]
-        [--bus 12 24] [--distances 0.3 1 5 20] [--grid 200] [--counts 4000]
+        [--bus 12 24] [--distances 0.3 1 5 20] [--grid 200] [--counts 4000] [--voltage vector]
 
 Needs the bench extra (CasADi). Motors are the ``nema17`` preset (at 1 A) or the stems of examples/motors/*.toml
 (at their rated current norm).
@@ -79,6 +79,8 @@ def main() -> None:
     ap.add_argument("--bus", nargs="+", type=float, default=[12.0, 24.0])
     ap.add_argument("--distances", nargs="+", type=float, default=[0.1, 0.3, 1.0, 5.0, 20.0])
     ap.add_argument("--grid", type=int, default=200)
+    ap.add_argument("--voltage", choices=("vector", "phase"), default="vector",
+                    help="the bus limit of both the plan and the optimum (default vector)")
     ap.add_argument("--counts", type=int, default=4000, help="encoder counts per revolution (default 4000)")
     a = ap.parse_args()
     print(f"{'motor':22s} {'bus':>4s} {'rad':>5s} {'plan ms':>9s} {'opt ms':>9s} {'ratio':>6s} {'cap':>5s} "
@@ -89,10 +91,10 @@ def main() -> None:
             limits = MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE)
             cap = speed_cap(m, limits, RATE)
             for dist in a.distances:
-                fw = time_optimal_dq(dist, m, limits, control_rate=RATE)
+                fw = time_optimal_dq(dist, m, limits, control_rate=RATE, voltage=a.voltage)
                 plan_us = plan_time(dist, m, limits)
                 opt = minimum_time(dist, m, MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE,
-                                                        speed_max=cap), voltage="vector", grid=a.grid)
+                                                        speed_max=cap), voltage=a.voltage, grid=a.grid)
                 status, err = track(m, fw, v_bus, a.counts)
                 tf = fw.plan.tf - fw.plan.t0
                 print(f"{name:22s} {v_bus:4.0f} {dist:5.1f} {tf * 1e3:9.3f} {opt.tf * 1e3:9.3f} {tf / opt.tf:6.3f} "
