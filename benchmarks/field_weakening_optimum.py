@@ -2,9 +2,9 @@
 
 For each motor, bus and move: the planned duration of :func:`flatstep.plan.time_optimal_dq.time_optimal_dq`, the
 minimum time of the same problem by direct collocation (:func:`flatstep.bench.collocation.minimum_time`, the
-``--voltage`` bus, i_d free, the planner's speed cap, rest at i_d = i_hold = 0.01 i_max, the planner's rest being i_d = 0), their
-ratio, the C planner's time (median of 5 calls), and the plan run by the d-q law (designed gains, observer,
-4000-count encoder, 12-bit current ADC) on the nominal plant on the C engine at 20 kHz: its status and the largest
+``--voltage`` bus, i_d free, the planner's speed cap, rest at i_d = i_hold = 0.01 i_max, the planner's rest being
+i_d = 0), their ratio, the C planner's time (median of 5 calls), and the plan run by the d-q law (designed gains,
+observer, encoder, 12-bit current ADC) on the nominal plant on the C engine at 20 kHz: its status and the largest
 angle error during the move.
 
     .venv/bin/python benchmarks/field_weakening_optimum.py [--motors nema17 ldo-42sth60-2004mac ...]
