@@ -22,6 +22,7 @@ struct tod_search {
     struct tod_result *out;
     bool found;
     fs_real start, width_tf, width_kappa;  // the next search's first kappa; the last width's best
+    int passes;                            // box filters of the candidates: 1 or 2
 };
 
 size_t time_optimal_dq_work_len(void)
@@ -85,7 +86,10 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
     }
     x[mv.n - mv.k - 1] = 0;
     len = box(x, mv.n - mv.k, mv.n_box, s->s, y);
-    len = box(y, len, mv.n_box, s->s, x);
+    if (s->passes == 2)
+        len = box(y, len, mv.n_box, s->s, x);
+    else
+        memcpy(x, y, len * sizeof *x);
     s->s[0] = 0;  // the running mean of TOD_ID_SPREAD widths either side, narrowed at the ends
     for (i = 0; i < len; i++)
         s->s[i + 1] = s->s[i] + x[i];
@@ -183,7 +187,7 @@ static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
     if (!tod_envelope(s->m, kappa * l->v_use * l->v_bus, TOD_CAP_PLAN * l->i_max, TOD_CAP_PLAN * s->cap, &s->w, s->idp,
                       s->idm))
         return (fs_real)INFINITY;
-    if (!to_smoothed_table(s->m, &s->any, s->d, width, &s->w) || !d_current(s, width, kid, kdid))
+    if (!to_smoothed_table(s->m, &s->any, s->d, width, s->passes, &s->w) || !d_current(s, width, kid, kdid))
         return (fs_real)INFINITY;
     out->tables++;
     g = margins(s, kid, kdid);
@@ -294,10 +298,12 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     for (i = 0; i < TOD_WIDTHS; i++)
         widths[i] = WIDTHS[i] * rise;
     // from the middle width down while the duration falls, then up unless down found a shorter table
-    s.start = 1;
-    f0 = run_width(&s, widths, TOD_WIDTHS / 2);
-    if (!walk(&s, widths, TOD_WIDTHS / 2 - 1, -1, f0) || !(f0 < (fs_real)INFINITY))
-        walk(&s, widths, TOD_WIDTHS / 2 + 1, 1, f0);
+    for (s.passes = 1; s.passes <= 2; s.passes++) {  // the box once (the jerk jumps, the law takes it), twice
+        s.start = 1;
+        f0 = run_width(&s, widths, TOD_WIDTHS / 2);
+        if (!walk(&s, widths, TOD_WIDTHS / 2 - 1, -1, f0) || !(f0 < (fs_real)INFINITY))
+            walk(&s, widths, TOD_WIDTHS / 2 + 1, 1, f0);
+    }
     if (!s.found) {
         out->n = 0;
         return TOD_ENOPLAN;

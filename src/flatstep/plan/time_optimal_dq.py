@@ -7,14 +7,15 @@ default) and the two agree on the planned durations to rounding (tests/test_time
 torque current over the d current within the bus share :math:`\kappa\,v_{use}v_{bus}` and ``i_max`` (closed form:
 two discs in the current plane), hence the acceleration envelope :math:`a_\pm(\omega)` and its d currents;
 :mod:`~flatstep.plan.time_optimal_dq_profile` smooths the bang-bang move on it and its d current by a box of
-width :math:`w` (twice), fits both as a table and measures the voltages of the d-q flat inverse on it, the
+width :math:`w` (once or twice), fits both as a table and measures the voltages of the d-q flat inverse on it, the
 :math:`L\dot i` terms included.
 
 **Search.** :math:`1 - \kappa` is the bus the inductance needs on top of the steady voltages. For each width
 (multiples of the current's rise time :math:`L i_{max}/(v_{use}v_{bus})`, :data:`DEFAULT_WIDTHS`), :math:`\kappa`
 is driven to the table's worst margin 0 by the secant, then regula falsi, in at most :data:`SEARCH` tables,
-from the bus share the previous width found. The widths are walked from the middle one down while the duration
-falls, then up unless the way down found a shorter table; the shortest feasible table wins.
+from the bus share the previous width found. With the box once (the jerk jumps; the d-q law takes it), then
+twice, the widths are walked from the middle one down while the duration falls, then up unless the way down found
+a shorter table; the shortest feasible table wins.
 
 **Limits.** The bus :math:`|v| \le v_{use}v_{bus}` (``voltage="phase"``: the inscribed circle of each phase's
 :math:`\pm v_{use}v_{bus}`, met once per electrical turn; ``"vector"``: the norm itself), :math:`|i| \le i_{max}`,
@@ -77,14 +78,14 @@ def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> f
     return min(cap, limits.speed_max) if limits.speed_max else cap
 
 
-def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float,
-         width: float) -> tuple[float, Optional[DQCandidate]]:
+def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float,
+         passes: int) -> tuple[float, Optional[DQCandidate]]:
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
     try:
         env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CAP_PLAN * limits.i_max, CAP_PLAN * cap)
         if timing(d, Envelope(env.omega, env.a_plus, env.a_minus), width).n > MAX_PLAN_SAMPLES:
             return math.inf, None
-        table = dq_table(d, env, width, motor)
+        table = dq_table(d, env, width, motor, passes)
     except ValueError:
         return math.inf, None
     mg = dq_margins(table, motor, limits.v_use * limits.v_bus, limits.i_max, cap)
@@ -92,13 +93,13 @@ def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: f
 
 
 def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float,
-                 start: float = 1.0) -> Optional[DQCandidate]:
+                 start: float = 1.0, passes: int = 2) -> Optional[DQCandidate]:
     """The shortest feasible table at ``width``: the secant on kappa from ``start``, then regula falsi in a bracket."""
     best: Optional[DQCandidate] = None
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
     k, k_prev, s_prev = start, math.nan, math.nan
     for _ in range(SEARCH):
-        s, c = _try(d, motor, limits, cap, k, width)
+        s, c = _try(d, motor, limits, cap, k, width, passes)
         aim = s + 0.5 * _S_TOL
         if c is not None and s <= 0:
             if best is None or c.tf < best.tf:
@@ -155,11 +156,11 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
     rise = motor.L * limits.i_max / (limits.v_use * limits.v_bus)
     ws = sorted(k * rise for k in (widths or DEFAULT_WIDTHS))
     best: Optional[DQCandidate] = None
-    start = 1.0
+    start, passes = 1.0, 1
 
     def run(i: int) -> float:
         nonlocal best, start
-        c = search_kappa(d, motor, limits, cap, ws[i], start)
+        c = search_kappa(d, motor, limits, cap, ws[i], start, passes)
         if c is None:
             return math.inf
         start = c.kappa  # the next width's search starts at this one's bus share
@@ -179,10 +180,11 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
             i += step
         return better
 
-    i0 = len(ws) // 2
-    f0 = run(i0)
-    if not walk(i0 - 1, -1, f0) or f0 == math.inf:  # an infeasible middle width: both ways
-        walk(i0 + 1, 1, f0)
+    for boxes in (1, 2):  # the box once (the jerk jumps, the law takes it), then twice
+        start, passes, i0 = 1.0, boxes, len(ws) // 2
+        f0 = run(i0)
+        if not walk(i0 - 1, -1, f0) or f0 == math.inf:  # an infeasible middle width: both ways
+            walk(i0 + 1, 1, f0)
     if best is None:
         raise ValueError(f"no feasible field-weakening plan of {distance} rad within {limits}: raise v_bus or i_max")
     return best

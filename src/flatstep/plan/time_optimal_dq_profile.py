@@ -42,8 +42,8 @@ class DQTable(NamedTuple):
     di_d: Array
 
 
-def dq_table(distance: float, env: DQEnvelope, width: float, motor: MotorParams) -> DQTable:
-    """The bang-bang move on ``env`` over ``distance`` > 0 and its d current, smoothed by ``width`` [s], as a table.
+def dq_table(distance: float, env: DQEnvelope, width: float, motor: MotorParams, passes: int = 2) -> DQTable:
+    """The move on ``env`` over ``distance`` > 0 and its d current, boxed ``passes`` times by ``width`` [s], as a table.
 
     Theta's rows are :func:`flatstep.plan.smoothing.smoothed_table`'s (csrc/time_optimal_table.c's in C); the d
     current is sampled, cut and boxed as its speed is, then spread by a centred running mean of ``ID_SPREAD``
@@ -51,7 +51,7 @@ def dq_table(distance: float, env: DQEnvelope, width: float, motor: MotorParams)
     current. Its knots are theta's.
     """
     speed_env = Envelope(env.omega, env.a_plus, env.a_minus)
-    table = smoothed_table(distance, speed_env, width, motor, _ANY_LIMITS)
+    table = smoothed_table(distance, speed_env, width, motor, _ANY_LIMITS, passes)
     b, dt, n_box, n, r, k = timing(distance, speed_env, width)
     total = b.t1 + b.cruise + b.t2
     i = np.arange(n - k)
@@ -63,7 +63,8 @@ def dq_table(distance: float, env: DQEnvelope, width: float, motor: MotorParams)
     # the d current of the side: the envelope's top while speeding up and cruising, its bottom while braking
     i_d = np.where(braking, np.interp(speed, env.omega, env.id_minus), np.interp(speed, env.omega, env.id_plus))
     i_d[-1] = 0.0
-    i_d = _box(_box(i_d, n_box), n_box)
+    for _ in range(passes):
+        i_d = _box(i_d, n_box)
     j = np.arange(i_d.size)
     half = np.minimum(np.minimum(j, i_d.size - 1 - j), ID_SPREAD * n_box)
     csum = np.concatenate([[0.0], np.cumsum(i_d)])
