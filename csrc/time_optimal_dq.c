@@ -5,7 +5,9 @@
 #include <string.h>
 
 #define TOD_ELECTRICAL_SHARE FS_C(0.05)  // the largest electrical frequency over the control rate
-#define TOD_CAP_PLAN FS_C(0.995)         // of i_max and the speed cap, the share the envelope is planned at
+#define TOD_CAP_PLAN FS_C(0.995)         // of the speed cap, the share the envelope is planned at
+#define TOD_CURRENT_PLAN FS_C(0.97)      // of i_max, the share the envelope is planned at
+#define TOD_V_MARGIN FS_C(0.995)         // of the bus, the voltage a table may reach at its samples
 #define TOD_S_TOL FS_C(0.003)            // a feasible table within 0.3 % of the limit ends a width's search
 #define TOD_PI FS_C(3.14159265358979323846)
 
@@ -170,7 +172,7 @@ static struct tod_margins margins(const struct tod_search *s, const fs_real *kid
             g.i_d_min = fs_min(g.i_d_min, id);
         }
     g.voltage /= v_limit, g.current /= s->lim->i_max, g.speed = g.speed_peak / s->cap;
-    g.worst = fs_max(fs_max(g.voltage, g.current), g.speed) - 1;
+    g.worst = fs_max(fs_max(g.voltage / TOD_V_MARGIN, g.current), g.speed) - 1;
     if (!fs_isfinite(g.worst))
         g.worst = (fs_real)INFINITY;
     return g;
@@ -184,8 +186,8 @@ static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
     struct tod_margins g;
     fs_real kid[TO_MAX_SEGMENTS + 1], kdid[TO_MAX_SEGMENTS + 1], tf;
     const struct tod_limits *l = s->lim;
-    if (!tod_envelope(s->m, kappa * l->v_use * l->v_bus, TOD_CAP_PLAN * l->i_max, TOD_CAP_PLAN * s->cap, &s->w, s->idp,
-                      s->idm))
+    if (!tod_envelope(s->m, kappa * l->v_use * l->v_bus, TOD_CURRENT_PLAN * l->i_max, TOD_CAP_PLAN * s->cap, &s->w,
+                      s->idp, s->idm))
         return (fs_real)INFINITY;
     if (!to_smoothed_table(s->m, &s->any, s->d, width, s->passes, &s->w) || !d_current(s, width, kid, kdid))
         return (fs_real)INFINITY;
@@ -292,7 +294,8 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     s.w.tr.breaks = s.w.breaks, s.w.tr.theta = s.w.theta, s.w.tr.rho = s.w.rho;
     s.idp = work + time_optimal_work_len(), s.idm = s.idp + TO_GRID;
     s.x = s.idm + TO_GRID, s.y = s.x + TO_FINE_LEN + 1, s.s = s.y + TO_FINE_LEN + 1;
-    if (!tod_envelope(m, lim->v_use * lim->v_bus, TOD_CAP_PLAN * lim->i_max, TOD_CAP_PLAN * s.cap, &s.w, s.idp, s.idm))
+    if (!tod_envelope(m, lim->v_use * lim->v_bus, TOD_CURRENT_PLAN * lim->i_max, TOD_CAP_PLAN * s.cap, &s.w, s.idp,
+                      s.idm))
         return TOD_ESTART;
     rise = m->L * lim->i_max / (lim->v_use * lim->v_bus);
     for (i = 0; i < TOD_WIDTHS; i++)

@@ -52,8 +52,11 @@ ELECTRICAL_SHARE = 0.05
 DEFAULT_WIDTHS = (0.75, 1.0, 1.5, 2.0, 3.0)
 #: Tables tried per width.
 SEARCH = 7
-#: Of i_max and of the speed cap, the share the envelope is planned at (the fit may cross it by a little).
+#: Of the speed cap, the share the envelope is planned at (the fit may cross it by a little).
 CAP_PLAN = 0.995
+#: Of i_max, the share the envelope is planned at: the d current, spread wider than the torque current, leaves the
+#: current disc by up to a few percent where both are large.
+CURRENT_PLAN = 0.97
 _S_TOL = 0.003  # a feasible table within 0.3 % of the limit ends a width's search
 VOLTAGES = ("phase", "vector")
 #: Of i_max, the least floor of the plan's rho channel (DQPlan).
@@ -82,7 +85,7 @@ def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: f
          passes: int) -> tuple[float, Optional[DQCandidate]]:
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
     try:
-        env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CAP_PLAN * limits.i_max, CAP_PLAN * cap)
+        env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CURRENT_PLAN * limits.i_max, CAP_PLAN * cap)
         if timing(d, Envelope(env.omega, env.a_plus, env.a_minus), width).n > MAX_PLAN_SAMPLES:
             return math.inf, None
         table = dq_table(d, env, width, motor, passes)
