@@ -4,11 +4,11 @@
 #include "time_optimal_dq_stages.h"
 #include <string.h>
 
-#define TOD_ELECTRICAL_SHARE FS_C(0.05)  // the largest electrical frequency over the control rate
-#define TOD_CAP_PLAN FS_C(0.995)         // of the speed cap, the share the envelope is planned at
-#define TOD_CURRENT_PLAN FS_C(0.97)      // of i_max, the share the envelope is planned at
-#define TOD_V_MARGIN FS_C(0.995)         // of the bus, the voltage a table may reach at its samples
-#define TOD_S_TOL FS_C(0.003)            // a feasible table within 0.3 % of the limit ends a width's search
+#define TOD_ELECTRICAL_SHARE FS_C(0.035)  // the largest electrical frequency over the control rate
+#define TOD_CAP_PLAN FS_C(0.995)          // of the speed cap, the share the envelope is planned at
+#define TOD_CURRENT_PLAN FS_C(0.97)       // of i_max, the share the envelope is planned at
+#define TOD_V_MARGIN FS_C(0.995)          // of the bus, the voltage a table may reach at its samples
+#define TOD_S_TOL FS_C(0.003)             // a feasible table within 0.3 % of the limit ends a width's search
 #define TOD_PI FS_C(3.14159265358979323846)
 
 // The scratch arrays and the search's state.

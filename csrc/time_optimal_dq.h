@@ -58,7 +58,8 @@ struct tod_result {
 // Returns the number of fs_real the workspace of time_optimal_dq_plan needs.
 size_t time_optimal_dq_work_len(void);
 
-// Returns the speed cap [rad/s]: 1/20 of the control rate in electrical frequency, and the user's cap.
+// Returns the speed cap [rad/s]: 0.035 of the control rate in electrical frequency (about 29 control periods per
+// electrical turn), and the user's cap.
 fs_real time_optimal_dq_speed_cap(const struct motor_params *m, const struct tod_limits *lim);
 
 // Returns TOD_OK and writes the shortest feasible field-weakening table over distance [rad] (!= 0, either sign)

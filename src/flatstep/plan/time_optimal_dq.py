@@ -47,7 +47,7 @@ from .time_optimal_dq_profile import DQTable, dq_margins, dq_table
 __all__ = ["DEFAULT_WIDTHS", "ELECTRICAL_SHARE", "DQCandidate", "DQPlan", "plan_dq_move", "speed_cap",
            "time_optimal_dq"]
 #: The largest electrical frequency over the control rate (csrc/time_optimal_dq.h ``TOD_ELECTRICAL_SHARE``).
-ELECTRICAL_SHARE = 0.05
+ELECTRICAL_SHARE = 0.035
 #: The smoothing widths tried, in units of the current's rise time L i_max / (v_use v_bus).
 DEFAULT_WIDTHS = (0.75, 1.0, 1.5, 2.0, 3.0)
 #: Tables tried per width.
