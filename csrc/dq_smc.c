@@ -12,11 +12,12 @@ static bool positive(fs_real x)
 void dq_smc_params_default(struct dq_smc_params *p)
 {
     struct smc_params sp;
-    struct dq_smc_current none = {0, 0, 0, 1, 0, 0};
+    struct dq_smc_current none = {0};  // i_d* = 0, no table
     struct torque_model tm = {0, 4, 0, 0, FS_C(0.01), 0, 0, 0, 1};
     smc_params_default(&sp);
     p->motor = sp.motor;
     p->plan = sp.plan;
+    none.tf = 1;
     p->current = none;
     p->gains = sp.gains;
     p->torques = tm;
@@ -32,6 +33,21 @@ void dq_smc_params_default(struct dq_smc_params *p)
     p->adapt.v_hold = 0;
 }
 
+// Returns true when the d-current table is absent or has 2..DQ_SMC_ID_KNOTS finite knots at rising times.
+static bool current_table_valid(const struct dq_smc_current *c)
+{
+    uint32_t i;
+    if (c->n_knots == 0)
+        return true;
+    if (c->n_knots < 2 || c->n_knots > DQ_SMC_ID_KNOTS)
+        return false;
+    for (i = 0; i < c->n_knots; i++)
+        if (!(fs_isfinite(c->knot_t[i]) && fs_isfinite(c->knot_id[i]) && fs_isfinite(c->knot_did[i])
+              && (i == 0 || c->knot_t[i] > c->knot_t[i - 1])))
+            return false;
+    return true;
+}
+
 // Returns DQ_SMC_PARAMS_OK, or the dq_smc_param_error naming the invalid group (s is then left unusable).
 int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
 {
@@ -42,7 +58,7 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
     if (!plan_valid(&p->plan)
         || !(fs_isfinite(c->i_d1) && fs_isfinite(c->i_d2) && fs_isfinite(c->t0) && fs_isfinite(c->tf)
              && (c->i_d2 == c->i_d1 || c->tf > c->t0) && fs_isfinite(c->weakening) && c->weakening >= 0
-             && fs_isfinite(c->weakening_speed) && c->weakening_speed >= 0))
+             && fs_isfinite(c->weakening_speed) && c->weakening_speed >= 0 && current_table_valid(c)))
         return DQ_SMC_EPLAN;
     if (!(positive(g->W1) && positive(g->W2) && positive(g->eps1) && positive(g->eps2) && positive(g->xi)
           && positive(g->wn) && g->hold_damping == 0))
@@ -102,8 +118,29 @@ static void dq_smc_adapt(struct dq_smc *s, fs_real s2, fs_real phi)
 static void dq_smc_current_ref(const struct dq_smc_current *c, fs_real t, fs_real w, fs_real a, fs_real *i_d,
                                fs_real *di_d)
 {
-    fs_real span = c->i_d2 - c->i_d1;
-    if (span == 0) {
+    fs_real span = c->i_d2 - c->i_d1, h, u, p0, p1, m0, m1;
+    uint32_t lo = 0, hi, mid;
+    if (c->n_knots >= 2) {  // the cubic Hermite table, held outside its knots
+        hi = c->n_knots - 1;
+        if (t <= c->knot_t[0] || t >= c->knot_t[hi]) {
+            *i_d = t <= c->knot_t[0] ? c->knot_id[0] : c->knot_id[hi];
+            *di_d = 0;
+        } else {
+            while (hi - lo > 1) {
+                mid = (lo + hi) / 2;
+                if (c->knot_t[mid] <= t)
+                    lo = mid;
+                else
+                    hi = mid;
+            }
+            h = c->knot_t[hi] - c->knot_t[lo];
+            u = (t - c->knot_t[lo]) / h;
+            p0 = c->knot_id[lo], p1 = c->knot_id[hi], m0 = c->knot_did[lo] * h, m1 = c->knot_did[hi] * h;
+            *i_d = ((2 * u - 3) * u * u + 1) * p0 + ((u - 2) * u + 1) * u * m0 + (3 - 2 * u) * u * u * p1
+                   + (u - 1) * u * u * m1;
+            *di_d = (6 * (u - 1) * u * (p0 - p1) + ((3 * u - 4) * u + 1) * m0 + (3 * u - 2) * u * m1) / h;
+        }
+    } else if (span == 0) {
         *i_d = c->i_d1;
         *di_d = 0;
     } else {

@@ -15,7 +15,8 @@
 enum dq_smc_param_error {
     DQ_SMC_PARAMS_OK = 0,
     DQ_SMC_EMOTOR,        // motor_params_valid fails
-    DQ_SMC_EPLAN,         // plan_valid fails, or the d-current plan is not finite (or tf <= t0 with i_d1 != i_d2)
+    DQ_SMC_EPLAN,         // plan_valid fails, or the d-current plan is not finite (or tf <= t0 with i_d1 != i_d2, or
+                          // its table's knots are not rising)
     DQ_SMC_EGAINS,        // a gain not finite and > 0, or hold_damping != 0 (this law has no detent hold)
     DQ_SMC_EMEASUREMENT,  // not SMC_IDEAL or SMC_MODEL
     DQ_SMC_ELIMITS,       // v_limit not finite and >= 1e-3
@@ -46,13 +47,21 @@ struct dq_smc_adaptation {
     fs_real v_hold;  // the bus voltage the estimate's hold knows [V]
 };
 
+// Knots of a planned d-current table, at most.
+enum { DQ_SMC_ID_KNOTS = 72 };
+
 // The planned d current i_d*(t) = i_d1 + psi(t, t0, tf) (i_d2 - i_d1) - weakening max(|theta*'| - weakening_speed, 0),
-// with the paper's psi of eq. (17) and the planned speed theta*' (flatstep.plan.d_current).
+// with the paper's psi of eq. (17) and the planned speed theta*' (flatstep.plan.d_current); with n_knots >= 2 the
+// cubic Hermite table through (knot_id, knot_did) at the times knot_t (held outside) replaces the psi term.
 struct dq_smc_current {
-    fs_real i_d1, i_d2;       // start and end d current [A]
-    fs_real t0, tf;           // start and end of the change [s]; read only when i_d2 != i_d1
-    fs_real weakening;        // k_w >= 0 [A s/rad]: field weakening per rad/s above weakening_speed
-    fs_real weakening_speed;  // >= 0 [rad/s]
+    fs_real i_d1, i_d2;                 // start and end d current [A]
+    fs_real t0, tf;                     // start and end of the change [s]; read only when i_d2 != i_d1
+    fs_real weakening;                  // k_w >= 0 [A s/rad]: field weakening per rad/s above weakening_speed
+    fs_real weakening_speed;            // >= 0 [rad/s]
+    uint32_t n_knots;                   // 0 (no table) or 2..DQ_SMC_ID_KNOTS
+    fs_real knot_t[DQ_SMC_ID_KNOTS];    // rising times [s]
+    fs_real knot_id[DQ_SMC_ID_KNOTS];   // d current at the knots [A]
+    fs_real knot_did[DQ_SMC_ID_KNOTS];  // its rate at the knots [A/s]
 };
 
 struct dq_smc_params {

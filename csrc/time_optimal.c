@@ -44,7 +44,7 @@ static fs_real try_table(struct to_search *s, fs_real gamma, fs_real width)
             return (fs_real)INFINITY;
         }
     }
-    if (!to_smoothed_table(s->m, &s->plan, s->d, width, &s->w)) {
+    if (!to_smoothed_table(s->m, &s->plan, s->d, width, 2, &s->w)) {
         s->overflow = true;
         return (fs_real)INFINITY;
     }

@@ -76,7 +76,8 @@ void to_bang_bang(fs_real d, fs_real width, struct to_work *w, struct to_move *m
 // time_optimal_table.c
 // Returns true when every limit is finite and in range (time_optimal.h's struct to_limits).
 bool to_limits_valid(const struct to_limits *l);
-bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim, fs_real d, fs_real width,
+// passes: the box filters (2; 1 for the field-weakening planner, whose law takes a jerk that jumps).
+bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim, fs_real d, fs_real width, int passes,
                        struct to_work *w);
 
 #endif

@@ -114,7 +114,7 @@ static fs_real rho_at(const struct motor_params *m, const struct to_limits *lim,
 
 // Returns true and builds the candidate table w->tr of the move over d > 0 at width (smoothing.smoothed_table);
 // false when the profile would not fit the workspace.
-bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim, fs_real d, fs_real width,
+bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim, fs_real d, fs_real width, int passes,
                        struct to_work *w)
 {
     struct to_move mv;
@@ -138,7 +138,10 @@ bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim
     }
     speed[mv.n - mv.k - 1] = 0;
     len = box(speed, mv.n - mv.k, mv.n_box, w->c, w->b);
-    len = box(w->b, len, mv.n_box, w->c, speed);
+    if (passes == 2)
+        len = box(w->b, len, mv.n_box, w->c, speed);
+    else
+        memcpy(speed, w->b, len * sizeof *speed);
     sum = 0;
     for (i = 0; i + 1 < len; i++) {  // the trapezoids of the angle
         inc[i] = FS_C(0.5) * (speed[i + 1] + speed[i]) * mv.dt;
@@ -154,7 +157,8 @@ bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim
         speed[i] *= scale;
     last = len - 1;
     // the cruise's knots 4 samples inside it (smoothing.smoothed_table)
-    nk = knots(last + mv.k, (mv.t1 + 2 * width) / mv.dt + 4, (mv.t1 + mv.cruise) / mv.dt - 4, mv.cruise > 0, w->knot);
+    nk = knots(last + mv.k, (mv.t1 + (fs_real)passes * width) / mv.dt + 4, (mv.t1 + mv.cruise) / mv.dt - 4,
+               mv.cruise > 0, w->knot);
     if (nk < 2)
         return false;
     w->tr.n = nk - 1;

@@ -103,8 +103,19 @@ def dq_smc() -> None:
     write("seeds", "dq_smc", "v-limit", bytes([0, 1]) + val(1e-3))
 
 
+def time_optimal_dq() -> None:
+    """Seeds of fuzz_time_optimal_dq: head, mask, distance, shortfall, motor, limits."""
+    for d in (0.3, 1.0, 5.0, -2.0):
+        write("seeds", "time_optimal_dq", f"move-{d:g}", bytes([0, 0]) + val(d))
+    write("seeds", "time_optimal_dq", "bus-12V", bytes([0, 2]) + val(1.0) + val(12.0))
+    write("seeds", "time_optimal_dq", "speed-cap", bytes([0, 16]) + val(5.0) + val(40.0))
+    write("seeds", "time_optimal_dq", "short-workspace", bytes([4, 0]) + val(1.0) + b"\x00")
+    write("seeds", "time_optimal_dq", "motor", bytes([0, 1]) + val(1.0) + nom() * 5 + b"\x32")
+
+
 if __name__ == "__main__":
     time_optimal()
     traj()
     flat()
     dq_smc()
+    time_optimal_dq()

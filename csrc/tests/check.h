@@ -35,5 +35,6 @@ int test_dq_smc(void);
 int test_dq_smc_km(void);
 int test_trajectory(void);
 int test_time_optimal(void);
+int test_time_optimal_dq(void);
 
 #endif

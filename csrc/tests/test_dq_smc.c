@@ -181,7 +181,8 @@ static int contract_checks(void)
     int i, k, m, bad = 0, faults = 0;
     dq_smc_params_default(&p);
     p.torques = TORQUES;
-    p.current = (struct dq_smc_current){0.1, -0.2, 0.01, 0.05, 0.05, 0.8};
+    p.current = (struct dq_smc_current){
+        .i_d1 = 0.1, .i_d2 = -0.2, .t0 = 0.01, .tf = 0.05, .weakening = 0.05, .weakening_speed = 0.8};
     for (m = 0; m < 2; m++) {
         p.measurement = m ? SMC_MODEL : SMC_IDEAL;
         dq_smc_init(&s, &p);

@@ -28,9 +28,11 @@ int main(int argc, char **argv)
         test_trajectory();
     else if (strcmp(suite, "time_optimal") == 0)
         test_time_optimal();
+    else if (strcmp(suite, "time_optimal_dq") == 0)
+        test_time_optimal_dq();
     else {
         printf("usage: %s vectors FILE | plan | smc | ode | sim | drive | baselines | dq_smc | trajectory | "
-               "time_optimal\n",
+               "time_optimal | time_optimal_dq\n",
                argv[0]);
         return 2;
     }

@@ -112,7 +112,8 @@ class Table(NamedTuple):
     rho: Array
 
 
-def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorParams, limits: MotorLimits) -> Table:
+def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorParams, limits: MotorLimits,
+                   passes: int = 2) -> Table:
     """The bang-bang move on ``env`` over ``distance`` > 0, smoothed twice by a box of ``width`` [s], as a table.
 
     The profile is sampled without the cut of :func:`timing` (sample ``i >= r`` at ``(i + k) dt``); a knot in the
@@ -126,7 +127,8 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
     speed = np.where(t <= b.t1, np.interp(t, b.t_acc, env.omega),
                      np.where(t < b.t1 + b.cruise, b.w_peak, np.interp(total - t, b.t_dec, env.omega)))
     speed[-1] = 0.0
-    speed = _box(_box(speed, n_box), n_box)
+    for _ in range(passes):  # twice (a box once: the jerk jumps, as the field-weakening planner may take)
+        speed = _box(speed, n_box)
     inc = 0.5 * (speed[1:] + speed[:-1]) * dt  # the trapezoids of the angle
     r = min(r, speed.size - 1)  # no cut (k = 0): r only has to index the profile
     cruise = speed[r] if k else 0.0
@@ -136,7 +138,7 @@ def smoothed_table(distance: float, env: Envelope, width: float, motor: MotorPar
     scale = distance / covered
     # the cruise's knots 4 samples inside it, where the jerk's central differences see only the constant cruise (at
     # its ends the jerk jumps, and a long cruise segment would bulge to meet half of that jump)
-    knots = _knots(speed.size - 1 + k, (b.t1 + 2 * width) / dt + 4, (b.t1 + b.cruise) / dt - 4, b.cruise > 0)
+    knots = _knots(speed.size - 1 + k, (b.t1 + passes * width) / dt + 4, (b.t1 + b.cruise) / dt - 4, b.cruise > 0)
     at = np.where(knots < r, knots, np.where(knots >= r + k, knots - k, r))  # the sample each knot reads
     # the angle from knot to knot: the trapezoids between their samples and the cut's samples between them
     sums = np.where(at[1:] > at[:-1], np.add.reduceat(inc, np.minimum(at[:-1], inc.size - 1)), 0.0)

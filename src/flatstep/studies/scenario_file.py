@@ -189,7 +189,7 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     period = None if rate is None else 1.0 / rate
     drive = wrap(where, "drive", Drive, **drive_t) if rate is not None else None
     limits = read_limits(where, sec["limits"], drive.v_bus if drive is not None and "v_bus" in drive_t else None)
-    planned = read_plan(where, sec["plan"], motor, limits, has_motor="motor" in doc)
+    planned = read_plan(where, sec["plan"], motor, limits, has_motor="motor" in doc, control_rate=rate)
     plan = planned.plan
     offset = sec["sensors"].get("current_offset")
     if offset is not None and not (isinstance(offset, list) and len(offset) == 2):
@@ -221,6 +221,12 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
                                                                         valid=MEASUREMENTS), measurement)
     weakening = {k: ctrl.pop(k) for k in ("weakening", "weakening_speed") if k in ctrl}
     d_current = wrap(where, "controller", DCurrentPlan, **weakening)
+    if planned.d_current is not None:  # a field-weakening plan brings its d current, for the d-q law alone
+        if weakening or not controller_type.startswith("dq_smc"):
+            raise InputError("type", controller_type, f"{where}:controller: a field-weakening plan is tracked by a "
+                             "dq_smc controller type with the plan's d current (no weakening keys); give type = "
+                             "\"dq_smc\" or another dq_smc type")
+        d_current = planned.d_current
     rho_keys = {"rho_margin": "margin", "rho_hold": "rho_hold"}
     given = {rho_keys[k]: ctrl.pop(k) for k in rho_keys if k in ctrl}
     loss_aware = wrap(where, "controller", LossAwareRho, **{"rho_hold": 0.5 * min(plan.rho1, plan.rho2), **given}

@@ -132,6 +132,10 @@ KEYS: dict[str, dict[str, Key]] = {
                               "none: the planner's choice), dwell [s] (a rest there)"),
         "through": Key("", "true, false", "false", "time_optimal: pass a waypoint at speed where the motion keeps "
                                                      "its direction"),
+        "field_weakening": Key("", "true, false", "false", "time_optimal: one move in the d-q flat outputs with "
+                                                             "field weakening, tracked by a dq_smc controller type"),
+        "voltage": Key("", '"phase", "vector"', '"phase"', "time_optimal with field_weakening: the bus limit on "
+                                                           "each phase or on the voltage vector"),
         "rho": Key("A", "> 0", "0.5", "psi, hermite, spline, scurve: the constant current magnitude"),
         "durations": Key("s", "list of one duration > 0 per move", "-",
                          "psi, hermite, spline: each move's duration (or caps)"),
@@ -228,7 +232,7 @@ KEYS: dict[str, dict[str, Key]] = {
 #: The [plan] keys each planner takes.
 PLANNER_KEYS: dict[str, tuple[str, ...]] = {
     "rest_to_rest": ("planner", "theta1", "theta2", "rho1", "rho2", "t0", "tf"),
-    "time_optimal": ("planner", "waypoints", "t0", "through"),
+    "time_optimal": ("planner", "waypoints", "t0", "through", "field_weakening", "voltage"),
     "psi": ("planner", "waypoints", "t0", "rho", "durations", "caps"),
     "hermite": ("planner", "waypoints", "t0", "rho", "durations", "caps"),
     "spline": ("planner", "waypoints", "t0", "rho", "durations", "caps"),

@@ -10,10 +10,12 @@ from dataclasses import dataclass
 from typing import Any, Optional, Union
 
 from ..model.motor import MotorParams
+from ..plan.d_current import DCurrentPlan
 from ..plan.limits import MotorLimits
 from ..plan.piecewise import PiecewisePlan
 from ..plan.rest_to_rest import PAPER_PLAN, RestToRest
 from ..plan.sequence import PLANNERS, Step, family_steps, optimal_sequence
+from ..plan.time_optimal_dq import DEFAULT_RATE, VOLTAGES, time_optimal_dq
 from ..plan.waypoints import Caps, Waypoint, plan_waypoints
 from ..validate import InputError, check_bool, check_choice, check_finite, check_positive, check_quantity
 from ..validate.checks import is_real
@@ -32,6 +34,7 @@ class PlannedMove:
     plan: Union[RestToRest, PiecewisePlan]
     steps: list[Step]
     limits: Optional[MotorLimits]
+    d_current: Optional[DCurrentPlan] = None  # the planned d current of a field-weakening plan
 
 
 def _planner(where: str, table: dict[str, Any]) -> str:
@@ -148,9 +151,38 @@ def read_limits(where: str, table: dict[str, Any], v_bus: Optional[float]) -> Op
     return wrap(where, "limits", MotorLimits, v_bus=v_bus, **table)
 
 
+def _field_weakening(where: str, given: dict[str, Any], points: list[Waypoint], motor: MotorParams,
+                     limits: MotorLimits, t0: float, control_rate: Optional[float]) -> PlannedMove:
+    """One field-weakening move between two waypoints (:func:`flatstep.plan.time_optimal_dq.time_optimal_dq`)."""
+    try:
+        voltage = check_choice("voltage", given.get("voltage", "phase"), VOLTAGES)
+    except InputError as exc:
+        raise exc.at(f"{where}:plan.voltage") from None
+    if given.get("through", False) is not False:
+        raise InputError("through", given["through"], f"{where}:plan.through: field_weakening plans one move from "
+                                                      "rest to rest; leave through out")
+    if len(points) != 2 or any(p.velocity is not None or p.dwell for p in points):
+        raise InputError("waypoints", given["waypoints"], f"{where}:plan.waypoints: field_weakening plans one move: "
+                         "give two waypoints (start and end angles), without velocity or dwell")
+    theta1, theta2 = points[0].theta, points[1].theta
+    try:
+        fw = time_optimal_dq(theta2 - theta1, motor, limits, theta1=theta1, t0=t0, voltage=voltage,
+                             control_rate=DEFAULT_RATE if control_rate is None else control_rate)
+    except InputError as exc:
+        raise exc.at(f"{where}:plan.waypoints") from None
+    except ValueError as exc:
+        raise ValueError(f"{where}:plan: {exc}") from None
+    # limits None: the (rho, theta) margins of flatstep.plan.margins do not apply; the planner measured the d-q ones
+    return PlannedMove("time_optimal", fw.plan, [(f"move {theta1:g} -> {theta2:g}", t0, fw.plan.tf - t0)], None,
+                       fw.d_current)
+
+
 def read_plan(where: str, table: dict[str, Any], motor: MotorParams, limits: Optional[MotorLimits],
-              has_motor: bool) -> PlannedMove:
-    """``[plan]`` planned (module docstring); ``has_motor``: the file gives ``[motor]``."""
+              has_motor: bool, control_rate: Optional[float] = None) -> PlannedMove:
+    """``[plan]`` planned (module docstring); ``has_motor``: the file gives ``[motor]``.
+
+    ``control_rate`` [Hz] is the drive's, which caps a field-weakening plan's speed (default: time_optimal_dq's).
+    """
     planner = _planner(where, table)
     _check_planner_keys(where, planner, table)
     given = {k: v for k, v in table.items() if k != "planner"}
@@ -173,6 +205,15 @@ def read_plan(where: str, table: dict[str, Any], motor: MotorParams, limits: Opt
         if limits is None:
             raise InputError("limits", None, f"{where}:limits: the time_optimal planner plans against the motor's "
                                              "limits: give [limits] i_max (and [drive] v_bus)")
+        try:
+            weakening = check_bool("field_weakening", given.get("field_weakening", False))
+        except InputError as exc:
+            raise exc.at(f"{where}:plan.field_weakening") from None
+        if weakening:
+            return _field_weakening(where, given, points, motor, limits, t0, control_rate)
+        if "voltage" in given:
+            raise InputError("voltage", given["voltage"], f"{where}:plan.voltage: the bus limit is chosen for a "
+                                                          "field-weakening plan: give field_weakening = true")
     else:
         rho = _number(where, "plan.rho", given.get("rho", 0.5), "current")
         caps = _caps(where, given["caps"]) if "caps" in given else None

@@ -1,0 +1,108 @@
+"""The field-weakening planner against the true optimum, and its plans tracked on a 20 kHz drive.
+
+For each motor, bus and move: the planned duration of :func:`flatstep.plan.time_optimal_dq.time_optimal_dq`, the
+minimum time of the same problem by direct collocation (:func:`flatstep.bench.collocation.minimum_time`, the
+``--voltage`` bus, i_d free, the planner's speed cap, rest at i_d = i_hold = 0.01 i_max, the planner's rest being
+i_d = 0), their ratio, the C planner's time (median of 5 calls), and the plan run by the d-q law (designed gains,
+observer, encoder, 12-bit current ADC) on the nominal plant on the C engine at 20 kHz: its status and the largest
+angle error during the move.
+
+    .venv/bin/python benchmarks/field_weakening_optimum.py [--motors nema17 ldo-42sth60-2004mac ...]
+        [--bus 12 24] [--distances 0.3 1 5 20] [--grid 200] [--counts 4000] [--voltage vector]
+
+Needs the bench extra (CasADi). Motors are the ``nema17`` preset (at 1 A) or the stems of examples/motors/*.toml
+(at their rated current norm).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import tomllib
+
+from flatstep.bench.collocation import minimum_time
+from flatstep.control.dq_smc import DQFlatnessSMC
+from flatstep.engine.simulate import simulate
+from flatstep.loop.design import design_gains
+from flatstep.model.datasheet import motor_from_table
+from flatstep.model.motor import MotorParams
+from flatstep.plan.limits import MotorLimits
+from flatstep.plan.time_optimal_dq import speed_cap, time_optimal_dq
+from flatstep.plan.time_optimal_dq_c import plan_raw
+from flatstep.studies.verify import drive_loop
+
+RATE = 20000.0
+V_USE = 0.84
+MOTORS = Path(__file__).resolve().parent.parent / "examples" / "motors"
+
+
+def motor(name: str) -> tuple[MotorParams, float]:
+    """The motor and its i_max [A]: the preset at 1 A, or a datasheet file at its rated current norm."""
+    if name in ("nema17", "paper"):
+        return MotorParams.preset(name), 1.0
+    path = MOTORS / f"{name}.toml"
+    model = motor_from_table(tomllib.loads(path.read_text())["motor"], str(path))
+    return model.params, model.rated_rho
+
+
+def track(m: MotorParams, fw: object, v_bus: float, counts: int = 4000) -> tuple[str, float]:
+    """The d-q law's run of the plan on the 20 kHz drive: its status and the largest |theta error| [rad] in the move."""
+    plan, d_current = fw.plan, fw.d_current  # type: ignore[attr-defined]
+    loop = drive_loop(v_bus, RATE, counts)
+    d = design_gains(m, plan, control_period=loop.control_period, v_bus=v_bus, encoder_counts=counts,
+                     current_step=4 / 4096)
+    loop = loop if loop.observer is not None else replace(loop, observer=d.observer)
+    ctrl = DQFlatnessSMC(m, plan, d.gains, "observer", d_current=d_current)
+    r = simulate(m, plan, ctrl, loop=loop, t_end=plan.tf + 0.01, x0=[0.0, 0.0, 0.0, plan.theta1])
+    during = (r.t >= plan.t0) & (r.t <= plan.tf)
+    return r.status, float(np.max(np.abs(r.theta_error[during])))
+
+
+def plan_time(dist: float, m: MotorParams, limits: MotorLimits) -> float:
+    """The median time [us] of 5 calls of the C planner (time_optimal_dq_plan, through cffi)."""
+    times = []
+    for _ in range(5):
+        t = time.perf_counter()
+        plan_raw(dist, m, limits, RATE)
+        times.append((time.perf_counter() - t) * 1e6)
+    return float(np.median(times))
+
+
+def main() -> None:
+    """Print one row per motor, bus and move."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--motors", nargs="+", default=["nema17", "ldo-42sth60-2004mac", "sanyo-103h5208-5240"])
+    ap.add_argument("--bus", nargs="+", type=float, default=[12.0, 24.0])
+    ap.add_argument("--distances", nargs="+", type=float, default=[0.1, 0.3, 1.0, 5.0, 20.0])
+    ap.add_argument("--grid", type=int, default=200)
+    ap.add_argument("--voltage", choices=("vector", "phase"), default="vector",
+                    help="the bus limit of both the plan and the optimum (default vector)")
+    ap.add_argument("--counts", type=int, default=4000, help="encoder counts per revolution (default 4000)")
+    a = ap.parse_args()
+    print(f"{'motor':22s} {'bus':>4s} {'rad':>5s} {'plan ms':>9s} {'opt ms':>9s} {'ratio':>6s} {'cap':>5s} "
+          f"{'w_pk':>5s} {'id_min':>6s} {'plan us':>8s} {'status':>7s} {'err mrad':>8s}")
+    for name in a.motors:
+        m, i_max = motor(name)
+        for v_bus in a.bus:
+            limits = MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE)
+            cap = speed_cap(m, limits, RATE)
+            for dist in a.distances:
+                fw = time_optimal_dq(dist, m, limits, control_rate=RATE, voltage=a.voltage)
+                plan_us = plan_time(dist, m, limits)
+                opt = minimum_time(dist, m, MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE,
+                                                        speed_max=cap), voltage=a.voltage, grid=a.grid)
+                status, err = track(m, fw, v_bus, a.counts)
+                tf = fw.plan.tf - fw.plan.t0
+                print(f"{name:22s} {v_bus:4.0f} {dist:5.1f} {tf * 1e3:9.3f} {opt.tf * 1e3:9.3f} {tf / opt.tf:6.3f} "
+                      f"{cap:5.0f} {fw.found.margins['speed_peak']:5.0f} {fw.found.margins['i_d_min']:6.2f} "
+                      f"{plan_us:8.0f} {status:>7s} {err * 1e3:8.3f}", flush=True)
+                if not math.isfinite(err):
+                    print("  (the run did not finish)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,318 @@
+// The field-weakening planner: the search on the bus share over the smoothing widths, each candidate's theta from
+// to_smoothed_table and its d current boxed and spread here (flatstep.plan.time_optimal_dq and
+// flatstep.plan.time_optimal_dq_profile are the reference, operation for operation).
+#include "time_optimal_dq_stages.h"
+#include <string.h>
+
+#define TOD_ELECTRICAL_SHARE FS_C(0.035)  // the largest electrical frequency over the control rate
+#define TOD_CAP_PLAN FS_C(0.995)          // of the speed cap, the share the envelope is planned at
+#define TOD_CURRENT_PLAN FS_C(0.97)       // of i_max, the share the envelope is planned at
+#define TOD_V_MARGIN FS_C(0.995)          // of the bus, the voltage a table may reach at its samples
+#define TOD_S_TOL FS_C(0.003)             // a feasible table within 0.3 % of the limit ends a width's search
+#define TOD_PI FS_C(3.14159265358979323846)
+
+// The scratch arrays and the search's state.
+struct tod_search {
+    const struct motor_params *m;
+    const struct tod_limits *lim;
+    struct to_limits any;  // valid limits for to_smoothed_table's rho rows, which this planner does not read
+    fs_real d, cap;
+    struct to_work w;
+    fs_real *idp, *idm;  // TO_GRID each: the envelope's d currents
+    fs_real *x, *y;      // TO_FINE_LEN + 1 each: the d current's samples
+    fs_real *s;          // TO_SUM_LEN: running sums
+    struct tod_result *out;
+    bool found;
+    fs_real start, width_tf, width_kappa;  // the next search's first kappa; the last width's best
+    int passes;                            // box filters of the candidates: 1 or 2
+};
+
+size_t time_optimal_dq_work_len(void)
+{
+    return time_optimal_work_len() + 2 * (size_t)TO_GRID + 2 * ((size_t)TO_FINE_LEN + 1) + (size_t)TO_SUM_LEN;
+}
+
+fs_real time_optimal_dq_speed_cap(const struct motor_params *m, const struct tod_limits *lim)
+{
+    fs_real cap = TOD_ELECTRICAL_SHARE * 2 * TOD_PI * lim->control_rate / (fs_real)m->Nr;
+    return lim->speed_max > 0 ? fs_min(cap, lim->speed_max) : cap;
+}
+
+// Returns the length of x after a box of n samples (smoothing._box), through the running sum in s.
+static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
+{
+    size_t i, out_len = len + n - 1;
+    fs_real unit = 1 / (fs_real)n;
+    for (i = 0; i < n; i++)
+        s[i] = 0;
+    for (i = 0; i < len; i++)
+        s[n + i] = s[n - 1 + i] + x[i];
+    for (i = n + len; i < len + 2 * n - 1; i++)
+        s[i] = s[i - 1];
+    for (i = 0; i < out_len; i++)
+        out[i] = (s[i + n] - s[i]) * unit;
+    return out_len;
+}
+
+// Returns the central difference of x at i (one-sided at the ends) over dt.
+static fs_real gradient(const fs_real *x, size_t len, size_t i, fs_real dt)
+{
+    if (i == 0)
+        return (x[1] - x[0]) / dt;
+    if (i == len - 1)
+        return (x[len - 1] - x[len - 2]) / dt;
+    return (x[i + 1] - x[i - 1]) / (2 * dt);
+}
+
+// Returns true and writes the d current's knots of the table in s->w.tr (time_optimal_dq_profile.dq_table).
+static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_real *knot_did)
+{
+    struct to_move mv;
+    struct to_work *w = &s->w;
+    fs_real t, total, speed, *x = s->x, *y = s->y;
+    size_t i, len, half, at, r, k, nk = w->tr.n + 1, j_acc = 0, j_dec = TO_GRID - 2, j_id = 0;
+    to_bang_bang(s->d, width, w, &mv);
+    total = mv.t1 + mv.cruise + mv.t2;
+    for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt, as the speed
+        t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
+        if (t <= mv.t1)
+            speed = to_interp_walk(t, w->tacc, w->omega, TO_GRID, &j_acc);
+        else if (t < mv.t1 + mv.cruise)
+            speed = mv.w_peak;
+        else
+            speed = to_interp_walk(total - t, w->tdec, w->omega, TO_GRID, &j_dec);
+        if (i == mv.n - mv.k - 1)
+            speed = 0;
+        // the d current of the side: the top while speeding up and cruising, the bottom while braking
+        x[i] = to_interp_walk(speed, w->omega, t >= mv.t1 + mv.cruise ? s->idm : s->idp, TO_GRID, &j_id);
+    }
+    x[mv.n - mv.k - 1] = 0;
+    len = box(x, mv.n - mv.k, mv.n_box, s->s, y);
+    if (s->passes == 2)
+        len = box(y, len, mv.n_box, s->s, x);
+    else
+        memcpy(x, y, len * sizeof *x);
+    s->s[0] = 0;  // the running mean of TOD_ID_SPREAD widths either side, narrowed at the ends
+    for (i = 0; i < len; i++)
+        s->s[i + 1] = s->s[i] + x[i];
+    for (i = 0; i < len; i++) {
+        half = i < len - 1 - i ? i : len - 1 - i;
+        half = half < TOD_ID_SPREAD * mv.n_box ? half : TOD_ID_SPREAD * mv.n_box;
+        y[i] = (s->s[i + half + 1] - s->s[i - half]) / (fs_real)(2 * half + 1);
+    }
+    r = mv.r < len - 1 ? mv.r : len - 1;
+    for (i = 0; i < nk; i++) {
+        k = (size_t)w->knot[i];
+        at = k < r ? k : k >= r + mv.k ? k - mv.k : r;
+        knot_id[i] = y[at];
+        knot_did[i] = i == 0 || i == nk - 1 ? 0 : gradient(y, len, at, mv.dt);
+    }
+    return true;
+}
+
+// Returns the k-th tau-derivative of a theta row at tau (piecewise.horner_rows).
+static fs_real row_deriv(const fs_real *row, int k, fs_real tau)
+{
+    fs_real a = 0, f;
+    int j, p, q;
+    for (j = 0; j < TRAJ_NCOEF - k; j++) {
+        p = TRAJ_NCOEF - 1 - j;
+        for (f = 1, q = 0; q < k; q++)
+            f *= (fs_real)(p - q);
+        a = j == 0 ? row[0] * f : a * tau + row[j] * f;
+    }
+    return a;
+}
+
+// Returns the d current and writes its rate at t (d_current.hermite_cubic, held outside the knots).
+static fs_real hermite(const fs_real *kt, const fs_real *v, const fs_real *sl, size_t n, fs_real t, fs_real *dv)
+{
+    size_t lo = 0, hi = n - 1, mid;
+    fs_real tc = fs_min(fs_max(t, kt[0]), kt[n - 1]), h, u, p0, p1, m0, m1;
+    while (hi - lo > 1) {
+        mid = (lo + hi) / 2;
+        if (kt[mid] <= tc)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    h = kt[lo + 1] - kt[lo], u = (tc - kt[lo]) / h;
+    p0 = v[lo], p1 = v[lo + 1], m0 = sl[lo] * h, m1 = sl[lo + 1] * h;
+    *dv = t > kt[0] && t < kt[n - 1]
+              ? (6 * (u - 1) * u * (p0 - p1) + ((3 * u - 4) * u + 1) * m0 + (3 * u - 2) * u * m1) / h
+              : 0;
+    return ((2 * u - 3) * u * u + 1) * p0 + ((u - 2) * u + 1) * u * m0 + (3 - 2 * u) * u * u * p1
+           + (u - 1) * u * u * m1;
+}
+
+// Returns the margins of the table (time_optimal_dq_profile.dq_margins): TO_CHECK samples per segment and the end.
+static struct tod_margins margins(const struct tod_search *s, const fs_real *kid, const fs_real *kdid)
+{
+    const struct motor_params *m = s->m;
+    const struct traj *tr = &s->w.tr;
+    struct tod_margins g = {0, 0, 0, 0, (fs_real)INFINITY, 0};
+    fs_real v_limit = s->lim->v_use * s->lim->v_bus, h, tau, w, acc, jerk, id, did, iq, diq, x, vd, vq;
+    size_t i, j, n = tr->n;
+    for (i = 0; i < n; i++)
+        for (j = 0; j <= (i == n - 1 ? (size_t)TO_CHECK : (size_t)TO_CHECK - 1); j++) {
+            const fs_real *row = tr->theta + i * TRAJ_NCOEF;
+            h = tr->breaks[i + 1] - tr->breaks[i], tau = (fs_real)j / (fs_real)TO_CHECK;
+            w = row_deriv(row, 1, tau) / fs_pow(h, 1);
+            acc = row_deriv(row, 2, tau) / fs_pow(h, 2);
+            jerk = row_deriv(row, 3, tau) / fs_pow(h, 3);
+            id = hermite(tr->breaks, kid, kdid, n + 1, tr->breaks[i] + tau * h, &did);
+            iq = (m->J * acc + m->B * w) / m->Km;
+            diq = (m->J * jerk + m->B * acc) / m->Km;
+            x = (fs_real)m->Nr * w * m->L;
+            vd = m->R * id + m->L * did - x * iq;
+            vq = m->R * iq + m->L * diq + x * id + m->Km * w;
+            g.voltage = fs_max(g.voltage, fs_hypot(vd, vq));
+            g.current = fs_max(g.current, fs_hypot(id, iq));
+            g.speed_peak = fs_max(g.speed_peak, fs_fabs(w));
+            g.i_d_min = fs_min(g.i_d_min, id);
+        }
+    g.voltage /= v_limit, g.current /= s->lim->i_max, g.speed = g.speed_peak / s->cap;
+    g.worst = fs_max(fs_max(g.voltage / TOD_V_MARGIN, g.current), g.speed) - 1;
+    if (!fs_isfinite(g.worst))
+        g.worst = (fs_real)INFINITY;
+    return g;
+}
+
+// Returns the measure s of the table at kappa and width (inf when none is built); a feasible table shorter than
+// the best becomes the best (time_optimal_dq._try).
+static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
+{
+    struct tod_result *out = s->out;
+    struct tod_margins g;
+    fs_real kid[TO_MAX_SEGMENTS + 1], kdid[TO_MAX_SEGMENTS + 1], tf;
+    const struct tod_limits *l = s->lim;
+    if (!tod_envelope(s->m, kappa * l->v_use * l->v_bus, TOD_CURRENT_PLAN * l->i_max, TOD_CAP_PLAN * s->cap, &s->w,
+                      s->idp, s->idm))
+        return (fs_real)INFINITY;
+    if (!to_smoothed_table(s->m, &s->any, s->d, width, s->passes, &s->w) || !d_current(s, width, kid, kdid))
+        return (fs_real)INFINITY;
+    out->tables++;
+    g = margins(s, kid, kdid);
+    tf = s->w.breaks[s->w.tr.n];
+    if (g.worst <= 0 && tf < s->width_tf)
+        s->width_tf = tf, s->width_kappa = kappa;
+    if (g.worst <= 0 && (!s->found || tf < out->breaks[out->n])) {
+        s->found = true;
+        out->n = s->w.tr.n;
+        memcpy(out->breaks, s->w.breaks, (out->n + 1) * sizeof *out->breaks);
+        memcpy(out->theta, s->w.theta, out->n * TRAJ_NCOEF * sizeof *out->theta);
+        memcpy(out->knot_id, kid, (out->n + 1) * sizeof *kid);
+        memcpy(out->knot_did, kdid, (out->n + 1) * sizeof *kdid);
+        out->kappa = kappa, out->width = width, out->margins = g;
+    }
+    return g.worst;
+}
+
+// Returns nothing; the secant on kappa from s->start, then regula falsi once bracketed (time_optimal_dq.search_kappa);
+// s->width_tf and s->width_kappa are the width's shortest feasible table's duration and bus share (inf and 0: none).
+static void search_kappa(struct tod_search *s, fs_real width)
+{
+    const fs_real nan = (fs_real)NAN;
+    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = s->start, k_prev = nan, s_prev = nan, x, aim, next;
+    int it;
+    s->width_tf = (fs_real)INFINITY, s->width_kappa = 0;
+    for (it = 0; it < TOD_SEARCH; it++) {
+        x = try_table(s, k, width);
+        aim = x + FS_C(0.5) * TOD_S_TOL;
+        if (x <= 0) {
+            lo = k, s_lo = aim;
+            if (k >= 1 || x > -TOD_S_TOL)
+                break;
+        } else
+            hi = k, s_hi = aim;
+        if (!isnan(s_lo) && fs_isfinite(s_hi)) {
+            next = lo + (hi - lo) * s_lo / (s_lo - s_hi);
+            next = fs_min(fs_max(next, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));
+        } else if (fs_isfinite(aim) && fs_isfinite(s_prev) && aim != s_prev) {
+            next = k - aim * (k - k_prev) / (aim - s_prev);
+            next = fs_min(fs_max(next, FS_C(0.5) * k), FS_C(1.5) * k);
+        } else if (fs_isfinite(aim))
+            next = k / (1 + aim);
+        else
+            next = FS_C(0.5) * (lo + hi);
+        k_prev = k, s_prev = aim, k = fs_min(next, 1);
+        if (k < FS_C(0.05) || hi - lo < FS_C(1e-4))
+            break;
+    }
+}
+
+// Returns the duration of width i's shortest feasible table (inf when none); the next width's search starts at its
+// kappa (time_optimal_dq.plan_dq_move's run).
+static fs_real run_width(struct tod_search *s, const fs_real *widths, long i)
+{
+    search_kappa(s, widths[i]);
+    if (s->width_tf < (fs_real)INFINITY)
+        s->start = s->width_kappa;
+    return s->width_tf;
+}
+
+// Returns true when a width beyond the one before i was shorter; walks by step while the duration falls.
+static bool walk(struct tod_search *s, const fs_real *widths, long i, long step, fs_real f)
+{
+    bool better = false;
+    fs_real fi;
+    for (; i >= 0 && i < TOD_WIDTHS; i += step) {
+        fi = run_width(s, widths, i);
+        if (fi < f)
+            better = true, f = fi;
+        else if (f < (fs_real)INFINITY)
+            break;
+    }
+    return better;
+}
+
+int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *lim, fs_real distance, fs_real *work,
+                         size_t work_len, struct tod_result *out)
+{
+    static const fs_real WIDTHS[TOD_WIDTHS] = {FS_C(0.75), 1, FS_C(1.5), 2, 3};
+    struct tod_search s;
+    struct to_limits any = {24, 1, FS_C(0.3), FS_C(0.3), 10, FS_C(1.2), FS_C(0.9), 0, 0, 0};
+    fs_real sign = distance < 0 ? -1 : 1, rise, widths[TOD_WIDTHS], f0;
+    size_t i, k;
+    out->n = 0, out->tables = 0;
+    if (!motor_params_valid(m) || !fs_isfinite(distance) || distance == 0
+        || !(fs_isfinite(lim->v_bus) && lim->v_bus > 0 && fs_isfinite(lim->v_use) && lim->v_use > 0 && lim->v_use <= 1
+             && fs_isfinite(lim->i_max) && lim->i_max > 0 && fs_isfinite(lim->speed_max) && lim->speed_max >= 0
+             && fs_isfinite(lim->control_rate) && lim->control_rate > 0))
+        return TOD_EARGS;
+    if (!work || work_len < time_optimal_dq_work_len())
+        return TOD_EWORK;
+    s.m = m, s.lim = lim, s.any = any, s.d = fs_fabs(distance), s.out = out, s.found = false;
+    s.cap = time_optimal_dq_speed_cap(m, lim);
+    s.w.omega = work, s.w.ap = work + TO_GRID, s.w.am = work + 2 * TO_GRID, s.w.tacc = work + 3 * TO_GRID;
+    s.w.tdec = work + 4 * TO_GRID, s.w.dboth = work + 5 * TO_GRID;
+    s.w.a = work + 6 * TO_GRID, s.w.b = s.w.a + TO_FINE_LEN + 1, s.w.c = s.w.b + TO_FINE_LEN + 1;
+    s.w.knot = s.w.c + TO_SUM_LEN;
+    s.w.breaks = s.w.knot + TO_MAX_SEGMENTS + 1;
+    s.w.theta = s.w.breaks + TO_MAX_SEGMENTS + 1;
+    s.w.rho = s.w.theta + TO_MAX_SEGMENTS * TRAJ_NCOEF;
+    s.w.tr.breaks = s.w.breaks, s.w.tr.theta = s.w.theta, s.w.tr.rho = s.w.rho;
+    s.idp = work + time_optimal_work_len(), s.idm = s.idp + TO_GRID;
+    s.x = s.idm + TO_GRID, s.y = s.x + TO_FINE_LEN + 1, s.s = s.y + TO_FINE_LEN + 1;
+    if (!tod_envelope(m, lim->v_use * lim->v_bus, TOD_CURRENT_PLAN * lim->i_max, TOD_CAP_PLAN * s.cap, &s.w, s.idp,
+                      s.idm))
+        return TOD_ESTART;
+    rise = m->L * lim->i_max / (lim->v_use * lim->v_bus);
+    for (i = 0; i < TOD_WIDTHS; i++)
+        widths[i] = WIDTHS[i] * rise;
+    // from the middle width down while the duration falls, then up unless down found a shorter table
+    for (s.passes = 1; s.passes <= 2; s.passes++) {  // the box once (the jerk jumps, the law takes it), twice
+        s.start = 1;
+        f0 = run_width(&s, widths, TOD_WIDTHS / 2);
+        if (!walk(&s, widths, TOD_WIDTHS / 2 - 1, -1, f0) || !(f0 < (fs_real)INFINITY))
+            walk(&s, widths, TOD_WIDTHS / 2 + 1, 1, f0);
+    }
+    if (!s.found) {
+        out->n = 0;
+        return TOD_ENOPLAN;
+    }
+    for (i = 0; i < out->n; i++)  // a negative move mirrors the positive one
+        for (k = 0; k < TRAJ_NCOEF; k++)
+            out->theta[i * TRAJ_NCOEF + k] *= sign;
+    return TOD_OK;
+}

@@ -1,0 +1,189 @@
+"""The field-weakening planner in the d-q flat outputs: C and reference parity, feasibility, the d current's table."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from flatstep.control.dq_smc import DQFlatnessSMC
+from flatstep.engine.simulate import simulate
+from flatstep.loop.design import design_gains
+from flatstep.model.motor import MotorParams
+from flatstep.plan.d_current import DCurrentPlan, hermite_cubic
+from flatstep.plan.limits import MotorLimits
+from flatstep.plan.time_optimal_dq import plan_dq_move, speed_cap, time_optimal_dq
+from flatstep.plan.time_optimal_dq_c import plan_raw
+from flatstep.plan.time_optimal_dq_envelope import best_currents, dq_envelope
+from flatstep.studies.verify import drive_loop
+
+NEMA17 = MotorParams.preset("nema17")
+
+
+def limits(v_bus: float = 24.0, **kw: float) -> MotorLimits:
+    return MotorLimits(v_bus=v_bus, i_max=1.0, v_use=0.84, **kw)
+
+
+@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.1), (24.0, 5.0), (12.0, 0.3)])
+def test_c_and_reference_plan_the_same_move(v_bus: float, distance: float) -> None:
+    py = plan_dq_move(distance, NEMA17, limits(v_bus), engine="python")
+    c = plan_dq_move(distance, NEMA17, limits(v_bus), engine="c")
+    assert c.tf == pytest.approx(py.tf, rel=1e-9)
+    assert c.kappa == pytest.approx(py.kappa, rel=1e-9)
+    np.testing.assert_allclose(c.table.i_d, py.table.i_d, atol=1e-9)
+    np.testing.assert_allclose(c.table.theta, py.table.theta, rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.3), (12.0, 1.0)])
+def test_c_and_reference_agree_where_a_near_tie_may_flip(v_bus: float, distance: float) -> None:
+    # a one-box candidate's margin at a jump of the jerk, or two widths of nearly equal duration: a rounding may
+    # send the search another way; the durations still agree to 0.1 %
+    py = plan_dq_move(distance, NEMA17, limits(v_bus), engine="python")
+    c = plan_dq_move(distance, NEMA17, limits(v_bus), engine="c")
+    assert c.tf == pytest.approx(py.tf, rel=1e-3)
+    assert c.margins["worst"] <= 0 and py.margins["worst"] <= 0
+
+
+def _voltages(plan: object, d_current: DCurrentPlan, m: MotorParams, n: int = 20000) -> tuple[np.ndarray, ...]:
+    """The d-q flat inverse along the plan on a fine grid: (|v|, |i|, omega)."""
+    t = np.linspace(plan.t0, plan.tf, n)  # type: ignore[attr-defined]
+    f = plan.flag(t)  # type: ignore[attr-defined]
+    i_d, di_d = d_current.flag(t, f.dtheta, f.ddtheta)
+    i_q = (m.J * f.ddtheta + m.B * f.dtheta) / m.Km
+    di_q = (m.J * f.dddtheta + m.B * f.ddtheta) / m.Km
+    x = m.Nr * f.dtheta * m.L
+    v_d = m.R * i_d + m.L * di_d - x * i_q
+    v_q = m.R * i_q + m.L * di_q + x * i_d + m.Km * f.dtheta
+    return np.hypot(v_d, v_q), np.hypot(i_d, i_q), f.dtheta
+
+
+@pytest.mark.parametrize("v_bus,distance", [(24.0, 1.0), (12.0, 5.0)])
+def test_plan_keeps_its_limits_on_a_fine_grid_and_weakens_the_field(v_bus: float, distance: float) -> None:
+    lim = limits(v_bus)
+    fw = time_optimal_dq(distance, NEMA17, lim, theta1=0.5, t0=0.01)
+    v, i, w = _voltages(fw.plan, fw.d_current, NEMA17)
+    assert np.max(v) <= 1.002 * lim.v_use * lim.v_bus  # the search checks 8 samples per segment
+    assert np.max(i) <= 1.002 * lim.i_max
+    assert np.max(np.abs(w)) <= speed_cap(NEMA17, lim, 20000.0)
+    assert fw.found.margins["i_d_min"] < -0.3  # the back EMF is cancelled at speed
+    assert fw.plan.theta1 == 0.5 and fw.plan.theta2 == pytest.approx(0.5 + distance, abs=1e-9)
+    assert fw.d_current.flag([0.0, fw.plan.tf + 1.0])[0] == pytest.approx([0.0, 0.0], abs=1e-9)
+
+
+def test_negative_move_mirrors_and_faster_than_without_field_weakening() -> None:
+    lim = limits(24.0)
+    up, down = time_optimal_dq(5.0, NEMA17, lim), time_optimal_dq(-5.0, NEMA17, lim)
+    assert down.plan.tf == up.plan.tf and down.plan.theta2 == pytest.approx(-5.0, abs=1e-9)
+    assert down.d_current.knot_id == up.d_current.knot_id  # the d current does not change sign
+    # the same search with the envelope held at i_d = 0 would stop at the no-load speed of the bus: FW goes beyond
+    no_load = lim.v_use * lim.v_bus / NEMA17.Km
+    assert up.found.margins["speed_peak"] > 1.1 * no_load
+    assert up.found.margins["speed_peak"] > 0.98 * speed_cap(NEMA17, lim, 20000.0)
+
+
+def test_speed_cap_follows_the_control_rate_and_the_user() -> None:
+    lim = limits(24.0)
+    assert speed_cap(NEMA17, lim, 20000.0) == pytest.approx(0.035 * 2 * math.pi * 20000 / 50)
+    slow = plan_dq_move(20.0, NEMA17, lim, control_rate=10000.0)
+    assert slow.margins["speed_peak"] <= speed_cap(NEMA17, lim, 10000.0)
+    capped = plan_dq_move(20.0, NEMA17, limits(24.0, speed_max=40.0))
+    assert capped.margins["speed_peak"] <= 40.0 and capped.tf > slow.tf
+
+
+def test_envelope_currents_lie_on_both_limits() -> None:
+    v, i_max = 0.84 * 24.0, 1.0
+    for w in (0.0, 50.0, 150.0):
+        i_d, i_q, i_d2, i_q2 = best_currents(w, NEMA17, v, i_max)
+        for d, q in ((i_d, i_q), (i_d2, i_q2)):
+            x = NEMA17.Nr * w * NEMA17.L
+            volt = math.hypot(NEMA17.R * d - x * q, NEMA17.R * q + x * d + NEMA17.Km * w)
+            assert math.hypot(d, q) <= i_max * (1 + 1e-12) and volt <= v * (1 + 1e-12)
+            assert math.isclose(math.hypot(d, q), i_max, rel_tol=1e-9) or math.isclose(volt, v, rel_tol=1e-9)
+    env = dq_envelope(NEMA17, v, i_max, 1e4)
+    assert env.omega[-1] < 1e4 and env.a_plus[-1] < 1e-6 * env.a_plus[0] + 1e-9  # the top speed, from friction
+
+
+def test_hermite_table_rate_is_the_derivative() -> None:
+    knots = np.array([0.0, 1e-3, 3e-3, 4e-3])
+    dc = DCurrentPlan(t0=0.0, tf=4e-3, knot_t=tuple(knots), knot_id=(0.0, -0.4, -0.5, 0.0),
+                      knot_did=(0.0, -200.0, 100.0, 0.0))
+    t = np.linspace(0.0, 4e-3, 4001)
+    y, dy = dc.flag(t)
+    np.testing.assert_allclose(dy[1:-1], np.gradient(y, t)[1:-1], atol=2.0)
+    assert y[1000] == pytest.approx(-0.4) and y[3000] == pytest.approx(-0.5)
+    assert hermite_cubic(np.array([-1.0, 1.0]), knots, np.array([0.0, -0.4, -0.5, 0.1]), np.zeros(4))[1].tolist() \
+        == [0.0, 0.0]
+
+
+def test_bad_arguments_are_named() -> None:
+    with pytest.raises(ValueError, match="control_rate"):
+        plan_dq_move(1.0, NEMA17, limits(), control_rate=-1.0)
+    with pytest.raises(ValueError, match="voltage"):
+        plan_dq_move(1.0, NEMA17, limits(), voltage="star")
+    with pytest.raises(ValueError, match="engine"):
+        time_optimal_dq(1.0, NEMA17, limits(), engine="fortran")
+    with pytest.raises(ValueError, match="rising times"):
+        DCurrentPlan(knot_t=(0.0, 0.0), knot_id=(0.0, 0.0), knot_did=(0.0, 0.0))
+    with pytest.raises(ValueError, match="2 to 72 knots"):
+        DCurrentPlan(knot_t=(0.0, 1.0), knot_id=(0.0,), knot_did=(0.0, 0.0))
+    rc, out = plan_raw(1.0, NEMA17, limits(), 20000.0, work_len=10)
+    assert rc == -4 and out.n == 0
+
+
+def test_plan_tracked_by_the_dq_law_on_a_20khz_drive() -> None:
+    lim = limits(24.0)
+    fw = time_optimal_dq(0.3, NEMA17, lim)
+    loop = drive_loop(24.0, 20000.0, 4000)
+    d = design_gains(NEMA17, fw.plan, control_period=loop.control_period, v_bus=24.0, encoder_counts=4000,
+                     current_step=4 / 4096)
+    loop = replace(loop, observer=d.observer)
+    ctrl = DQFlatnessSMC(NEMA17, fw.plan, d.gains, "observer", d_current=fw.d_current)
+    r = simulate(NEMA17, fw.plan, ctrl, loop=loop, t_end=fw.plan.tf + 0.005, x0=[0.0, 0.0, 0.0, 0.0])
+    during = r.t <= fw.plan.tf
+    assert r.status == "ok"
+    assert np.max(np.abs(r.theta_error[during])) < 2e-3
+    # the law follows the planned d current: below -0.2 A at the peak speed
+    i_d = np.cos(NEMA17.Nr * r.theta) * r.ia + np.sin(NEMA17.Nr * r.theta) * r.ib
+    k = int(np.argmax(r.omega))
+    assert i_d[k] < -0.2
+
+
+_FILE = """
+[motor]
+preset = "nema17"
+[drive]
+v_bus = 24.0
+control_rate = 20000.0
+[limits]
+i_max = 1.0
+v_use = 0.84
+[plan]
+planner = "time_optimal"
+field_weakening = true
+waypoints = [0.5, {last}]
+[controller]
+type = "{ctrl}"
+"""
+
+
+def test_scenario_file_plans_field_weakening_for_the_dq_law(tmp_path: object) -> None:
+    from pathlib import Path
+
+    from flatstep.studies.scenario_file import read_scenario_file
+
+    p = Path(str(tmp_path)) / "fw.toml"
+    p.write_text(_FILE.format(last=1.5, ctrl="dq_smc"))
+    sf = read_scenario_file(p)
+    direct = time_optimal_dq(1.0, NEMA17, limits(24.0), theta1=0.5)
+    assert sf.scenario.plan.tf == pytest.approx(direct.plan.tf, rel=1e-12)
+    assert sf.scenario.d_current.knot_id == direct.d_current.knot_id
+    p.write_text(_FILE.format(last=1.5, ctrl="smc"))
+    with pytest.raises(ValueError, match="fw.toml:controller: a field-weakening plan is tracked by a dq_smc"):
+        read_scenario_file(p)
+    p.write_text(_FILE.format(last="1.5, 2.5", ctrl="dq_smc"))
+    with pytest.raises(ValueError, match="plan.waypoints: field_weakening plans one move"):
+        read_scenario_file(p)
+    p.write_text(_FILE.format(last=1.5, ctrl="dq_smc").replace("field_weakening = true", 'voltage = "phase"'))
+    with pytest.raises(ValueError, match="plan.voltage: the bus limit is chosen for a field-weakening plan"):
+        read_scenario_file(p)
