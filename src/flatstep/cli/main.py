@@ -38,6 +38,7 @@ from .motor import add_motor_command
 from .plan import add_plan_command, check_plan_file, scenario_on_drive
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
+from .tune import add_tune_command
 
 #: The summary table's columns and their units.
 TABLE_KEYS = {"theta_final": "rad", "max_abs_theta_error": "rad", "max_abs_rho_error": "A", "max_abs_va": "V",
@@ -250,6 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_design_command(sub)
     add_robustness_command(sub)
     add_compare_command(sub)
+    add_tune_command(sub)
     add_identify_command(sub)
     add_plan_command(sub)
     add_calibrate_command(sub)

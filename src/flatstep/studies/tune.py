@@ -53,14 +53,14 @@ FAIL_PENALTY = 20.0
 
 @dataclass(frozen=True)
 class Caps:
-    """The caps every law is tuned under, worst over the plants; ``None``: the default said for each.
+    r"""The caps every law is tuned under, worst over the plants; ``None``: the default said for each.
 
     Parameters
     ----------
     peak_voltage : float, optional
         Peak phase voltage from the move's start on [V] (default: the drive's bus, which the drive enforces).
     copper : float, optional
-        Copper loss :math:`R\\int(i_a^2 + i_b^2)dt` from the move's start to the horizon [J] (default: none).
+        Copper loss :math:`R\int(i_a^2 + i_b^2)dt` from the move's start to the horizon [J] (default: none).
     settling : float, optional
         Settling time after the move's end into the settling band (one encoder count) [s] (default: settled
         before the horizon's end).
@@ -176,23 +176,23 @@ def evaluate(scenarios: Sequence[Scenario], errors: list[dict[str, float]], gain
     out = []
     for i, sc in enumerate(scenarios):
         b = default_band(sc) if band is None else band
-        worst: dict[str, Optional[float]] = {}
+        worst = {"move_max": math.nan, "peak_voltage": math.nan, "copper_loss": math.nan}
+        settling: Optional[float] = 0.0
         bad = 0
         for row, run in zip(rows[i * n:(i + 1) * n], runs[i * n:(i + 1) * n], strict=True):
             if row["error"] is not None or row.get("status") != "ok":
                 bad += 1
             if row["error"] is not None:
                 continue
-            m = metrics(*(row[f"series_{k}"] for k in KEEP), sc.plan, band=b, R=run.simulated_plant.motor.R)
-            for key in ("move_max", "peak_voltage", "copper_loss"):
-                worst[key] = max(worst.get(key, -math.inf) or -math.inf, m[key] or 0.0)
+            t, e, ia, ib, va, vb = (row[f"series_{k}"] for k in KEEP)
+            m = metrics(t, e, ia, ib, va, vb, sc.plan, band=b, R=run.simulated_plant.motor.R)
+            worst = {k: float(np.fmax(v, m[k] or 0.0)) for k, v in worst.items()}  # fmax: NaN loses
             settled = m["settling_time"]
-            worst["settling"] = None if "settling" in worst and worst["settling"] is None or settled is None \
-                else max(worst.get("settling") or 0.0, settled)
-        nan = math.nan
-        out.append(Evaluation(dict(gains[i]), float(worst.get("move_max", nan) or nan),
-                              float(worst.get("peak_voltage", nan) or nan), float(worst.get("copper_loss", nan) or nan),
-                              worst.get("settling") if worst else None, bad, n))
+            settling = None if settling is None or settled is None else max(settling, settled)
+        if bad == n:
+            settling = None
+        out.append(Evaluation(dict(gains[i]), worst["move_max"], worst["peak_voltage"], worst["copper_loss"],
+                              settling, bad, n))
     return out
 
 

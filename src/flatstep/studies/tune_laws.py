@@ -21,14 +21,14 @@ from .scenario import Scenario
 
 @dataclass(frozen=True)
 class Gain:
-    """One tunable gain: its ``[controller]`` key and its bounds, in decades around the scenario's value.
+    r"""One tunable gain: its ``[controller]`` key and its bounds, in decades around the scenario's value.
 
     Parameters
     ----------
     key : str
         The gain's key in a scenario file's ``[controller]`` table (docs/scenario-reference.md).
     low, high : float
-        The search's bounds, :math:`\\log_{10}` of the gain over the scenario's own value (``-1, 1``: a tenth to ten
+        The search's bounds, :math:`\log_{10}` of the gain over the scenario's own value (``-1, 1``: a tenth to ten
         times), ``low < 0 < high`` so that the scenario's value is inside.
     """
 
