@@ -101,6 +101,10 @@ class Caps:
         return {"peak_voltage": self.peak_voltage, "copper": self.copper, "settling": self.settling}
 
 
+#: The caps' defaults: the bus, no copper cap, settled before the horizon's end.
+DEFAULT_CAPS = Caps()
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """One candidate's gains and its worst over the plants [rad, V, J, s] (``settling`` ``None``: not settled)."""
@@ -276,7 +280,7 @@ def check_budget(budget: int, population: int, source: str = "budget") -> tuple[
 
 
 def tune(scenario: Scenario, kind: Optional[str] = None, *, budget: int = BUDGET, seed: int = 0,
-         caps: Caps = Caps(), study: Optional[Robustness] = None, population: int = POPULATION,
+         caps: Caps = DEFAULT_CAPS, study: Optional[Robustness] = None, population: int = POPULATION,
          log: Optional[Callable[[str], None]] = None, **batch_options: Any) -> TuneResult:
     """Tune the gains of controller type ``kind`` (default: the scenario's) on the scenario's plants.
 
