@@ -11,24 +11,23 @@ static bool positive(fs_real x)
 int cascade_init(struct cascade *s, const struct cascade_params *p)
 {
     const struct motor_params *m = &p->motor;
-    fs_real wc = p->gains.current_bandwidth, w = p->gains.position_bandwidth;
+    const struct cascade_gains *g = &p->gains;
+    fs_real wc = g->current_bandwidth;
     if (!motor_params_valid(m))
         return CASCADE_EMOTOR;
     if (!plan_valid(&p->plan))
         return CASCADE_EPLAN;
-    if (!positive(wc) || !positive(w))
+    if (!positive(wc) || !positive(g->k_theta) || !positive(g->k_omega)
+        || !(fs_isfinite(g->ki_omega) && g->ki_omega >= 0))
         return CASCADE_EGAINS;
     s->p = *p;
-    s->k_theta = w / 3;
-    s->k_omega = FS_C(2.25) * w;
     s->kp = m->L * wc;
     s->L_Nr = m->L * m->Nr;
-    if (!(fs_isfinite(s->k_omega) && fs_isfinite(FS_C(0.75) * (w * w)) && fs_isfinite(s->kp) && fs_isfinite(m->R * wc)
-          && fs_isfinite(s->L_Nr)))
+    if (!(fs_isfinite(s->kp) && fs_isfinite(m->R * wc) && fs_isfinite(s->L_Nr)))
         return CASCADE_EGAINS;
     if (!positive(p->Ts))
         return CASCADE_EPERIOD;
-    s->ki_omega_Ts = FS_C(0.75) * (w * w) * p->Ts;
+    s->ki_omega_Ts = g->ki_omega * p->Ts;
     s->ki_Ts = m->R * wc * p->Ts;
     if (!(fs_isfinite(s->ki_omega_Ts) && fs_isfinite(s->ki_Ts)))
         return CASCADE_EPERIOD;
@@ -47,13 +46,27 @@ void cascade_reset(struct cascade *s)
     s->integral[0] = s->integral[1] = s->integral[2] = 0;
 }
 
+// Returns R iq_ff + L iq_ff', the voltage of the q current the plan needs: iq_ff = (J theta*'' + B theta*' + E*) / Km
+// and its rate, with the known torques along the plan (flatstep.control.feedforward.reference in d-q).
+static fs_real cascade_reference_voltage(const struct cascade *s, fs_real t, const fs_real *ref)
+{
+    const struct motor_params *m = &s->p.motor;
+    fs_real E = torque_model_torque(&s->p.torques, m->Nr, t, ref[PLAN_THETA], ref[PLAN_DTHETA]);
+    fs_real dE = torque_model_rate(&s->p.torques, m->Nr, t, ref[PLAN_THETA], ref[PLAN_DTHETA], ref[PLAN_DDTHETA]);
+    fs_real iq_ff = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA] + E) / m->Km;
+    fs_real diq_ff = (m->J * ref[PLAN_DDDTHETA] + m->B * ref[PLAN_DDTHETA] + dE) / m->Km;
+    return m->R * iq_ff + m->L * diq_ff;
+}
+
 // Returns ctrl_status bits; writes the command v and advances the integrals (cascade.h).
 uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v)
 {
     // e_w = theta*' + k_theta (theta* - theta) - omega; iq* = (J theta*'' + B theta*' + J (k_omega e_w + I0) + E) / Km;
-    // v_dq = kp (i_dq* - i_dq) + I12 [+ decoupling]; v = inverse Park; I += ki Ts e unless max|v| > v_limit.
+    // v_dq = kp (i_dq* - i_dq) + I12 [+ decoupling] [+ (0, R iq_ff + L iq_ff')]; v = inverse Park;
+    // I += ki Ts e unless max|v| > v_limit.
     const struct motor_params *m = &s->p.motor;
     const fs_real *I = s->integral;
+    const struct cascade_gains *g = &s->p.gains;
     fs_real ref[PLAN_FLAG_LEN], e_w, accel, iq_ref, sn, cs, id, iq, e_d, e_q, vd, vq, out[2], next[3], z;
     bool hold;
     v[0] = v[1] = 0;
@@ -63,8 +76,8 @@ uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v
     if (z != 0)
         return CTRL_NONFINITE;
     plan_flag(&s->plan, t, ref);
-    e_w = ref[PLAN_DTHETA] + s->k_theta * (ref[PLAN_THETA] - y[3]) - y[2];
-    accel = s->k_omega * e_w + I[0];
+    e_w = ref[PLAN_DTHETA] + g->k_theta * (ref[PLAN_THETA] - y[3]) - y[2];
+    accel = g->k_omega * e_w + I[0];
     iq_ref = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA] + m->J * accel
               + torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]))
              / m->Km;
@@ -76,10 +89,12 @@ uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v
     e_q = iq_ref - iq;
     vd = s->kp * e_d + I[1];
     vq = s->kp * e_q + I[2];
-    if (s->p.gains.decoupling) {
+    if (g->decoupling) {
         vd = vd + -s->L_Nr * y[2] * iq;
         vq = vq + (s->L_Nr * y[2] * id + m->Km * y[2]);
     }
+    if (g->voltage_feedforward)
+        vq = vq + cascade_reference_voltage(s, t, ref);
     out[0] = vd * cs - vq * sn;
     out[1] = vd * sn + vq * cs;
     hold = fs_fabs(out[0]) > s->p.v_limit || fs_fabs(out[1]) > s->p.v_limit;

@@ -16,17 +16,21 @@ enum cascade_param_error {
     CASCADE_PARAMS_OK = 0,
     CASCADE_EMOTOR,    // motor_params_valid fails
     CASCADE_EPLAN,     // plan_valid fails
-    CASCADE_EGAINS,    // a bandwidth not finite and > 0, or a gain derived from it overflows
+    CASCADE_EGAINS,    // wc, k_theta, k_omega not finite and > 0, ki_omega not finite and >= 0, or L wc overflows
     CASCADE_EPERIOD,   // Ts not finite and > 0, or ki Ts overflows
     CASCADE_ELIMITS,   // v_limit not > 0 (INFINITY is allowed: no limit)
     CASCADE_ETORQUES,  // torque_model_valid fails
 };
 
-// As flatstep.CascadeGains: k_theta = w / 3, k_omega = 2.25 w, ki_omega = 0.75 w^2 for w = position_bandwidth.
+// As flatstep.CascadeGains: the current PIs' bandwidth and the P-PI loop's gains (the rule's w / 3, 2.25 w,
+// 0.75 w^2 for a bandwidth w, or any others).
 struct cascade_gains {
-    fs_real current_bandwidth;   // wc [rad/s], > 0: current PIs kp = L wc, ki = R wc
-    fs_real position_bandwidth;  // w [rad/s], > 0
-    bool decoupling;             // add -L Nr omega iq to vd and L Nr omega id + Km omega to vq
+    fs_real current_bandwidth;  // wc [rad/s], > 0: current PIs kp = L wc, ki = R wc
+    fs_real k_theta;            // position gain [1/s], > 0
+    fs_real k_omega;            // velocity gain [1/s], > 0
+    fs_real ki_omega;           // velocity integral gain [1/s^2], >= 0
+    bool decoupling;            // add -L Nr omega iq to vd and L Nr omega id + Km omega to vq
+    bool voltage_feedforward;   // add R iq_ff + L iq_ff' to vq, iq_ff = (J theta*'' + B theta*' + E*) / Km on the plan
 };
 
 struct cascade_params {
@@ -41,12 +45,11 @@ struct cascade_params {
 // Caller-owned state of the cascade.
 struct cascade {
     struct cascade_params p;
-    struct plan_coef plan;     // p.plan ready to evaluate
-    fs_real k_theta, k_omega;  // w / 3, 2.25 w
-    fs_real ki_omega_Ts;       // 0.75 w^2 Ts
-    fs_real kp, ki_Ts;         // L wc and R wc Ts of the current loops
-    fs_real L_Nr;              // L Nr, the decoupling's factor
-    fs_real integral[3];       // velocity loop [rad/s^2], d and q current loops [V] (Python's state)
+    struct plan_coef plan;  // p.plan ready to evaluate
+    fs_real ki_omega_Ts;    // ki_omega Ts
+    fs_real kp, ki_Ts;      // L wc and R wc Ts of the current loops
+    fs_real L_Nr;           // L Nr, the decoupling's factor
+    fs_real integral[3];    // velocity loop [rad/s^2], d and q current loops [V] (Python's state)
 };
 
 // Returns CASCADE_PARAMS_OK, or the cascade_param_error naming the invalid group (s is then unusable).
@@ -56,7 +59,9 @@ int cascade_init(struct cascade *s, const struct cascade_params *p);
 void cascade_reset(struct cascade *s);
 
 // Returns ctrl_status bits; writes the cascade's command v = (va, vb) for time t and y = (ia, ib, omega, theta,
-// theta'') (y[4] is not read; iq* carries E(t, theta, omega) / Km of the torque model) and advances the integrals by one period Ts, as CascadeFOC.step. v is not limited:
+// theta'') (y[4] is not read; iq* carries E(t, theta, omega) / Km of the torque model; with voltage_feedforward vq
+// carries R iq_ff + L iq_ff' with E and E' along the plan) and advances the integrals by one period Ts, as
+// CascadeFOC.step. v is not limited:
 // CTRL_SATURATED says max(|va|, |vb|) > v_limit, and the integrals then hold (anti-windup). On a fault
 // (CTRL_NONFINITE: t, y[0..3] or an integral not finite; CTRL_OVERFLOW: v or an integral would not be finite)
 // v = (0, 0) and the state is left unchanged.

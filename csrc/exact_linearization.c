@@ -30,6 +30,8 @@ int exact_linearization_init(struct exact_linearization *s, const struct exact_l
         return EXACT_LINEARIZATION_EMEASUREMENT;
     if (!(p->v_limit > 0))
         return EXACT_LINEARIZATION_ELIMITS;
+    if (!torque_model_valid(&p->torques))
+        return EXACT_LINEARIZATION_ETORQUES;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
     s->L_Nr = p->motor.L * p->motor.Nr;
@@ -46,10 +48,11 @@ void exact_linearization_reset(struct exact_linearization *s)
 // Returns ctrl_status bits; writes the law's voltages v (exact_linearization.h).
 uint32_t exact_linearization_step(struct exact_linearization *s, fs_real t, const fs_real *y, fs_real *v)
 {
-    // u = theta*''' - k2 e'' - k1 e' - k0 e; vq = R iq + L Nr omega id + Km omega + L / Km (J u + B theta''),
+    // u = theta*''' - k2 e'' - k1 e' - k0 e; vq = R iq + L Nr omega id + Km omega + L / Km (J u + B theta'' + E'),
     // vd = R id - L Nr omega iq - L pd id (theta''' = u, id' = -pd id); v = inverse Park of (vd, vq).
     const struct motor_params *m = &s->p.motor;
-    fs_real ref[PLAN_FLAG_LEN], sn, cs, id, iq, acc, u, vd, vq, out[2], z;
+    const struct torque_model *E = &s->p.torques;
+    fs_real ref[PLAN_FLAG_LEN], sn, cs, id, iq, acc, u, dE, vd, vq, out[2], z;
     bool measured = s->p.measurement == EXACT_LINEARIZATION_MEASURED;
     v[0] = v[1] = 0;
     // x - x is 0 for a finite x and NaN otherwise: one test covers every input used.
@@ -62,11 +65,12 @@ uint32_t exact_linearization_step(struct exact_linearization *s, fs_real t, cons
     fs_sincos(m->Nr * y[3], &sn, &cs);
     id = y[0] * cs + y[1] * sn;
     iq = -y[0] * sn + y[1] * cs;
-    acc = measured ? y[4] : (m->Km * iq - m->B * y[2]) / m->J;
+    acc = measured ? y[4] : (m->Km * iq - m->B * y[2] - torque_model_torque(E, m->Nr, t, y[3], y[2])) / m->J;
+    dE = torque_model_rate(E, m->Nr, t, y[3], y[2], acc);
     plan_flag(&s->plan, t, ref);
     u = ref[PLAN_DDDTHETA] - s->k2 * (acc - ref[PLAN_DDTHETA]) - s->k1 * (y[2] - ref[PLAN_DTHETA])
         - s->k0 * (y[3] - ref[PLAN_THETA]);
-    vq = m->R * iq + s->L_Nr * y[2] * id + m->Km * y[2] + s->L_Km * (m->J * u + m->B * acc);
+    vq = m->R * iq + s->L_Nr * y[2] * id + m->Km * y[2] + s->L_Km * (m->J * u + m->B * acc + dE);
     vd = m->R * id - s->L_Nr * y[2] * iq - m->L * s->p.gains.pd * id;
     out[0] = vd * cs - vq * sn;
     out[1] = vd * sn + vq * cs;

@@ -8,6 +8,7 @@
 #include "fs_real.h"
 #include "motor.h"
 #include "plan.h"
+#include "torque_model.h"
 
 // cffi:begin
 // Where theta'' comes from: y[4] (Python's "ideal" and "observer") or the zero-load model (Km iq - B omega) / J
@@ -22,6 +23,7 @@ enum exact_linearization_param_error {
     EXACT_LINEARIZATION_EGAINS,        // wn, xi, p3, pd not finite and > 0, or k0, k1, k2 overflow
     EXACT_LINEARIZATION_EMEASUREMENT,  // not an exact_linearization_measurement
     EXACT_LINEARIZATION_ELIMITS,       // v_limit not > 0 (INFINITY is allowed: no limit)
+    EXACT_LINEARIZATION_ETORQUES,      // torque_model_valid fails
 };
 
 // As flatstep.LinearizationGains: the angle error's poles (s + p3)(s^2 + 2 xi wn s + wn^2), the d current's s + pd.
@@ -36,8 +38,9 @@ struct exact_linearization_params {
     struct motor_params motor;  // the controller's nominal model
     struct plan plan;           // the move, psi or a table (theta*, theta*', theta*'', theta*''')
     struct exact_linearization_gains gains;
-    int measurement;  // enum exact_linearization_measurement
-    fs_real v_limit;  // > 0, INFINITY: none; only sets CTRL_SATURATED (the law is static, no windup)
+    int measurement;              // enum exact_linearization_measurement
+    fs_real v_limit;              // > 0, INFINITY: none; only sets CTRL_SATURATED (the law is static, no windup)
+    struct torque_model torques;  // the known torques E (theta'' model: - E / J; vq: + L E' / Km); all zero: none
 };
 
 // Caller-owned state of the law: its parameters and constants, nothing that a step changes.

@@ -60,12 +60,24 @@ void microstep_reset(struct microstep *s)
     s->integral[1] = s->p.motor.R * i[1];
 }
 
+// Returns nothing; writes the back EMF at the plan's angle and speed, Km theta*' (-sin Nr theta*, cos Nr theta*).
+static void microstep_back_emf(struct microstep *s, fs_real t, fs_real emf[2])
+{
+    fs_real f[PLAN_FLAG_LEN], sn, cs;
+    const struct motor_params *m = &s->p.motor;
+    plan_flag(&s->plan, t, f);
+    fs_sincos(m->Nr * f[PLAN_THETA], &sn, &cs);
+    emf[0] = -m->Km * f[PLAN_DTHETA] * sn;
+    emf[1] = m->Km * f[PLAN_DTHETA] * cs;
+}
+
 // Returns ctrl_status bits; writes the command v and advances the integrals (microstep.h).
 uint32_t microstep_step(struct microstep *s, fs_real t, const fs_real *y, fs_real *v)
 {
-    // v = kp (i* - i) + I [+ R i* + L di*/dt]; I += ki Ts (i* - i) unless max|v| > v_limit (anti-windup).
+    // v = kp (i* - i) + I [+ R i* + L di*/dt] [+ Km theta*' (-sin, cos)(Nr theta*)];
+    // I += ki Ts (i* - i) unless max|v| > v_limit (anti-windup).
     const struct motor_params *m = &s->p.motor;
-    fs_real i[2], di[2], e[2], out[2], next[2], z;
+    fs_real i[2], di[2], emf[2] = {0, 0}, e[2], out[2], next[2], z;
     bool hold;
     int k;
     v[0] = v[1] = 0;
@@ -74,11 +86,14 @@ uint32_t microstep_step(struct microstep *s, fs_real t, const fs_real *y, fs_rea
     if (z != 0)
         return CTRL_NONFINITE;
     microstep_reference(s, t, i, di);
+    if (s->p.gains.back_emf)
+        microstep_back_emf(s, t, emf);
     for (k = 0; k < 2; k++) {
         e[k] = i[k] - y[k];
         out[k] = s->kp * e[k] + s->integral[k];
         if (s->p.gains.feedforward)
             out[k] = out[k] + m->R * i[k] + m->L * di[k];
+        out[k] = out[k] + emf[k];
     }
     hold = fs_fabs(out[0]) > s->p.v_limit || fs_fabs(out[1]) > s->p.v_limit;
     for (k = 0; k < 2; k++)

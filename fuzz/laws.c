@@ -209,7 +209,7 @@ static int init_smc(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t
     return rc;
 }
 
-// Returns microstep_init's status; decodes the driver (options: 1 no feedforward). Aborts when a documented
+// Returns microstep_init's status; decodes the driver (options: 1 no feedforward, 2 the back EMF). Aborts when a documented
 // requirement is broken yet accepted.
 static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t options, const struct setup *u)
 {
@@ -218,6 +218,7 @@ static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, u
     int rc;
     p.motor = *u->model, p.plan = *u->plan, p.Ts = u->Ts, p.v_limit = u->v_limit;
     p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.feedforward = !(options & 1);
+    p.gains.back_emf = (options & 2) != 0;
     if (hostile) {
         p.gains.current_bandwidth = fz_value(r, p.gains.current_bandwidth), p.Ts = fz_value(r, p.Ts);
         p.v_limit = fz_value(r, p.v_limit);
@@ -233,7 +234,7 @@ static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, u
     return rc;
 }
 
-// Returns cascade_init's status; decodes the cascade (options: 1 no decoupling). Aborts when a documented
+// Returns cascade_init's status; decodes the cascade (options: 1 no decoupling, 2 the voltage feedforward). Aborts when a documented
 // requirement is broken yet accepted.
 static int init_cascade(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t options, const struct setup *u)
 {
@@ -241,14 +242,19 @@ static int init_cascade(struct fz_law *c, struct fz_reader *r, bool hostile, uin
     bool ok;
     int rc;
     p.motor = *u->model, p.plan = *u->plan, p.Ts = u->Ts, p.v_limit = u->v_limit;
-    p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.position_bandwidth = 200, p.gains.decoupling = !(options & 1);
+    p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.decoupling = !(options & 1);
+    p.gains.k_theta = 200.0 / 3, p.gains.k_omega = 450, p.gains.ki_omega = 30000;
+    p.gains.voltage_feedforward = (options & 2) != 0;
+    p.torques = (struct torque_model){0};
     if (hostile) {
         p.gains.current_bandwidth = fz_value(r, p.gains.current_bandwidth);
-        p.gains.position_bandwidth = fz_value(r, p.gains.position_bandwidth), p.Ts = fz_value(r, p.Ts);
+        p.gains.k_theta = fz_value(r, p.gains.k_theta), p.gains.k_omega = fz_value(r, p.gains.k_omega);
+        p.gains.ki_omega = fz_value(r, p.gains.ki_omega), p.Ts = fz_value(r, p.Ts);
         p.v_limit = fz_value(r, p.v_limit);
     }
     ok = motor_ok(&p.motor) && plan_ok(&p.plan) && fz_positive(p.gains.current_bandwidth)
-         && fz_positive(p.gains.position_bandwidth) && fz_positive(p.Ts) && p.v_limit > 0;
+         && fz_positive(p.gains.k_theta) && fz_positive(p.gains.k_omega) && isfinite(p.gains.ki_omega)
+         && p.gains.ki_omega >= 0 && fz_positive(p.Ts) && p.v_limit > 0;
     rc = cascade_init(&c->u.cas, &p);
     if (!ok && rc == CASCADE_PARAMS_OK)
         FZ_FAIL("cascade_init accepted invalid parameters");
@@ -268,6 +274,7 @@ static int init_exact(struct fz_law *c, struct fz_reader *r, bool hostile, uint8
     int rc;
     p.motor = *u->model, p.plan = *u->plan, p.v_limit = u->v_limit;
     p.measurement = options & 1 ? EXACT_LINEARIZATION_MODEL : EXACT_LINEARIZATION_MEASURED;
+    p.torques = (struct torque_model){0};
     g->wn = 200, g->xi = 0.8, g->p3 = 0.3 / u->Ts, g->pd = 0.3 / u->Ts;
     if (hostile) {
         g->wn = fz_value(r, g->wn), g->xi = fz_value(r, g->xi), g->p3 = fz_value(r, g->p3);

@@ -19,6 +19,7 @@ static void microstep_defaults(struct microstep_params *p)
     p->plan = PLAN;
     p->gains.current_bandwidth = 0.3 / TS;
     p->gains.feedforward = true;
+    p->gains.back_emf = false;
     p->Ts = TS;
     p->v_limit = INFINITY;
 }
@@ -29,8 +30,11 @@ static void cascade_defaults(struct cascade_params *p)
     p->motor = MOTOR;
     p->plan = PLAN;
     p->gains.current_bandwidth = 0.3 / TS;
-    p->gains.position_bandwidth = 0.3 / TS / 4;
+    p->gains.k_theta = 0.3 / TS / 4 / 3;
+    p->gains.k_omega = 2.25 * (0.3 / TS / 4);
+    p->gains.ki_omega = 0.75 * (0.3 / TS / 4) * (0.3 / TS / 4);
     p->gains.decoupling = true;
+    p->gains.voltage_feedforward = false;
     p->Ts = TS;
     p->v_limit = INFINITY;
     p->torques = (struct torque_model){0, 4, 0, 0, 0.01, 0, 0, 0, 1};
@@ -45,6 +49,7 @@ static void exlin_defaults(struct exact_linearization_params *p)
     p->gains = (struct exact_linearization_gains){lambda / 4, 0.9, lambda, lambda};
     p->measurement = EXACT_LINEARIZATION_MODEL;
     p->v_limit = INFINITY;
+    p->torques = (struct torque_model){0};
 }
 
 // Returns 0; each _init rejects each invalid group and accepts the defaults (INFINITY as v_limit among them).
@@ -77,17 +82,21 @@ static int init_checks(void)
     CHECK(microstep_init(&ms, &mq) == MICROSTEP_ELIMITS, "v_limit = NaN");
 
     CHECK(cascade_init(&cs, &cp) == CASCADE_PARAMS_OK, "cascade defaults");
-    CHECK(rel_diff(cs.k_theta, 250) < 1e-14 && rel_diff(cs.k_omega, 1687.5) < 1e-14
-              && rel_diff(cs.ki_omega_Ts, 42.1875) < 1e-14,
-          "k_theta %g k_omega %g ki_omega Ts %g", cs.k_theta, cs.k_omega, cs.ki_omega_Ts);
+    CHECK(rel_diff(cs.ki_omega_Ts, 42.1875) < 1e-14, "ki_omega Ts %g", cs.ki_omega_Ts);
     cq = cp, cq.motor.Nr = 0;
     CHECK(cascade_init(&cs, &cq) == CASCADE_EMOTOR, "Nr = 0");
     cq = cp, cq.plan.rho2 = 0;
     CHECK(cascade_init(&cs, &cq) == CASCADE_EPLAN, "rho2 = 0");
-    cq = cp, cq.gains.position_bandwidth = -1;
-    CHECK(cascade_init(&cs, &cq) == CASCADE_EGAINS, "w < 0");
-    cq = cp, cq.gains.position_bandwidth = 1e200;
-    CHECK(cascade_init(&cs, &cq) == CASCADE_EGAINS, "ki_omega = 0.75 w^2 overflows");
+    cq = cp, cq.gains.k_theta = -1;
+    CHECK(cascade_init(&cs, &cq) == CASCADE_EGAINS, "k_theta < 0");
+    cq = cp, cq.gains.k_omega = NAN;
+    CHECK(cascade_init(&cs, &cq) == CASCADE_EGAINS, "k_omega NaN");
+    cq = cp, cq.gains.ki_omega = -1;
+    CHECK(cascade_init(&cs, &cq) == CASCADE_EGAINS, "ki_omega < 0");
+    cq = cp, cq.gains.ki_omega = 0;
+    CHECK(cascade_init(&cs, &cq) == CASCADE_PARAMS_OK, "ki_omega = 0: a P-P cascade");
+    cq = cp, cq.gains.ki_omega = 1e300, cq.Ts = 1e10;
+    CHECK(cascade_init(&cs, &cq) == CASCADE_EPERIOD, "ki_omega Ts overflows");
     cq = cp, cq.gains.current_bandwidth = INFINITY;
     CHECK(cascade_init(&cs, &cq) == CASCADE_EGAINS, "wc = inf");
     cq = cp, cq.Ts = 0;
@@ -225,6 +234,32 @@ static int guard_checks(void)
     return 0;
 }
 
+// Returns 0; the voltage feedforward adds (0, R iq_ff + L iq_ff') in d-q, with the torques along the plan.
+static int cascade_feedforward_checks(struct cascade_params *cp)
+{
+    struct cascade off, on;
+    double y[5] = {0.1, -0.2, 3.0, 0.01, 0}, v0[2], v1[2], f[PLAN_FLAG_LEN], E, dE, iq_ff, diq_ff, dq[2], sn, cs;
+    double t = 0.027;
+    const struct motor_params *m = &cp->motor;
+    cascade_init(&off, cp);
+    cp->gains.voltage_feedforward = true;
+    CHECK(cascade_init(&on, cp) == CASCADE_PARAMS_OK, "cascade with the voltage feedforward");
+    cp->gains.voltage_feedforward = false;
+    CHECK(cascade_step(&off, t, y, v0) == CTRL_OK && cascade_step(&on, t, y, v1) == CTRL_OK, "steps");
+    plan_flag(&on.plan, t, f);
+    E = torque_model_torque(&cp->torques, m->Nr, t, f[PLAN_THETA], f[PLAN_DTHETA]);
+    dE = torque_model_rate(&cp->torques, m->Nr, t, f[PLAN_THETA], f[PLAN_DTHETA], f[PLAN_DDTHETA]);
+    iq_ff = (m->J * f[PLAN_DDTHETA] + m->B * f[PLAN_DTHETA] + E) / m->Km;
+    diq_ff = (m->J * f[PLAN_DDDTHETA] + m->B * f[PLAN_DDTHETA] + dE) / m->Km;
+    sn = sin(m->Nr * y[3]), cs = cos(m->Nr * y[3]);
+    dq[0] = (v1[0] - v0[0]) * cs + (v1[1] - v0[1]) * sn;
+    dq[1] = -(v1[0] - v0[0]) * sn + (v1[1] - v0[1]) * cs;
+    CHECK(fabs(dq[0]) < 1e-12 && rel_diff(dq[1], m->R * iq_ff + m->L * diq_ff) < 1e-12 && fabs(dq[1]) > 1e-3,
+          "cascade voltage feedforward: dq %g %g, expected %g", dq[0], dq[1], m->R * iq_ff + m->L * diq_ff);
+    CHECK(off.integral[2] == on.integral[2], "the feedforward leaves the integrals alone");
+    return 0;
+}
+
 // Returns 0; with a finite v_limit the integrals hold while max(|va|, |vb|) exceeds it (CTRL_SATURATED, v not
 // scaled), and advance by ki Ts e when it does not.
 static int windup_checks(void)
@@ -256,11 +291,11 @@ static int windup_checks(void)
     cp.v_limit = INFINITY;
     cascade_init(&cs, &cp);
     CHECK(cascade_step(&cs, 0, y, v) == CTRL_OK, "cascade, no limit");
-    ia = cs.k_omega * cs.k_theta * 1e-3 * 3.6e-6 / 0.05;  // iq* at theta = -1 mrad
-    CHECK(rel_diff(cs.integral[0], cs.ki_omega_Ts * cs.k_theta * 1e-3) < 1e-14
+    ia = cs.p.gains.k_omega * cs.p.gains.k_theta * 1e-3 * 3.6e-6 / 0.05;  // iq* at theta = -1 mrad
+    CHECK(rel_diff(cs.integral[0], cs.ki_omega_Ts * cs.p.gains.k_theta * 1e-3) < 1e-14
               && rel_diff(cs.integral[2], cs.ki_Ts * ia) < 1e-14 && cs.integral[1] == 0,
           "cascade integrals %.17g %.17g", cs.integral[0], cs.integral[2]);
-    return 0;
+    return cascade_feedforward_checks(&cp);
 }
 
 // Returns 0; on the nominal plant with no load the law makes theta''' = u and i_d' = -pd i_d (model mode).

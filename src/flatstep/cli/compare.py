@@ -8,6 +8,7 @@ import time
 from dataclasses import replace
 from typing import Any, Literal, Optional, Sequence
 
+from ..control.spec import is_controller
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, LABELS, SMC_TYPES
 from ..json_out import strict_json
 from ..studies.calibrate import calibration_horizon
@@ -146,10 +147,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     mode = "each" if args.calibrate_each else None
     every = CONTROLLER_TYPES if mode == "each" else scenario_kinds(scenario)  # each unit brings its own table
     kinds = tuple(k.strip() for k in args.controllers.split(",")) if args.controllers else every
-    unknown = [k for k in kinds if k not in CONTROLLER_TYPES]
+    unknown = [k for k in kinds if not is_controller(k)]
     if unknown or not kinds or len(set(kinds)) != len(kinds):
-        raise ValueError(f"--controllers {args.controllers!r}: give distinct names among {list(CONTROLLER_TYPES)}, "
-                         "separated by commas")
+        raise ValueError(f"--controllers {args.controllers!r}: give distinct names among {list(CONTROLLER_TYPES)} "
+                         "(or law+option+...), separated by commas")
     if args.band is not None and args.band <= 0:
         raise ValueError(f"--band {args.band!r}: the settling band must be > 0 rad")
     band = args.band if args.band is not None else default_band(scenario)

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -41,40 +41,69 @@ from numpy.typing import ArrayLike, NDArray
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.protocol import Plan
-from ..validate import check_positive
+from ..validate import InputError, check_finite, check_positive
+from .feedforward import reference
 from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, pi_integrate, pi_output
+
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
 
 
 @dataclass(frozen=True)
 class CascadeGains:
-    """Bandwidths of the cascade [rad/s]: current loops, and ``position_bandwidth`` ``w`` of the P-PI loop."""
+    r"""Gains of the cascade: the current loops' bandwidth and the P-PI loop's gains.
+
+    By default the P-PI loop's gains follow the rule of the module docstring from its bandwidth
+    ``position_bandwidth`` :math:`w` (poles :math:`w, w, w/4`); any of ``k_theta``, ``k_omega``, ``ki_omega``
+    given replaces its rule's value, so that the three poles are free.
+
+    Parameters
+    ----------
+    current_bandwidth : float
+        :math:`\omega_c` [rad/s] of the d-q current PIs (pole-zero cancellation), > 0.
+    position_bandwidth : float
+        :math:`w` [rad/s] of the rule, > 0.
+    decoupling : bool
+        Cancel the axes' coupling and the back EMF at the measured speed (default on).
+    k_theta, k_omega, ki_omega : float, optional
+        Position gain [1/s] (> 0; rule :math:`w/3`), velocity gain [1/s] (> 0; rule :math:`2.25w`), velocity
+        integral gain [1/s^2] (>= 0; rule :math:`0.75w^2`).
+    voltage_feedforward : bool
+        Add the voltage of the q current the plan needs, :math:`R i_q^{ff} + L\,di_q^{ff}/dt` (module docstring;
+        default off).
+    """
 
     current_bandwidth: float
     position_bandwidth: float
     decoupling: bool = True
+    k_theta: Optional[float] = None
+    k_omega: Optional[float] = None
+    ki_omega: Optional[float] = None
+    voltage_feedforward: bool = False
 
     def __post_init__(self) -> None:
         for name in ("current_bandwidth", "position_bandwidth"):
             object.__setattr__(self, name, check_positive(name, getattr(self, name), unit=" rad/s"))
+        w = self.position_bandwidth
+        for name, rule, unit in (("k_theta", w / 3.0, " 1/s"), ("k_omega", 2.25 * w, " 1/s")):
+            value = getattr(self, name)
+            object.__setattr__(self, name, rule if value is None else check_positive(name, value, unit=unit))
+        ki = 0.75 * w**2 if self.ki_omega is None else check_finite("ki_omega", self.ki_omega)
+        if ki < 0:
+            raise InputError("ki_omega", ki, f"ki_omega={ki!r} 1/s^2 must be >= 0 (0: no velocity integral)")
+        object.__setattr__(self, "ki_omega", ki)
+        for name in ("decoupling", "voltage_feedforward"):
+            if not isinstance(getattr(self, name), bool):
+                raise InputError(name, getattr(self, name), f"{name}={getattr(self, name)!r} is not true or false")
 
-    @property
-    def k_theta(self) -> float:
-        """Position gain :math:`w/3` [1/s]."""
-        return self.position_bandwidth / 3.0
+    def loop_gains(self) -> tuple[float, float, float]:
+        """``(k_theta, k_omega, ki_omega)`` of the P-PI loop."""
+        return float(self.k_theta or 0.0), float(self.k_omega or 0.0), float(self.ki_omega or 0.0)
 
-    @property
-    def k_omega(self) -> float:
-        """Velocity gain :math:`2.25 w` [1/s]."""
-        return 2.25 * self.position_bandwidth
-
-    @property
-    def ki_omega(self) -> float:
-        """Velocity integral gain :math:`0.75 w^2` [1/s^2]."""
-        return 0.75 * self.position_bandwidth**2
-
-    def as_dict(self) -> dict[str, float]:
-        """The bandwidths, the decoupling switch and the loop gains they give, for JSON."""
-        return {**asdict(self), "k_theta": self.k_theta, "k_omega": self.k_omega, "ki_omega": self.ki_omega}
+    def as_dict(self) -> dict[str, Any]:
+        """The bandwidths, the switches and the loop gains, for JSON."""
+        return asdict(self)
 
 
 class CascadeFOC(BaselineController[CascadeGains]):
@@ -115,7 +144,8 @@ class CascadeFOC(BaselineController[CascadeGains]):
             raise ValueError(f"torques={torques!r} is not a TorqueModel")
         self.torques, self.model_observer = torques, bool(model_observer)
         self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
-        self.pi_omega = PIGains(gains.k_omega, gains.ki_omega)
+        self.k_theta, k_omega, ki_omega = gains.loop_gains()
+        self.pi_omega = PIGains(k_omega, ki_omega)
 
     @property
     def observer_torques(self) -> Optional[TorqueModel]:
@@ -136,7 +166,7 @@ class CascadeFOC(BaselineController[CascadeGains]):
         integral = self.initial_state() if state is None else np.asarray(state, dtype=float)
         ia, ib, omega, theta = np.asarray(measurement, dtype=float)[:4]
         ref = self.plan.flag(t)
-        e_omega = float(ref.dtheta + g.k_theta * (ref.theta - theta) - omega)
+        e_omega = float(ref.dtheta + self.k_theta * (ref.theta - theta) - omega)
         accel = pi_output(self.pi_omega, e_omega, integral[0])
         known = float(self.torques.torque(t, theta, omega, m.Nr))  # the anti-cogging (and friction, load) torque
         iq_ref = (m.J * ref.ddtheta + m.B * ref.dtheta + m.J * accel + known) / m.Km
@@ -146,16 +176,45 @@ class CascadeFOC(BaselineController[CascadeGains]):
         v_dq = pi_output(self.pi, e_i, integral[1:])
         if g.decoupling:
             v_dq = v_dq + np.array([-m.L * m.Nr * omega * i_q, m.L * m.Nr * omega * i_d + m.Km * omega])
+        if g.voltage_feedforward:
+            v_dq = v_dq + np.array([0.0, self.reference_voltage(t)])
         v = np.array(inverse_park(v_dq[0], v_dq[1], p))
         hold = bus_scale(v, self.v_limit) < 1.0
         new = np.concatenate([[pi_integrate(self.pi_omega, e_omega, integral[0], Ts, hold)],
                               pi_integrate(self.pi, e_i, integral[1:], Ts, hold)])
         return v, new
 
+    def reference_voltage(self, t: float) -> float:
+        r"""The voltage of the q current the plan needs, :math:`R i_q^{ff} + L\,di_q^{ff}/dt` [V] at time ``t``.
+
+        :math:`i_q^{ff} = (J\ddot\theta^* + B\dot\theta^* + E^*)/K_m` with the known torques along the plan
+        (:func:`flatstep.control.feedforward.reference` in d-q).
+        """
+        ref = reference(self.plan, self.motor, t, torques=self.torques, frame="dq")
+        return float(self.motor.R * ref.currents[1] + self.motor.L * ref.current_rates[1])
+
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct cascade_params`` (csrc/cascade.h)."""
         g = self.gains
+        k_theta, k_omega, ki_omega = g.loop_gains()
         return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
-                    gains=dict(current_bandwidth=g.current_bandwidth, position_bandwidth=g.position_bandwidth,
-                               decoupling=g.decoupling), torques=self.torques.as_dict(),
+                    gains=dict(current_bandwidth=g.current_bandwidth, k_theta=k_theta, k_omega=k_omega,
+                               ki_omega=ki_omega, decoupling=g.decoupling,
+                               voltage_feedforward=g.voltage_feedforward), torques=self.torques.as_dict(),
                     Ts=self.control_period, v_limit=self.v_limit)
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> CascadeFOC:
+    """The cascade as ``spec`` asks (flatstep.control.spec), tuned by rule (:mod:`flatstep.control.build`).
+
+    Current loops at ``lambda``, the P-PI loop by the rule at ``w = omega_n``, any of :class:`CascadeGains`'s fields
+    given in ``context.law_gains`` over them; ``feedforward`` is the anti-cogging (the known torques in the q-current
+    command), ``observer_torques`` gives them to the observer too, ``voltage_feedforward`` adds the voltage of the
+    planned q current (with those torques along the plan).
+    """
+    lam, wn = context.bandwidths()
+    gains = context.gains(CascadeGains, dict(current_bandwidth=lam, position_bandwidth=wn),
+                          dict(voltage_feedforward=spec.voltage_feedforward))
+    return CascadeFOC(context.motor, context.plan, gains, control_period=context.period,
+                      measurement=context.measurement, v_limit=context.v_limit, torques=context.torques,
+                      model_observer=spec.observer_torques)

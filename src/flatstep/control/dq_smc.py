@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,6 +58,10 @@ from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.protocol import Plan
 from ..validate import check_positive
 from .smc import MEASUREMENTS, SMCGains
+
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
 
 Array = NDArray[np.float64]
 #: The paper's gains (Section 3), the default.
@@ -327,3 +331,18 @@ class DQFlatnessSMC:
                                                                   range=self.adaptation.range,
                                                                   Ts=self.adaptation.control_period,
                                                                   v_hold=self.adaptation.v_hold))
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> DQFlatnessSMC:
+    """The d-q law as ``spec`` asks (flatstep.control.spec): the run's gains, known torques, planned d current.
+
+    ``integral`` adds :meth:`DQIntegral.designed` (its pole at ``omega_n/4`` as the cascade's velocity integral,
+    held while the bus limits) and ``km_estimate`` :meth:`DQKmAdaptation.designed` (at the integral's rate, held as
+    the integral is); both advance by the control period.
+    """
+    g, v = context.sliding_gains(), context.v_limit
+    integral = DQIntegral.designed(g, context.period, v) if spec.integral else None
+    adaptation = (DQKmAdaptation.designed(context.motor, context.plan, g, context.period, v)
+                  if spec.km_estimate else None)
+    return DQFlatnessSMC(context.motor, context.plan, g, context.measurement, torques=context.torques,
+                         d_current=context.d_current, integral=integral, adaptation=adaptation)

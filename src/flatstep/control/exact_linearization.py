@@ -22,20 +22,31 @@ zero-load model :math:`(K_m i_q - B\omega)/J`, which is Zribi and Chiasson's sta
 exactly the dynamics the sliding controller imposes inside its boundary layer (:math:`\dot s_2 = -\lambda s_2`
 on :math:`s_2 = \ddot e + 2\xi\omega_n\dot e + \omega_n^2 e`), so the two differ only in what they do
 outside the layer, in keeping :math:`i_d = 0` instead of :math:`\rho = \rho^*`, and in their coordinates.
+
+**Known torques** (``torques``, the ``feedforward`` option, as the flatness laws take them): with
+:math:`J\ddot\theta = K_m i_q - B\dot\theta - E` the law adds :math:`L\dot E/K_m` to :math:`v_q`, and the ``model``
+acceleration is :math:`(K_m i_q - B\omega - E)/J`; the drive's observer shares them. None by default (the law
+above bit for bit).
 """
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
+from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.protocol import Plan
 from ..validate import check_finite, check_positive
+from .build import XI
 from .loops import BaselineController, inverse_park, park
+
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
 
 
 @dataclass(frozen=True)
@@ -87,6 +98,8 @@ class ExactLinearization(BaselineController[LinearizationGains]):
         Accepted for a uniform interface; the law is static.
     v_limit : float
         The bus voltage [V]; the C twin only flags saturation against it (the law is static, no windup).
+    torques : TorqueModel
+        The torques the law knows beyond eq. (1) (module docstring; default none).
     """
 
     #: The C twin: csrc/exact_linearization.h.
@@ -94,9 +107,17 @@ class ExactLinearization(BaselineController[LinearizationGains]):
 
     def __init__(self, motor: MotorParams, plan: Plan, gains: LinearizationGains, *,
                  measurement: str = "observer", control_period: Optional[float] = None,
-                 v_limit: float = math.inf) -> None:
+                 v_limit: float = math.inf, torques: TorqueModel = NO_TORQUES) -> None:
         super().__init__(motor, plan, gains, measurement=measurement, control_period=control_period,
                          v_limit=v_limit)
+        if not isinstance(torques, TorqueModel):
+            raise ValueError(f"torques={torques!r} is not a TorqueModel")
+        self.torques = torques
+
+    @property
+    def observer_torques(self) -> TorqueModel:
+        """The torques the drive loop's observer predicts with: the law's own (the observer shares its model)."""
+        return self.torques
 
     def voltages(self, t: ArrayLike, x: ArrayLike, ddtheta: Optional[ArrayLike] = None) -> NDArray[np.float64]:
         """Phase voltages (va, vb) of the law, vectorized over time; ``ddtheta`` is not read in ``model`` mode."""
@@ -104,10 +125,14 @@ class ExactLinearization(BaselineController[LinearizationGains]):
         ia, ib, omega, theta = np.asarray(x, dtype=float)
         p = m.Nr * theta
         i_d, i_q = park(ia, ib, p)
-        acc = (m.Km * i_q - m.B * omega) / m.J if self.measurement == "model" else np.asarray(ddtheta, dtype=float)
+        if self.measurement == "model":
+            acc = (m.Km * i_q - m.B * omega - self.torques.torque(t, theta, omega, m.Nr)) / m.J
+        else:
+            acc = np.asarray(ddtheta, dtype=float)
+        dE = self.torques.torque_rate(t, theta, omega, acc, m.Nr)
         ref = self.plan.flag(t)
         u = ref.dddtheta - k2 * (acc - ref.ddtheta) - k1 * (omega - ref.dtheta) - k0 * (theta - ref.theta)
-        v_q = m.R * i_q + m.L * m.Nr * omega * i_d + m.Km * omega + m.L / m.Km * (m.J * u + m.B * acc)
+        v_q = m.R * i_q + m.L * m.Nr * omega * i_d + m.Km * omega + m.L / m.Km * (m.J * u + m.B * acc + dE)
         v_d = m.R * i_d - m.L * m.Nr * omega * i_q - m.L * self.gains.pd * i_d
         return np.array(inverse_park(v_d, v_q, p))
 
@@ -121,4 +146,19 @@ class ExactLinearization(BaselineController[LinearizationGains]):
         g = self.gains
         return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(wn=g.wn, xi=g.xi, p3=g.p3, pd=g.pd),
-                    measurement=1 if self.measurement == "model" else 0, v_limit=self.v_limit)
+                    measurement=1 if self.measurement == "model" else 0, v_limit=self.v_limit,
+                    torques=self.torques.as_dict())
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> ExactLinearization:
+    """Exact linearization (flatstep.control.spec), its poles by rule (flatstep.control.build).
+
+    The angle's at ``(s + lambda)(s^2 + 2 xi omega_n s + omega_n^2)``, the d current's at ``lambda``; any of
+    :class:`LinearizationGains`'s fields given in ``context.law_gains`` replaces the rule's; ``feedforward`` gives it
+    the known torques.
+    """
+    lam, wn = context.bandwidths()
+    gains = context.gains(LinearizationGains, dict(wn=wn, xi=XI, p3=lam, pd=lam))
+    return ExactLinearization(context.motor, context.plan, gains,
+                              control_period=context.period, measurement=context.measurement,
+                              v_limit=context.v_limit, torques=context.torques)

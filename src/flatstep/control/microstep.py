@@ -19,7 +19,8 @@ frequency :math:`N_r\dot\theta^*` (:math:`\arctan(N_r\dot\theta^*/\omega_c)`, i.
 8.6 counts of a 14-bit encoder, at 20 rad/s on a 50-tooth rotor with :math:`\omega_c = 6000` rad/s); the
 feedforward stands in for that, so that the baseline is not crippled by the linear loop
 (``feedforward=False`` shows the lag). It reads the two phase currents and nothing else: no encoder, no
-speed, no back-emf compensation. The rotor
+speed (the ``back_emf`` option adds the back EMF the plan's speed gives, :math:`K_m\dot\theta^*(-\sin N_r\theta^*,
+\cos N_r\theta^*)`, as a driver with back-EMF compensation does from its commanded speed). The rotor
 lags :math:`\theta^*` by the load angle :math:`\arcsin(T/(K_m\rho^*))/N_r` for a torque demand :math:`T`, and
 rings at the stiffness :math:`\sqrt{K_m N_r\rho^*/J}` with only the motor's own damping.
 
@@ -31,7 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -41,21 +42,31 @@ from ..plan.protocol import Plan
 from ..validate import check_positive
 from .loops import BaselineController, PIGains, bus_scale, pi_integrate, pi_output
 
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
+
 
 @dataclass(frozen=True)
 class MicrostepGains:
-    """Current-loop bandwidth [rad/s] of the microstepping driver (PI gains by pole-zero cancellation)."""
+    r"""Current-loop bandwidth [rad/s] of the microstepping driver (PI gains by pole-zero cancellation).
+
+    ``feedforward`` adds the voltage of the current reference, :math:`R i^* + L\,di^*/dt` (default on);
+    ``back_emf`` the back EMF at the plan's angle and speed (default off; module docstring).
+    """
 
     current_bandwidth: float
     feedforward: bool = True
+    back_emf: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "current_bandwidth",
                            check_positive("current_bandwidth", self.current_bandwidth, unit=" rad/s"))
 
     def as_dict(self) -> dict[str, float]:
-        """The bandwidth and the feedforward switch, for JSON."""
-        return {"current_bandwidth": self.current_bandwidth, "feedforward": self.feedforward}
+        """The bandwidth and the feedforward switches, for JSON."""
+        return {"current_bandwidth": self.current_bandwidth, "feedforward": self.feedforward,
+                "back_emf": self.back_emf}
 
 
 class Microstepping(BaselineController[MicrostepGains]):
@@ -119,14 +130,31 @@ class Microstepping(BaselineController[MicrostepGains]):
         i_ref = self.current_reference(t)
         error = i_ref - y[:2]
         v = pi_output(self.pi, error, integral)
+        m = self.motor
         if self.gains.feedforward:
-            m = self.motor
             v = v + m.R * i_ref + m.L * self.current_reference(t, 1)
+        if self.gains.back_emf:
+            ref = self.plan.flag(t)
+            p = m.Nr * ref.theta
+            v = v + m.Km * ref.dtheta * np.array([-np.sin(p), np.cos(p)])
         hold = bus_scale(v, self.v_limit) < 1.0
         return v, pi_integrate(self.pi, error, integral, self.control_period, hold)
 
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct microstep_params`` (csrc/microstep.h)."""
         return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
-                    gains=dict(current_bandwidth=self.gains.current_bandwidth, feedforward=self.gains.feedforward),
+                    gains=dict(current_bandwidth=self.gains.current_bandwidth, feedforward=self.gains.feedforward,
+                               back_emf=self.gains.back_emf),
                     Ts=self.control_period, v_limit=self.v_limit)
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> Microstepping:
+    """The microstepping driver (flatstep.control.spec), its current loops at ``lambda`` (flatstep.control.build).
+
+    Any of :class:`MicrostepGains`'s fields given in ``context.law_gains`` replaces the rule's; ``back_emf`` adds the
+    back EMF at the plan's speed.
+    """
+    lam, _ = context.bandwidths()
+    gains = context.gains(MicrostepGains, dict(current_bandwidth=lam), dict(back_emf=spec.back_emf))
+    return Microstepping(context.motor, context.plan, gains, control_period=context.period,
+                         measurement=context.measurement, v_limit=context.v_limit)

@@ -42,8 +42,8 @@ Without torques the first arcsine is 0 and the hold is the one above bit for bit
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-from typing import Any, Optional
+from dataclasses import asdict, dataclass, replace
+from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -57,7 +57,14 @@ from ..plan.protocol import Plan
 from ..validate import InputError, check_finite, check_quantity
 from .protocol import check_parts
 
+if TYPE_CHECKING:
+    from .build import BuildContext
+    from .spec import ControllerSpec
+
 MEASUREMENTS = ("ideal", "model", "observer")
+#: The damping ratio of the detent hold (the ``hold`` option) when the run's gains give none: critical
+#: damping of the magnetic spring (docs/comparison.md, "At rest on the paper's move").
+REST_HOLD_DAMPING = 1.0
 
 
 @dataclass(frozen=True)
@@ -245,3 +252,20 @@ class FlatnessSMC:
                     measurement=1 if self.measurement == "model" else 0, torques=self.torques.as_dict(),
                     loss_aware=self.loss_aware.as_dict() if self.loss_aware else dict(margin=0.0, rho_hold=0.0),
                     v_limit=self.c_v_limit, rho_min=self.c_rho_min)
+
+
+def from_spec(spec: ControllerSpec, context: BuildContext) -> FlatnessSMC:
+    """The paper's law as ``spec`` asks (flatstep.control.spec): the run's gains, known torques, rho plan, hold.
+
+    ``hold`` pins the detent from tf on with ``smc_gains.hold_damping`` (or :data:`REST_HOLD_DAMPING`), turned by
+    the known torques' load angle on the target; ``rho_plan="loss_aware"`` tracks the loss-aware rho*(t)
+    (``context.loss_aware``, default ``LossAwareRho.for_plan(plan)``).
+    """
+    gains = context.sliding_gains()
+    if spec.hold and gains.hold_damping is None:
+        gains = replace(gains, hold_damping=REST_HOLD_DAMPING)
+    loss_aware = None
+    if spec.rho_plan == "loss_aware":
+        loss_aware = context.loss_aware or LossAwareRho.for_plan(context.plan)
+    return FlatnessSMC(context.motor, context.plan, gains, context.measurement, torques=context.torques,
+                       loss_aware=loss_aware)

@@ -1,12 +1,13 @@
 """What controller to build: a law and its orthogonal options, validated in one place.
 
-A :class:`ControllerSpec` names one of the :data:`LAWS` and the options it takes:
+A :class:`ControllerSpec` names one of the :data:`LAWS` and the options it takes (:data:`OPTIONS`, one row each:
+the laws that take it, what it needs from a run, what it requires or excludes):
 
 =====================  =============================================================  ==============================
 option                 what it adds                                                   laws
 =====================  =============================================================  ==============================
-``feedforward``        the torques known beyond eq. (1) (a ``TorqueModel``: detent,   smc, dq_smc, cascade
-                       Coulomb friction, load) in the law's voltages and observer
+``feedforward``        the torques known beyond eq. (1) (a ``TorqueModel``: detent,   smc, dq_smc, cascade,
+                       Coulomb friction, load) in the law's voltages and observer     exact_linearization
                        (the cascade: anti-cogging, as firmware does it)
 ``observer_torques``   the cascade's observer knows those torques too                cascade (with feedforward)
 ``integral``           integral action on ``s2``                                      dq_smc
@@ -14,38 +15,145 @@ option                 what it adds                                             
 ``hold``               the detent hold from ``tf`` on                                 smc
 ``rho_plan``           ``"plan"`` (the plan's rho*) or ``"loss_aware"`` (rho*(t)      smc
                        from the torque the move needs)
+``voltage_feedforward`` the voltage of the planned q current, ``R iq* + L diq*/dt``   cascade
+                       (with the known torques along the plan when ``feedforward``)
+``back_emf``           the back EMF at the plan's angle and speed                     microstep
 =====================  =============================================================  ==============================
 
 Every combination the table allows is a controller; :meth:`ControllerSpec.name` is its name (the historical type
 names, ``"dq_smc_i_ff"`` say, for the combinations that had one: :data:`ALIASES`), and :meth:`ControllerSpec.parse`
 reads a name back, either form. What each law needs from a run (a control period, the torque model, the sliding
-gains) is derived here, not listed by hand.
+gains) is derived here from :data:`LAW_TABLE` and :data:`OPTIONS`, not listed by hand; each law's file builds its
+controller from the spec (its ``from_spec``, registered in :data:`LAW_TABLE`), so that adding an option touches this
+file and the law's file alone.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from ..validate import InputError
+from . import cascade, dq_smc, exact_linearization, microstep, smc
+from .build import BuildContext
 
-#: The control laws, the paper's first.
-LAWS = ("smc", "dq_smc", "cascade", "microstep", "exact_linearization")
-#: The laws whose gains are the run's :class:`~flatstep.control.smc.SMCGains` (designed or given, not by rule).
-SLIDING_LAWS = ("smc", "dq_smc")
-#: Which laws take each option (``rho_plan``: its values other than ``"plan"``).
-OPTION_LAWS: dict[str, tuple[str, ...]] = {
-    "feedforward": ("smc", "dq_smc", "cascade"),
-    "observer_torques": ("cascade",),
-    "integral": ("dq_smc",),
-    "km_estimate": ("dq_smc",),
-    "hold": ("smc",),
-    "rho_plan": ("smc",),
+#: What an option or a law may need from a run: the torque model it knows, the control period it advances by.
+NEEDS = ("torques", "control_period")
+
+
+@dataclass(frozen=True)
+class Law:
+    """A control law: how to build it, its label, and what it needs.
+
+    Parameters
+    ----------
+    build : callable
+        ``build(spec, context) -> controller``, the law file's ``from_spec``.
+    label : str
+        Its short label for tables and figures.
+    sliding : bool
+        Whether its gains are the run's :class:`~flatstep.control.smc.SMCGains` (designed or given), else tuned by
+        rule from the control period.
+    gains : type
+        Its gains class (a dataclass): the names a scenario's ``[controller]`` table may give.
+    needs : tuple of str
+        Of :data:`NEEDS`, what the law needs with every option off.
+    """
+
+    build: Callable[["ControllerSpec", BuildContext], Any]
+    label: str
+    sliding: bool
+    gains: type
+    needs: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Option:
+    """An option of the spec: the laws that take it and what it needs.
+
+    Parameters
+    ----------
+    laws : tuple of str
+        The laws that take it.
+    doc : str
+        What it adds, one line (the scenario files' reference).
+    label : str
+        Its part of a controller's label (:meth:`ControllerSpec.label`).
+    rank : int
+        The place of that part in the label.
+    needs : tuple of str
+        Of :data:`NEEDS`, what the option needs from a run when on.
+    requires : tuple of str
+        The options that must be on with it, and ``why`` says why.
+    excludes : tuple of str
+        The options that must be off (at their default) with it.
+    why : str
+        Why it requires or excludes those.
+    values : tuple of str
+        For a choice (not true/false): its values, the first the default (off).
+    hides : tuple of str
+        Options whose label part this one's replaces.
+    """
+
+    laws: tuple[str, ...]
+    doc: str
+    label: str
+    rank: int
+    needs: tuple[str, ...] = ()
+    requires: tuple[str, ...] = ()
+    excludes: tuple[str, ...] = ()
+    why: str = ""
+    values: tuple[str, ...] = ()
+    hides: tuple[str, ...] = ()
+
+
+#: The control laws, the paper's first, each with its builder.
+LAW_TABLE: dict[str, Law] = {
+    "smc": Law(smc.from_spec, "flatness + SMC", True, smc.SMCGains),
+    "dq_smc": Law(dq_smc.from_spec, "flatness d-q SMC", True, smc.SMCGains),
+    "cascade": Law(cascade.from_spec, "cascaded PID (FOC)", False, cascade.CascadeGains, ("control_period",)),
+    "microstep": Law(microstep.from_spec, "open-loop microstep", False, microstep.MicrostepGains,
+                     ("control_period",)),
+    "exact_linearization": Law(exact_linearization.from_spec, "exact linearization", False,
+                               exact_linearization.LinearizationGains, ("control_period",)),
 }
+#: The options, in the order of a controller's name.
+OPTIONS: dict[str, Option] = {
+    "feedforward": Option(("smc", "dq_smc", "cascade", "exact_linearization"),
+                          "the known torques ([feedforward]) in the law and its observer", "ff", 2, needs=("torques",)),
+    "observer_torques": Option(("cascade",), "the cascade's observer knows the torques too", "model obs.", 3,
+                               requires=("feedforward",),
+                               why="the observer shares the torque model the feedforward brings",
+                               hides=("feedforward",)),
+    "integral": Option(("dq_smc",), "integral action on s2", "I", 1, needs=("control_period",)),
+    "km_estimate": Option(("dq_smc",), "an online estimate of Km", "Km", 4, needs=("control_period",),
+                          requires=("integral", "feedforward"),
+                          why="the estimate runs on the integral's error, with the torques known"),
+    "hold": Option(("smc",), "hold the target's detent from tf on", "hold", 5, excludes=("rho_plan",),
+                   why="the hold holds the plan's rho at the target"),
+    "rho_plan": Option(("smc",), "the plan's rho*, or rho*(t) from the torque the move needs", "rho(t)", 0,
+                       values=("plan", "loss_aware")),
+    "voltage_feedforward": Option(("cascade",), "the voltage of the planned q current, R iq* + L diq*/dt (with the "
+                                  "known torques along the plan when feedforward)", "v ff", 6),
+    "back_emf": Option(("microstep",), "the back EMF at the plan's angle and speed in the driver's voltages", "emf", 7),
+}
+#: The control laws, the paper's first.
+LAWS = tuple(LAW_TABLE)
+#: The laws whose gains are the run's :class:`~flatstep.control.smc.SMCGains` (designed or given, not by rule).
+SLIDING_LAWS = tuple(k for k, law in LAW_TABLE.items() if law.sliding)
+#: Which laws take each option (a choice: its values other than the first).
+OPTION_LAWS: dict[str, tuple[str, ...]] = {name: opt.laws for name, opt in OPTIONS.items()}
 #: The values of ``rho_plan``.
-RHO_PLANS = ("plan", "loss_aware")
+RHO_PLANS = OPTIONS["rho_plan"].values
+#: The gain names each law takes (its gains class's fields; the options' own switches left out).
+LAW_GAINS: dict[str, tuple[str, ...]] = {k: tuple(f.name for f in fields(law.gains) if f.name not in OPTIONS)
+                                         for k, law in LAW_TABLE.items()}
 #: Short labels of the laws, for tables and figures.
-LAW_LABELS = {"smc": "flatness + SMC", "dq_smc": "flatness d-q SMC", "cascade": "cascaded PID (FOC)",
-              "microstep": "open-loop microstep", "exact_linearization": "exact linearization"}
+LAW_LABELS = {k: law.label for k, law in LAW_TABLE.items()}
+
+
+def _off(name: str) -> Any:
+    """The value of option ``name`` when off: false, or a choice's first value."""
+    return OPTIONS[name].values[0] if OPTIONS[name].values else False
 
 
 @dataclass(frozen=True)
@@ -60,6 +168,10 @@ class ControllerSpec:
         The options of the module docstring's table (default off).
     rho_plan : str
         ``"plan"`` or ``"loss_aware"`` (:data:`RHO_PLANS`).
+    voltage_feedforward : bool
+        The cascade's current-reference voltage (module docstring; default off).
+    back_emf : bool
+        The microstepping driver's back-EMF feedforward (default off).
     """
 
     law: str = "smc"
@@ -69,61 +181,78 @@ class ControllerSpec:
     km_estimate: bool = False
     hold: bool = False
     rho_plan: str = "plan"
+    voltage_feedforward: bool = False
+    back_emf: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.law, str) or self.law not in LAWS:
             raise InputError("law", self.law, f"law={self.law!r} is unknown; valid: {list(LAWS)}")
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.name in ("law", "rho_plan"):
+        for name, opt in OPTIONS.items():
+            value = getattr(self, name)
+            if opt.values:
+                if not isinstance(value, str) or value not in opt.values:
+                    raise InputError(name, value, f"{name}={value!r} is unknown; valid: {list(opt.values)}")
+                if value != opt.values[0] and self.law not in opt.laws:
+                    raise InputError(name, value, f"{name}={value!r} is an option of {list(opt.laws)}, not of law "
+                                     f"{self.law!r}")
                 continue
             if not isinstance(value, bool):
-                raise InputError(f.name, value, f"{f.name}={value!r} is not true or false")
-            if value and self.law not in OPTION_LAWS[f.name]:
-                raise InputError(f.name, value, f"{f.name}=true is not an option of law {self.law!r} (it is one of "
-                                 f"{list(OPTION_LAWS[f.name])}); the options of {self.law!r}: "
-                                 f"{self.options_of(self.law)}")
-        if not isinstance(self.rho_plan, str) or self.rho_plan not in RHO_PLANS:
-            raise InputError("rho_plan", self.rho_plan, f"rho_plan={self.rho_plan!r} is unknown; valid: "
-                             f"{list(RHO_PLANS)}")
-        if self.rho_plan != "plan" and self.law not in OPTION_LAWS["rho_plan"]:
-            raise InputError("rho_plan", self.rho_plan, f"rho_plan={self.rho_plan!r} is an option of "
-                             f"{list(OPTION_LAWS['rho_plan'])}, not of law {self.law!r}")
-        if self.observer_torques and not self.feedforward:
-            raise InputError("observer_torques", True, "observer_torques=true needs feedforward=true (the observer "
-                             "shares the torque model the feedforward brings)")
-        if self.km_estimate and not (self.integral and self.feedforward):
-            raise InputError("km_estimate", True, "km_estimate=true needs integral=true and feedforward=true (the "
-                             "estimate runs on the integral's error, with the torques known)")
-        if self.hold and self.rho_plan != "plan":
-            raise InputError("hold", True, "hold=true holds the plan's rho at the target; with rho_plan='loss_aware' "
-                             "give one of them")
+                raise InputError(name, value, f"{name}={value!r} is not true or false")
+            if value and self.law not in opt.laws:
+                raise InputError(name, value, f"{name}=true is not an option of law {self.law!r} (it is one of "
+                                 f"{list(opt.laws)}); the options of {self.law!r}: {self.options_of(self.law)}")
+        for name in self.options_on():
+            opt = OPTIONS[name]
+            if opt.requires and not all(getattr(self, r) != _off(r) for r in opt.requires):
+                raise InputError(name, getattr(self, name), f"{self._shown(name)} needs "
+                                 f"{' and '.join(f'{r}=true' for r in opt.requires)} ({opt.why})")
+            for other in opt.excludes:
+                if getattr(self, other) != _off(other):
+                    raise InputError(name, getattr(self, name), f"{self._shown(name)}: {opt.why}; with "
+                                     f"{self._shown(other)} give one of them")
+
+    def _shown(self, name: str) -> str:
+        """``name=value`` as a file would write it."""
+        value = getattr(self, name)
+        return f"{name}=true" if value is True else f"{name}={value!r}"
 
     @staticmethod
     def options_of(law: str) -> list[str]:
         """The options ``law`` takes."""
         return [name for name, laws in OPTION_LAWS.items() if law in laws]
 
+    def options_on(self) -> list[str]:
+        """The options not at their default, in :data:`OPTIONS` order."""
+        return [name for name in OPTIONS if getattr(self, name) != _off(name)]
+
     # -- what the law needs, derived -------------------------------------------------------------------------------
+    def needs(self) -> set[str]:
+        """What the law and its options need from a run (of :data:`NEEDS`)."""
+        return {*LAW_TABLE[self.law].needs, *(n for name in self.options_on() for n in OPTIONS[name].needs)}
+
     @property
     def needs_torques(self) -> bool:
         """Whether a torque model (a scenario's ``[feedforward]``) must be given."""
-        return self.feedforward
+        return "torques" in self.needs()
 
     @property
     def sliding(self) -> bool:
         """Whether the gains are the run's SMCGains (else tuned by rule from the control period)."""
-        return self.law in SLIDING_LAWS
+        return LAW_TABLE[self.law].sliding
 
     @property
     def needs_control_period(self) -> bool:
         """Whether the law is tuned from, or advances by, the control period (no continuous-time run)."""
-        return not self.sliding or self.integral
+        return "control_period" in self.needs()
 
     @property
     def continuous(self) -> bool:
         """Whether the law can run in continuous time (flatstep.engine.settings.Continuous)."""
         return not self.needs_control_period
+
+    def build(self, context: BuildContext) -> Any:
+        """The controller: the law's builder (:data:`LAW_TABLE`) on this spec and ``context``."""
+        return LAW_TABLE[self.law].build(self, context)
 
     # -- names -----------------------------------------------------------------------------------------------------
     def name(self) -> str:
@@ -131,23 +260,20 @@ class ControllerSpec:
         for alias, spec in ALIASES.items():
             if spec == self:
                 return alias
-        opts = [f.name for f in fields(self) if f.name not in ("law", "rho_plan") and getattr(self, f.name)]
-        if self.rho_plan != "plan":
-            opts.append(self.rho_plan)
+        opts = [name for name in self.options_on() if not OPTIONS[name].values]
+        opts += [getattr(self, name) for name in self.options_on() if OPTIONS[name].values]
         return "+".join([self.law, *opts])
 
     def label(self) -> str:
         """A short label for tables and figures."""
-        base = LAW_LABELS[self.law]
-        extra = [text for on, text in ((self.rho_plan == "loss_aware", "rho(t)"), (self.integral, "I"),
-                                       (self.feedforward and not self.observer_torques, "ff"),
-                                       (self.observer_torques, "model obs."), (self.km_estimate, "Km"),
-                                       (self.hold, "hold")) if on]
-        return base + (", " + "+".join(extra) if extra else "")
+        on = self.options_on()
+        hidden = {h for name in on for h in OPTIONS[name].hides}
+        extra = [OPTIONS[name].label for name in sorted(on, key=lambda n: OPTIONS[n].rank) if name not in hidden]
+        return LAW_LABELS[self.law] + (", " + "+".join(extra) if extra else "")
 
     @classmethod
     def parse(cls, value: Any, where: str = "controller") -> "ControllerSpec":
-        """A spec from a name (an alias or ``law+option+...``), a mapping of fields, or a spec.
+        """A spec from a name (``law+option+...``, an alias, or ``alias+option+...``), a mapping of fields, or a spec.
 
         Raises
         ------
@@ -171,14 +297,18 @@ class ControllerSpec:
         if value in ALIASES:
             return ALIASES[value]
         law, *opts = value.split("+")
+        kwargs: dict[str, Any] = {}
+        if law in ALIASES:  # a historical name with more options: "cascade_model+voltage_feedforward"
+            base = ALIASES[law]
+            law, kwargs = base.law, {name: getattr(base, name) for name in base.options_on()}
         if law not in LAWS:
             raise InputError(where, value, f"{where}={value!r} is unknown; valid: {list(ALIASES)}, or "
-                             f"law+option+... with a law of {list(LAWS)} and options of {list(OPTION_LAWS)}")
-        kwargs: dict[str, Any] = {}
+                             f"law+option+... with a law of {list(LAWS)} and options of {list(OPTIONS)}")
+        choices = {v: name for name, opt in OPTIONS.items() for v in opt.values}
         for opt in opts:
-            if opt in RHO_PLANS:
-                kwargs["rho_plan"] = opt
-            elif opt in OPTION_LAWS and opt != "rho_plan":
+            if opt in choices:
+                kwargs[choices[opt]] = opt
+            elif opt in OPTIONS and not OPTIONS[opt].values:
                 kwargs[opt] = True
             else:
                 raise InputError(where, value, f"{where}={value!r}: unknown option {opt!r}; the options of "
@@ -207,3 +337,43 @@ ALIASES: dict[str, ControllerSpec] = {
     "smc_ff_hold": ControllerSpec("smc", feedforward=True, hold=True),
     "dq_smc_i_ff_km": ControllerSpec("dq_smc", integral=True, feedforward=True, km_estimate=True),
 }
+#: The controllers a scenario can name by their historical type names (``[controller] type``), the paper's first;
+#: any other valid combination of a law and its options is named ``law+option+...``.
+CONTROLLER_TYPES = tuple(ALIASES)
+
+
+class _Labels(dict[str, str]):
+    """The historical names' labels; any other controller name's label is its spec's (``LABELS[name]``)."""
+
+    def __missing__(self, name: str) -> str:
+        return ControllerSpec.parse(name).label()
+
+
+#: Short labels of the historical names for tables and figures; ``LABELS[name]`` of any other name is its spec's.
+LABELS = _Labels({"smc": "flatness + SMC", "microstep": "open-loop microstep", "cascade": "cascaded PID (FOC)",
+          "exact_linearization": "exact linearization", "dq_smc": "flatness d-q + SMC",
+          "smc_ff": "flatness + SMC + ff", "dq_smc_ff": "flatness d-q SMC + ff",
+          "cascade_ff": "cascade + anti-cogging", "cascade_model": "cascade + model obs.",
+          "smc_la": "flatness + SMC, rho(t)", "smc_la_ff": "flatness rho(t) + ff",
+          "dq_smc_i": "flatness d-q SMC + I", "dq_smc_i_ff": "flatness d-q SMC+I+ff",
+          "smc_ff_hold": "flatness SMC+ff, hold", "dq_smc_i_ff_km": "flatness d-q I+ff+Km"})
+#: The types whose gains are the scenario's :class:`~flatstep.control.smc.SMCGains` (not tuned by rule).
+SMC_TYPES = tuple(k for k, s in ALIASES.items() if s.sliding)
+#: The flatness types that can run in continuous time (no integral or estimate advancing by the control period).
+CONTINUOUS_TYPES = tuple(k for k, s in ALIASES.items() if s.continuous)
+#: The types that need a torque model.
+FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
+
+
+def label(kind: str) -> str:
+    """The label of a controller name (:data:`LABELS`, or the spec's own for a ``law+option+...`` name)."""
+    return LABELS[kind]
+
+
+def is_controller(name: object) -> bool:
+    """Whether ``name`` names a controller: an alias, ``law+option+...`` or ``alias+option+...``, valid."""
+    try:
+        ControllerSpec.parse(name)
+    except ValueError:
+        return False
+    return isinstance(name, str)

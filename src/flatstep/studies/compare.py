@@ -25,6 +25,7 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..control.spec import ControllerSpec, is_controller
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, SMC_TYPES
 from ..engine.result import STATUSES, SimResult
 from ..errors import RunError
@@ -104,10 +105,10 @@ def default_band(scenario: Scenario) -> float:
 
 def _check_kinds(kinds: Sequence[str]) -> tuple[str, ...]:
     """``kinds`` as a tuple, or a ValueError if it is empty or names an unknown controller type."""
-    bad = [k for k in kinds if k not in CONTROLLER_TYPES]
+    bad = [k for k in kinds if not is_controller(k)]
     if bad or not kinds:
         raise ValueError(f"controllers {bad or list(kinds)!r} are not controller types; "
-                         f"valid: {list(CONTROLLER_TYPES)}")
+                         f"valid: {list(CONTROLLER_TYPES)}, or law+option+...")
     return tuple(kinds)
 
 
@@ -184,7 +185,7 @@ def compare(scenario: Scenario, kinds: Sequence[str] = CONTROLLER_TYPES, *, band
     out: dict[str, dict[str, Any]] = {}
     for kind in kinds:
         scale = bandwidth_scale if kind not in SMC_TYPES else 1.0
-        if unit is not None and kind in FEEDFORWARD_TYPES:
+        if unit is not None and ControllerSpec.parse(kind).needs_torques:
             if isinstance(unit, str):
                 out[kind] = {"metrics": None, "result": None, "faults": 0, "status": CALIBRATION_FAILED,
                              "lost_at": None, "error": unit}
@@ -235,7 +236,7 @@ def compare_worst(scenario: Scenario, study: Robustness, kinds: Sequence[str] = 
     out: dict[str, dict[str, Any]] = {}
     for kind in kinds:
         scale = bandwidth_scale if kind not in SMC_TYPES else 1.0
-        calibrated = mode == "each" and kind in FEEDFORWARD_TYPES
+        calibrated = mode == "each" and ControllerSpec.parse(kind).needs_torques
         if calibrated:
             if units is None:
                 units = calibrate_units(perturbed(scenario, errors, "/calibration"))

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, Optional
+from typing import Any, Mapping, Optional
 
 from ..control.smc import SMCGains
 from ..control.tuning import AnyController, make_controller
@@ -47,6 +47,10 @@ class Scenario:
         Where the controller's speed and acceleration come from: ``"ideal"``, ``"model"`` or ``"observer"``.
     bandwidth_scale : float
         Multiplies every bandwidth of a baseline (1: the tuning rule).
+    lambda_ts : float, optional
+        The current loop's speed times the control period, for every law (``None``: the rule's 0.3).
+    law_gains : mapping, optional
+        A baseline's gains by name over its rule (``CascadeGains``' ``k_theta``, say; ``None``: the rule's).
     plant : Plant, optional
         The simulated plant (motor, effects, load); ``None``: ``Plant(motor)``, a perfect model, no load.
     loop : DriveLoop, optional
@@ -80,6 +84,8 @@ class Scenario:
     torques: Optional[TorqueModel] = None
     d_current: DCurrentPlan = ZERO_D_CURRENT
     loss_aware: Optional[LossAwareRho] = None
+    lambda_ts: Optional[float] = None
+    law_gains: Optional[Mapping[str, Any]] = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "t_end", check_quantity("t_end", self.t_end))
@@ -120,7 +126,8 @@ class Scenario:
                                measurement=self.measurement, smc_gains=self.gains, v_limit=v_bus,
                                bandwidth_scale=self.bandwidth_scale,
                                compute_delay=loop.compute_delay if loop is not None else False,
-                               torques=self.torques, d_current=self.d_current, loss_aware=self.loss_aware)
+                               torques=self.torques, d_current=self.d_current, loss_aware=self.loss_aware,
+                               lambda_ts=self.lambda_ts, law_gains=self.law_gains)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""

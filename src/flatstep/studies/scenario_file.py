@@ -12,8 +12,9 @@ from functools import partial
 from pathlib import Path
 from typing import Any, Optional, Union
 
+from ..control.build import check_lambda_ts
 from ..control.smc import MEASUREMENTS, SMCGains
-from ..control.spec import OPTION_LAWS, ControllerSpec
+from ..control.spec import LAW_GAINS, LAW_TABLE, OPTION_LAWS, ControllerSpec
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.design import design_gains
 from ..loop.drive import Drive
@@ -224,6 +225,15 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     given = {rho_keys[k]: ctrl.pop(k) for k in rho_keys if k in ctrl}
     loss_aware = wrap(where, "controller", LossAwareRho, **{"rho_hold": 0.5 * min(plan.rho1, plan.rho2), **given}
                       ) if given else None
+    lambda_ts = ctrl.pop("lambda_ts", None)
+    if lambda_ts is not None:
+        lambda_ts = value(where, "controller", "lambda_ts", check_lambda_ts, lambda_ts)
+    law = ControllerSpec.parse(controller_type).law
+    sliding_keys, law_gains = (ctrl, None) if LAW_TABLE[law].sliding else ({}, ctrl)
+    for key in ctrl:
+        if key not in LAW_GAINS[law]:
+            raise InputError(key, ctrl[key], f"{where}:controller.{key}: {key} is not a gain of law {law!r}; its "
+                             f"gains: {list(LAW_GAINS[law])}")
     observer = None
     if design:
         if period is None or drive is None:  # no control_rate: neither a period nor a drive
@@ -233,10 +243,10 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
                  uncertainty=uncertainty, compute_delay=compute_delay,
                  encoder_counts=sensors.encoder_counts if sensors else None,
                  current_step=sensors.current_step if sensors else 0.0)
-        gains = wrap(where, "controller", lambda **kw: replace(d.gains, **kw), **ctrl)
+        gains = wrap(where, "controller", lambda **kw: replace(d.gains, **kw), **sliding_keys)
         observer = d.observer if sensors else None
     else:
-        gains = wrap(where, "controller", SMCGains, **ctrl)
+        gains = wrap(where, "controller", SMCGains, **sliding_keys)
     if sec["observer"]:
         observer = wrap(where, "observer", Observer, **{**(observer.as_dict() if observer else {}), **sec["observer"]})
     if measurement is None:  # what the drive can give: an observer's estimate, the model, or the truth
@@ -250,6 +260,7 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     scenario = wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
                     gains=gains, measurement=measurement, t_end=t_end, plant=simulated,
                     loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale, torques=torques,
+                    lambda_ts=lambda_ts, law_gains=law_gains,
                     d_current=d_current, loss_aware=loss_aware)
     robustness = wrap(where, "robustness", Robustness, **sec["robustness"]) if "robustness" in doc else None
     return ScenarioFile(path, scenario, robustness, planned.planner, planned.limits, planned.steps)

@@ -11,7 +11,7 @@ from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
 from ..control.smc import MEASUREMENTS, SMCGains
-from ..control.spec import LAWS, OPTION_LAWS, RHO_PLANS
+from ..control.spec import LAWS, OPTIONS
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.drive import PWM_MODES, Drive
 from ..loop.observers import Observer
@@ -142,19 +142,30 @@ KEYS: dict[str, dict[str, Key]] = {
                     "the controller by name (flatstep.control.spec: each name is a law and its options)"),
         "law": Key("", ", ".join(f'"{c}"' for c in LAWS), '"smc"',
                    "the control law, with the options below (instead of type)"),
-        **{k: Key("", "true, false", "false", f"with law: {doc} ({', '.join(OPTION_LAWS[k])})")
-           for k, doc in (("feedforward", "the known torques ([feedforward]) in the law and its observer"),
-                          ("observer_torques", "the cascade's observer knows the torques too"),
-                          ("integral", "integral action on s2"), ("km_estimate", "an online estimate of Km"),
-                          ("hold", "hold the target's detent from tf on"))},
-        "rho_plan": Key("", ", ".join(f'"{r}"' for r in RHO_PLANS), '"plan"',
-                        "with law: the plan's rho*, or rho*(t) from the torque the move needs (smc)"),
+        **{k: Key("", ", ".join(f'"{v}"' for v in opt.values) if opt.values else "true, false",
+                  f'"{opt.values[0]}"' if opt.values else "false", f"with law: {opt.doc} ({', '.join(opt.laws)})")
+           for k, opt in OPTIONS.items()},
         "bandwidth_scale": _q("scale", 1.0, "multiplies every bandwidth of a baseline"),
+        "lambda_ts": Key("", "(0, 1]", "0.3 (0.15 with compute_delay)",
+                         "every law: the current loop's speed times the control period (a baseline's current "
+                         "bandwidth, a sliding law's W/eps)"),
+        "current_bandwidth": Key("rad/s", "> 0", "lambda_ts / Ts", "cascade, microstep: the current loops' bandwidth"),
+        "position_bandwidth": Key("rad/s", "> 0", "lambda / 4",
+                                  "cascade: w of the rule k_theta = w/3, k_omega = 2.25 w, ki_omega = 0.75 w^2"),
+        "k_theta": Key("1/s", "> 0", "w / 3", "cascade: position gain"),
+        "k_omega": Key("1/s", "> 0", "2.25 w", "cascade: velocity gain"),
+        "ki_omega": Key("1/s^2", ">= 0", "0.75 w^2", "cascade: velocity integral gain"),
+        "decoupling": Key("", "true, false", "true", "cascade: cancel the axes' coupling and the back EMF"),
+        "p3": Key("rad/s", "> 0", "lambda", "exact_linearization: the angle error's real pole"),
+        "pd": Key("rad/s", "> 0", "lambda", "exact_linearization: the d current's pole"),
         "measurement": Key("", ", ".join(f'"{m}"' for m in MEASUREMENTS), "what the drive gives",
                            "where the law's speed and acceleration come from (observer with an observer, model with "
                            "sensors, else ideal)"),
-        **{k: _q("gain", _default(SMCGains, k), f"the sliding law's {k}") for k in ("W1", "W2", "eps1", "eps2", "wn")},
-        "xi": _q("damping", _default(SMCGains, "xi"), "damping of the theta error dynamics"),
+        **{k: _q("gain", _default(SMCGains, k), f"the sliding law's {k}") for k in ("W1", "W2", "eps1", "eps2")},
+        "wn": _q("gain", _default(SMCGains, "wn"), "the theta error dynamics' natural frequency (sliding laws; "
+                 "exact_linearization: lambda / 4 by rule)"),
+        "xi": _q("damping", _default(SMCGains, "xi"), "damping of the theta error dynamics (exact_linearization: 0.9 "
+                 "by rule)"),
         "hold_damping": _q("damping", None, "from tf on, hold the target's detent with this damping (none: track)"),
         "design": Key("", "true, false", "false", "design the gains for the drive (needs [drive] control_rate)"),
         "uncertainty": _q("relative", 0.1, "the relative parameter error the design allows"),
