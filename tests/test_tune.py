@@ -66,7 +66,7 @@ def test_seeded_tuning_is_reproducible(tiny, tuned_smc):
 def test_budget_is_the_same_for_every_law(tiny, tuned_smc):
     cascade = tune(tiny.scenario, "cascade", seed=3, study=tiny.robustness, **FAST)
     assert len(tuned_smc.evaluations) == len(cascade.evaluations) == 10
-    assert set(cascade.gains) == {"bandwidth_scale"}
+    assert set(cascade.gains) == {"current_bandwidth", "k_theta", "k_omega", "ki_omega"}
     assert set(tuned_smc.gains) == {"W1", "eps1", "W2", "eps2", "wn"}
 
 
@@ -135,8 +135,9 @@ def test_cli_tune_writes_a_table_that_simulate_reads(tiny, cli, tmp_path):
     assert "cascade tuned" in run.stdout and "wrote t.toml" in run.stdout
     back = read_scenario_file(tmp_path / "t.toml")
     assert back.scenario.controller_type == "cascade"
-    scale = float(run.stdout.split("bandwidth_scale = ")[1].split()[0])
-    assert back.scenario.bandwidth_scale == pytest.approx(scale, rel=1e-4)
+    k_theta = float(run.stdout.split("k_theta = ")[1].split(",")[0])
+    assert back.scenario.law_gains["k_theta"] == pytest.approx(k_theta, rel=1e-4)
+    assert back.scenario.controller().gains.k_theta == back.scenario.law_gains["k_theta"]
     sim = cli(["simulate", "t.toml"], cwd=tmp_path)
     assert sim.returncode == 0, sim.stderr
     again = cli(["tune", "s.toml", "--law", "cascade", "--budget", "10", "--population", "5", "--out", "t.toml",
@@ -203,7 +204,7 @@ def test_api_refuses_bad_input(tiny):
     with pytest.raises(ValueError, match="fractions of the bus"):
         check_fractions([0.0])
     with pytest.raises(ValueError, match="not the tunable gains"):
-        tuned_toml(TINY, "smc", {"bandwidth_scale": 2.0}, "x")
+        tuned_toml(TINY, "smc", {"k_theta": 2.0}, "x")
 
 
 def test_every_law_has_a_table_row_with_bounds_around_its_value():
@@ -213,6 +214,19 @@ def test_every_law_has_a_table_row_with_bounds_around_its_value():
             assert g.low < 0 < g.high
     assert law_gains("cascade_model") is TUNABLE["cascade"]
     assert law_gains("dq_smc_i_ff") is TUNABLE["dq_smc"]
+
+
+@pytest.mark.parametrize("kind", ["smc", "cascade", "microstep", "exact_linearization", "dq_smc"])
+def test_each_row_reads_and_applies_the_controller_as_built(tiny, kind):
+    import dataclasses as dc
+
+    row = law_gains(kind)
+    base = dc.replace(tiny.scenario, controller_type=kind, bandwidth_scale=2.0)
+    centre = row.read(base)
+    same = row.apply(base, centre)
+    assert row.read(same) == pytest.approx(centre, rel=1e-12)  # the rule's scaling moved into the gains, unchanged
+    doubled = row.apply(base, {k: 2 * v for k, v in centre.items()})
+    assert row.read(doubled) == pytest.approx({k: 2 * v for k, v in centre.items()}, rel=1e-12)
 
 
 @pytest.mark.slow

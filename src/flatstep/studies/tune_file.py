@@ -22,12 +22,13 @@ else:  # pragma: no cover
 from ..control.spec import OPTION_LAWS
 from ..validate import InputError
 from .scenario_file import ScenarioFile, read_scenario_file
-from .tune_laws import TUNABLE, law_gains
+from .tune_laws import RULE_KEYS, TUNABLE, law_gains
 
 #: The first bytes of a tuned file.
 TUNED_MARK = b"# flatstep tune:"
-#: The ``[controller]`` keys a tuned table drops: the law's name (given again as ``type``), and every law's gains.
-_DROPPED = {"type", "law", *OPTION_LAWS, *(g.key for row in TUNABLE.values() for g in row.gains)}
+#: The ``[controller]`` keys a tuned table drops: the law's name and options (given again as ``type``), the rule's
+#: scalings, and every law's gains.
+_DROPPED = {"type", "law", *OPTION_LAWS, *RULE_KEYS, *(g.key for row in TUNABLE.values() for g in row.gains)}
 
 
 def tuned_toml(text: str, kind: str, gains: Mapping[str, float], note: str) -> str:

@@ -71,32 +71,46 @@ class LawGains:
 #: (their ratio is the current loop's speed W1/eps1) and the error dynamics' natural frequency; the damping stays.
 SLIDING_GAINS = (Gain("W1", -1.0, 1.0), Gain("eps1", -1.0, 1.0), Gain("W2", -1.0, 1.0), Gain("eps2", -1.0, 1.0),
                  Gain("wn", -1.0, 1.0))
-#: The baselines' tuned gain as the public API builds them today: every bandwidth of the rule times one factor.
-SCALE_GAINS = (Gain("bandwidth_scale", -0.7, 0.7),)
+#: The cascade's (:class:`~flatstep.control.cascade.CascadeGains`): the current loops' bandwidth (up to about
+#: lambda Ts = 1) and the three free gains of its P-PI loop, around the rule's w, w, w/4 poles.
+CASCADE_GAINS = (Gain("current_bandwidth", -0.7, 0.5), Gain("k_theta", -1.0, 1.0), Gain("k_omega", -1.0, 1.0),
+                 Gain("ki_omega", -2.0, 1.0))
+#: Open-loop microstepping's (:class:`~flatstep.control.microstep.MicrostepGains`): its current loops' bandwidth.
+MICROSTEP_GAINS = (Gain("current_bandwidth", -0.7, 0.5),)
+#: Exact linearization's (:class:`~flatstep.control.exact_linearization.LinearizationGains`): its poles.
+LINEARIZATION_GAINS = (Gain("wn", -1.0, 1.0), Gain("xi", -0.5, 0.3), Gain("p3", -1.0, 0.5), Gain("pd", -1.0, 0.5))
 
 
-def _sliding_read(scenario: Scenario) -> dict[str, float]:
-    return {g.key: float(getattr(scenario.gains, g.key)) for g in SLIDING_GAINS}
+def _read(keys: tuple[Gain, ...]) -> Callable[[Scenario], dict[str, float]]:
+    """A reader of the gains ``keys`` from the scenario's controller as built (the rule's, or the file's)."""
+
+    def read(scenario: Scenario) -> dict[str, float]:
+        gains = scenario.controller().gains
+        return {g.key: float(getattr(gains, g.key)) for g in keys}
+
+    return read
 
 
 def _sliding_apply(scenario: Scenario, values: Mapping[str, float]) -> Scenario:
-    return replace(scenario, gains=replace(scenario.gains, **values))
+    """The sliding law's gains in ``gains`` (the current loop's speed is W1/eps1: no ``lambda_ts`` over it)."""
+    return replace(scenario, gains=replace(scenario.gains, **values), lambda_ts=None)
 
 
-def _scale_read(scenario: Scenario) -> dict[str, float]:
-    return {"bandwidth_scale": float(scenario.bandwidth_scale)}
+def _baseline_apply(scenario: Scenario, values: Mapping[str, float]) -> Scenario:
+    """A baseline's gains by name over its rule (``law_gains``), every one given: no scale or ``lambda_ts`` left."""
+    return replace(scenario, law_gains={**(scenario.law_gains or {}), **values}, lambda_ts=None, bandwidth_scale=1.0)
 
 
-def _scale_apply(scenario: Scenario, values: Mapping[str, float]) -> Scenario:
-    return replace(scenario, bandwidth_scale=float(values["bandwidth_scale"]))
-
-
-_SLIDING = LawGains(SLIDING_GAINS, _sliding_read, _sliding_apply)
-_SCALED = LawGains(SCALE_GAINS, _scale_read, _scale_apply)
+_SLIDING = LawGains(SLIDING_GAINS, _read(SLIDING_GAINS), _sliding_apply)
 
 #: Each law's tunable gains (module docstring).
-TUNABLE: dict[str, LawGains] = {"smc": _SLIDING, "dq_smc": _SLIDING, "cascade": _SCALED, "microstep": _SCALED,
-                                "exact_linearization": _SCALED}
+TUNABLE: dict[str, LawGains] = {
+    "smc": _SLIDING, "dq_smc": _SLIDING,
+    "cascade": LawGains(CASCADE_GAINS, _read(CASCADE_GAINS), _baseline_apply),
+    "microstep": LawGains(MICROSTEP_GAINS, _read(MICROSTEP_GAINS), _baseline_apply),
+    "exact_linearization": LawGains(LINEARIZATION_GAINS, _read(LINEARIZATION_GAINS), _baseline_apply)}
+#: The ``[controller]`` keys a tuned table leaves out: the rule's scalings, which its gains, all given, replace.
+RULE_KEYS = ("bandwidth_scale", "lambda_ts")
 
 
 def law_gains(kind: str, where: str = "law") -> LawGains:
