@@ -172,7 +172,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 DESCRIPTION = """Plan and control stepping motors by differential flatness and sliding modes.
 
 Commands: reproduce (the paper's figures), simulate (one move), design (gains for a drive), robustness (a
-scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
+scenario under parameter errors), compare (every controller on one scenario), tune (a law's gains searched
+on the scenario's plants under caps), identify (motor parameters
 from a recording), calibrate (detent, friction and load from the drive's own sensors), plan (the fastest
 moves through waypoints under the motor's limits), motor (a motor from its datasheet, with what was assumed),
 bench (benchmarks). 'flatstep COMMAND --help' lists a command's flags.

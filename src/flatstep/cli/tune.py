@@ -181,7 +181,7 @@ def add_tune_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -
     p = sub.add_parser("tune", help="tune a law's gains on the scenario's plants under caps",
                        description="Search each law's gains (SciPy's differential evolution, seeded, the same "
                        "budget of evaluations for every law) for the least worst-of-plants max error during the move "
-                       "over the file's [robustness] plants (default the +-10 %% corners of R, L, Km, J, B), under "
+                       "over the file's [robustness] plants (default the +-10 % corners of R, L, Km, J, B), under "
                        "caps on peak voltage, copper loss and settling (penalties in the search; the answer meets "
                        "them on every plant). Prints the scenario's gains and the tuned ones; --out writes the "
                        "scenario with the tuned [controller] table. Exit 3 if no candidate of a law met the caps.")
