@@ -60,7 +60,7 @@ def cmd_compare_tuned(args: argparse.Namespace) -> int:
     study = sf.robustness
     if args.samples is not None:
         study = replace(study, samples=args.samples) if study is not None else None
-    check_work(scenario, sf, [k for k in kinds if k not in given], args.budget, len(fractions))
+    check_work(scenario, sf, args.budget)
     log = Log(enabled=not args.quiet, what="compare --tuned")
     frontiers: dict[str, Frontier] = {}
     tuned = {}

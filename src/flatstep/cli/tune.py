@@ -74,16 +74,22 @@ def out_files(out: Optional[str], kinds: Sequence[str], inputs: Sequence[str], f
     return files
 
 
-def check_work(scenario: Scenario, sf: ScenarioFile, kinds: Sequence[str], budget: int, points: int = 1) -> None:
-    """Refuse a tuning whose runs exceed the study limit (:func:`flatstep.validate.limits.check_study`)."""
+def check_work(scenario: Scenario, sf: ScenarioFile, budget: int) -> None:
+    """Refuse a search whose runs exceed the study limit (:func:`flatstep.validate.limits.check_study`).
+
+    One search (one law under one set of caps) is the unit: each law and each cap of a frontier is one more.
+    """
     loop = scenario.loop
     if loop is None:
         raise InputError("scenario", str(sf.path), f"{sf.path} has no [drive] control_rate: the tuner runs the "
                          "sampled drive loop on the C engine")
     plants = len(study_of(scenario, sf.robustness))
-    check_study(len(kinds) * points * budget * plants,
-                estimate(scenario.t_end, control_period=loop.control_period, substeps=loop.substeps),
-                what=f"tuning {len(kinds)} laws x {points} caps ({budget} evaluations of {plants} plants each)")
+    try:
+        check_study(budget * plants, estimate(scenario.t_end, control_period=loop.control_period,
+                                              substeps=loop.substeps),
+                    what=f"one search ({budget} evaluations of {plants} plants)")
+    except InputError as exc:
+        raise InputError("--budget", budget, f"--budget {budget}: {exc}; or lower --budget") from None
 
 
 def row(label: str, ev: Evaluation, count: Optional[float], extra: str = "") -> str:
@@ -116,7 +122,7 @@ def cmd_tune(args: argparse.Namespace) -> int:
     budget, population = check_budget(args.budget, args.population, "--budget")
     caps = caps_of(args)
     scenario = scenario_on_drive(sf, skip=args.no_verify)
-    check_work(scenario, sf, kinds, budget)
+    check_work(scenario, sf, budget)
     log = Log(enabled=not args.quiet)
     results: dict[str, TuneResult] = {}
     for kind in kinds:
