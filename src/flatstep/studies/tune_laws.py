@@ -71,14 +71,15 @@ class LawGains:
 #: (their ratio is the current loop's speed W1/eps1) and the error dynamics' natural frequency; the damping stays.
 SLIDING_GAINS = (Gain("W1", -1.0, 1.0), Gain("eps1", -1.0, 1.0), Gain("W2", -1.0, 1.0), Gain("eps2", -1.0, 1.0),
                  Gain("wn", -1.0, 1.0))
-#: The cascade's (:class:`~flatstep.control.cascade.CascadeGains`): the current loops' bandwidth (up to about
-#: lambda Ts = 1) and the three free gains of its P-PI loop, around the rule's w, w, w/4 poles.
-CASCADE_GAINS = (Gain("current_bandwidth", -0.7, 0.5), Gain("k_theta", -1.0, 1.0), Gain("k_omega", -1.0, 1.0),
-                 Gain("ki_omega", -2.0, 1.0))
+#: The cascade's (:class:`~flatstep.control.cascade.CascadeGains`): the current loops' bandwidth (a fifth to five
+#: times the rule's lambda Ts = 0.3) and the three free gains of its P-PI loop, around the rule's w, w, w/4 poles
+#: (wide enough to hold every bandwidth of the rule scaled by a fifth to five, the integral gain with its square).
+CASCADE_GAINS = (Gain("current_bandwidth", -0.7, 0.7), Gain("k_theta", -1.0, 1.0), Gain("k_omega", -1.0, 1.0),
+                 Gain("ki_omega", -2.0, 1.5))
 #: Open-loop microstepping's (:class:`~flatstep.control.microstep.MicrostepGains`): its current loops' bandwidth.
-MICROSTEP_GAINS = (Gain("current_bandwidth", -0.7, 0.5),)
+MICROSTEP_GAINS = (Gain("current_bandwidth", -0.7, 0.7),)
 #: Exact linearization's (:class:`~flatstep.control.exact_linearization.LinearizationGains`): its poles.
-LINEARIZATION_GAINS = (Gain("wn", -1.0, 1.0), Gain("xi", -0.5, 0.3), Gain("p3", -1.0, 0.5), Gain("pd", -1.0, 0.5))
+LINEARIZATION_GAINS = (Gain("wn", -1.0, 1.0), Gain("xi", -0.5, 0.3), Gain("p3", -1.0, 0.7), Gain("pd", -1.0, 0.7))
 
 
 def _read(keys: tuple[Gain, ...]) -> Callable[[Scenario], dict[str, float]]:
