@@ -125,6 +125,13 @@ def test_tuned_toml_keeps_the_file_and_reads_back(tiny, tuned_smc, tmp_path):
         assert getattr(back.scenario.gains, key) == value
     assert back.scenario.loop.observer == tiny.scenario.loop.observer  # design = true kept: the designed observer
     assert read_tuned(tmp_path)["smc"].path == path
+    # another law's gains in the file (a sliding law's W1, hold_damping) do not go into a cascade's table
+    other = TINY.replace("uncertainty = 0.1", "uncertainty = 0.1\nW1 = 50.0\nhold_damping = 1.0\nbandwidth_scale = 2.0")
+    gains = {"current_bandwidth": 3000.0, "k_theta": 100.0, "k_omega": 600.0, "ki_omega": 5e4}
+    (tmp_path / "cascade.toml").write_text(tuned_toml(other, "cascade", gains, "cascade tuned"))
+    cascade = read_scenario_file(tmp_path / "cascade.toml").scenario
+    assert dict(cascade.law_gains) == gains and cascade.bandwidth_scale == 1.0
+    assert cascade.controller().gains.k_omega == 600.0
 
 
 def test_cli_tune_writes_a_table_that_simulate_reads(tiny, cli, tmp_path):

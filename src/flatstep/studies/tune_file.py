@@ -19,23 +19,25 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from ..control.spec import OPTION_LAWS
+from ..control.spec import LAW_GAINS, OPTION_LAWS, ControllerSpec
 from ..validate import InputError
 from .scenario_file import ScenarioFile, read_scenario_file
-from .tune_laws import RULE_KEYS, TUNABLE, law_gains
+from .tune_laws import RULE_KEYS, law_gains
 
 #: The first bytes of a tuned file.
 TUNED_MARK = b"# flatstep tune:"
-#: The ``[controller]`` keys a tuned table drops: the law's name and options (given again as ``type``), the rule's
-#: scalings, and every law's gains.
-_DROPPED = {"type", "law", *OPTION_LAWS, *RULE_KEYS, *(g.key for row in TUNABLE.values() for g in row.gains)}
+#: The ``[controller]`` keys a tuned table drops whatever its law: the law's name and options (given again as
+#: ``type``) and the rule's scalings.
+_DROPPED = {"type", "law", *OPTION_LAWS, *RULE_KEYS}
+#: Every law's gain keys: a tuned table keeps those of its own law only.
+_GAIN_KEYS = {k for keys in LAW_GAINS.values() for k in keys}
 
 
 def tuned_toml(text: str, kind: str, gains: Mapping[str, float], note: str) -> str:
     """The scenario file ``text`` with ``[controller] type = kind`` and the tuned ``gains``; ``note`` heads it.
 
-    The other ``[controller]`` keys stay (``design``: the observer the design gives, ``measurement``, ...); the
-    gains given replace those the design (or the file) would give.
+    The other ``[controller]`` keys stay (``design``: the observer the design gives, ``measurement``, ...), but for
+    another law's gains; the gains given replace those the design (or the file) would give.
 
     Raises
     ------
@@ -52,8 +54,9 @@ def tuned_toml(text: str, kind: str, gains: Mapping[str, float], note: str) -> s
     old = tomllib.loads(text).get("controller", {})
     table = tomlkit.table()
     table.add("type", kind)
+    own = LAW_GAINS[ControllerSpec.parse(kind).law]
     for key, value in old.items():
-        if key not in _DROPPED:
+        if key not in _DROPPED and key not in row.keys and (key not in _GAIN_KEYS or key in own):
             table.add(key, value)
     for key in row.keys:
         table.add(key, float(gains[key]))
