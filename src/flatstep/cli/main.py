@@ -1,9 +1,10 @@
 """flatstep: plan and control stepping motors by differential flatness and sliding modes.
 
 The command line: ``reproduce`` (the paper's figures), ``simulate`` (one move), ``design`` (gains for a drive),
-``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``identify``
-(motor parameters from a recording), ``bench`` (benchmarks). ``flatstep --help`` prints :data:`DESCRIPTION` (the
-commands and the exit codes, docs/errors.md); ``flatstep COMMAND --help`` lists a command's flags.
+``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``tune`` (a
+law's gains searched under caps), ``identify`` (motor parameters from a recording), ``bench`` (benchmarks).
+``flatstep --help`` prints :data:`DESCRIPTION` (the commands and the exit codes, docs/errors.md);
+``flatstep COMMAND --help`` lists a command's flags.
 """
 from __future__ import annotations
 
