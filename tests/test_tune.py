@@ -169,6 +169,7 @@ def test_cli_tune_writes_a_table_that_simulate_reads(tiny, cli, tmp_path):
     (["--out", "s.toml"], "is an input of this run"),
     (["--peak-voltage", "-1"], "peak_voltage"),
     (["--budget", "1000000"], "or lower --budget"),
+    (["--law", "cascade_ff"], "--law cascade_ff: controller type 'cascade_ff' needs the torques"),
 ])
 def test_cli_tune_refuses_bad_input(cli, tmp_path, argv, match):
     (tmp_path / "s.toml").write_text(TINY)

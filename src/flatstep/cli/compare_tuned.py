@@ -6,7 +6,7 @@ import sys
 from dataclasses import replace
 from typing import Any
 
-from ..control.spec import LAWS, ControllerSpec
+from ..control.spec import LAWS
 from ..json_out import strict_json
 from ..studies.frontier import Frontier, FrontierPoint, check_fractions, frontier, outside_layer
 from ..studies.robustness import encoder_count
@@ -19,7 +19,7 @@ from ..validate.paths import PNG_MARK, check_output_dir, json_marks
 from .flags import out_dir
 from .plan import scenario_on_drive
 from .status import EXIT_LOST, EXIT_OK
-from .tune import Log, caps_line, caps_of, check_work, header, row
+from .tune import Log, caps_line, caps_of, check_work, header, laws_of, row
 
 #: The files ``flatstep compare --tuned --out`` writes.
 TUNED_FILES = {"frontier.png": PNG_MARK, "tuned.json": json_marks("scenario")}
@@ -42,14 +42,7 @@ def cmd_compare_tuned(args: argparse.Namespace) -> int:
         check_output_dir(args.out, "--out", TUNED_FILES, inputs=[args.scenario], force=args.force)
     sf = read_scenario_file(args.scenario)
     names = [k.strip() for k in args.controllers.split(",")] if args.controllers else list(LAWS)
-    kinds = []
-    for name in names:
-        kind = ControllerSpec.parse(name, "--controllers").name()
-        law_gains(kind, "--controllers")
-        if kind in kinds:
-            raise InputError("--controllers", args.controllers, f"--controllers {args.controllers!r}: {name} is "
-                             "given twice")
-        kinds.append(kind)
+    kinds = laws_of(names, sf.scenario, "--controllers")
     given = read_tuned(args.tuned) if args.tuned else {}
     fractions = check_fractions([float(f) for f in args.frontier.split(",")] if args.frontier else [1.0],
                                 "--frontier") if not given else (1.0,)
@@ -117,7 +110,7 @@ def _print(name: str, frontiers: dict[str, Frontier], layers: dict[str, Any], co
     for kind, fr in frontiers.items():
         best = fr.points[-1].best
         if best is None:
-            print(f"{kind:<30}{'no candidate met the caps':>40}")
+            print(f"{kind:<40}{'no candidate met the caps':>40}")
             continue
         print(row(kind, best, count, f"  {fr.wall_time:.1f} s" if fr.results else "  (read)"))
         print("  " + ", ".join(f"{k} = {v:.5g}" for k, v in best.gains.items()))

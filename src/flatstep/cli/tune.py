@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Optional, Sequence
 
@@ -44,6 +45,10 @@ def laws_of(given: Optional[Sequence[str]], scenario: Scenario, flag: str = "--l
         law_gains(kind, flag)
         if kind in kinds:
             raise InputError(flag, name, f"{flag} {name}: given twice; name each law once")
+        try:
+            replace(scenario, controller_type=kind).controller()  # before any work: a type the file cannot build
+        except ValueError as exc:
+            raise InputError(flag, name, f"{flag} {name}: {exc}") from None
         kinds.append(kind)
     return kinds
 
@@ -96,14 +101,14 @@ def row(label: str, ev: Evaluation, count: Optional[float], extra: str = "") -> 
     """One line of the table: worst move error, peak voltage, copper, settling, plants not ok."""
     move = f"{ev.move_max / count:11.3f}" if count else f"{ev.move_max:11.3e}"
     settling = f"{ev.settling * 1e3:11.3g}" if ev.settling is not None else f"{'unsettled':>11}"
-    return (f"{label:<30}{move}{ev.peak_voltage:11.3g}{ev.copper * 1e3:11.4g}{settling}"
+    return (f"{label:<40}{move}{ev.peak_voltage:11.3g}{ev.copper * 1e3:11.4g}{settling}"
             f"{ev.bad_plants:>7}/{ev.plants:<3}{extra}")
 
 
 def header(count: Optional[float]) -> str:
     """The table's header."""
     unit = "counts" if count else "rad"
-    return (f"{'law':<30}{'worst move':>11}{'peak |v|':>11}{'copper':>11}{'settling':>11}{'not ok':>11}"
+    return (f"{'law':<40}{'worst move':>11}{'peak |v|':>11}{'copper':>11}{'settling':>11}{'not ok':>11}"
             f"   [{unit}, V, mJ, ms]")
 
 
