@@ -102,7 +102,7 @@ def row(label: str, ev: Evaluation, count: Optional[float], extra: str = "") -> 
     move = f"{ev.move_max / count:11.3f}" if count else f"{ev.move_max:11.3e}"
     settling = f"{ev.settling * 1e3:11.3g}" if ev.settling is not None else f"{'unsettled':>11}"
     return (f"{label:<40}{move}{ev.peak_voltage:11.3g}{ev.copper * 1e3:11.4g}{settling}"
-            f"{ev.bad_plants:>7}/{ev.plants:<3}{extra}")
+            f"{ev.bad_plants:>7}/{ev.plants:<3}{extra}").rstrip()
 
 
 def header(count: Optional[float]) -> str:
