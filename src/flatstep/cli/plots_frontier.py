@@ -30,6 +30,7 @@ def plot_frontier(frontiers: dict[str, Frontier], count: Optional[float], *, tit
     left.set_xlabel("peak-voltage cap [V]")
     left.set_ylabel(f"worst-of-plants max error during the move [{'counts' if count else 'rad'}]")
     right.set_xlabel("worst-of-plants copper loss from the move's start [mJ]")
+    right.set_xscale("log")  # the laws' copper differs by orders of magnitude
     for ax in (left, right):
         ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
