@@ -11,13 +11,30 @@ static bool positive(fs_real x)
 // Returns nothing; writes i* = rho* (cos Nr theta*, sin Nr theta*) at t and, when di is not NULL, its derivative.
 static void microstep_reference(const struct microstep *s, fs_real t, fs_real i[2], fs_real *di)
 {
-    fs_real ref[PLAN_FLAG_LEN], sn, cs, w;
+    // With the load angle the vector leads N_r theta* by delta, sin delta = c = (J theta*'' + B theta*') / (Km rho*)
+    // clipped to [-1, 1]; delta' = c' / cos delta inside (0 where clipped).
+    const struct motor_params *m = &s->p.motor;
+    fs_real ref[PLAN_FLAG_LEN], sn, cs, w, dp, c, cd, sp, cp;
     plan_flag(&s->plan, t, ref);
-    fs_sincos(s->p.motor.Nr * ref[PLAN_THETA], &sn, &cs);
+    fs_sincos(m->Nr * ref[PLAN_THETA], &sn, &cs);
+    dp = m->Nr * ref[PLAN_DTHETA];
+    if (s->p.gains.load_angle) {
+        c = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA]) / (m->Km * ref[PLAN_RHO]);
+        c = c > 1 ? 1 : c < -1 ? -1 : c;
+        cd = fs_sqrt(1 - c * c);
+        if (cd > 0)
+            dp = dp
+                 + ((m->J * ref[PLAN_DDDTHETA] + m->B * ref[PLAN_DDTHETA]) - c * m->Km * ref[PLAN_DRHO])
+                       / (m->Km * ref[PLAN_RHO]) / cd;
+        sp = sn * cd + cs * c;
+        cp = cs * cd - sn * c;
+        sn = sp;
+        cs = cp;
+    }
     i[0] = ref[PLAN_RHO] * cs;
     i[1] = ref[PLAN_RHO] * sn;
     if (di) {
-        w = s->p.motor.Nr * ref[PLAN_DTHETA] * ref[PLAN_RHO];
+        w = dp * ref[PLAN_RHO];
         di[0] = ref[PLAN_DRHO] * cs - w * sn;
         di[1] = ref[PLAN_DRHO] * sn + w * cs;
     }

@@ -25,6 +25,7 @@ struct microstep_gains {
     fs_real current_bandwidth;  // wc [rad/s], > 0: PI gains kp = L wc, ki = R wc (pole-zero cancellation)
     bool feedforward;           // add R i* + L di*/dt to the PI output
     bool back_emf;              // add the back EMF at the plan's speed, Km theta*' (-sin Nr theta*, cos Nr theta*)
+    bool load_angle;            // lead Nr theta* by asin((J theta*'' + B theta*') / (Km rho*)), clipped
 };
 
 struct microstep_params {

@@ -209,7 +209,7 @@ static int init_smc(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t
     return rc;
 }
 
-// Returns microstep_init's status; decodes the driver (options: 1 no feedforward, 2 the back EMF). Aborts when a documented
+// Returns microstep_init's status; decodes the driver (options: 1 no feedforward, 2 the back EMF, 4 the load angle). Aborts when a documented
 // requirement is broken yet accepted.
 static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t options, const struct setup *u)
 {
@@ -219,6 +219,7 @@ static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, u
     p.motor = *u->model, p.plan = *u->plan, p.Ts = u->Ts, p.v_limit = u->v_limit;
     p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.feedforward = !(options & 1);
     p.gains.back_emf = (options & 2) != 0;
+    p.gains.load_angle = (options & 4) != 0;
     if (hostile) {
         p.gains.current_bandwidth = fz_value(r, p.gains.current_bandwidth), p.Ts = fz_value(r, p.Ts);
         p.v_limit = fz_value(r, p.v_limit);

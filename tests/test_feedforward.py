@@ -123,6 +123,7 @@ def test_a_scenario_file_gives_any_law_its_gains(tmp_path):
     ctrl = sc.controller()
     assert sc.controller_type == "cascade+voltage_feedforward" and ctrl.gains.k_theta == 200.0
     assert ctrl.gains.current_bandwidth == pytest.approx(0.25 * 20000.0) and ctrl.gains.voltage_feedforward
+    assert replace(sc, controller_type="smc", lambda_ts=None).controller().gains == sc.gains  # cascade gains: its own
     path.write_text(FILE + 'type = "smc"\nk_theta = 200.0\n')
     with pytest.raises(ValueError, match=r"s.toml:controller.k_theta: k_theta is not a gain of law 'smc'"):
         load_scenario(path)
@@ -152,10 +153,27 @@ def test_the_back_emf_of_the_microstepping_driver():
     np.testing.assert_array_equal(s0, s1)
 
 
+def test_the_load_angle_of_the_microstepping_driver():
+    """Leading by the load angle puts the torque the plan needs on the q axis of the planned angle."""
+    ctrl = build("microstep+load_angle")
+    f = PLAN.flag(T)
+    i_d, i_q = fs.control.loops.park(*ctrl.current_reference(T), MOTOR.Nr * f.theta)
+    torque = MOTOR.J * f.ddtheta + MOTOR.B * f.dtheta
+    inside = np.abs(torque) < MOTOR.Km * f.rho
+    np.testing.assert_allclose((MOTOR.Km * i_q)[inside], torque[inside], rtol=1e-9, atol=1e-12)
+    assert np.max(np.abs(i_q)) > 0.05 and np.all(np.hypot(i_d, i_q) == pytest.approx(f.rho))
+    h = 1e-7
+    numeric = (ctrl.current_reference(T + h) - ctrl.current_reference(T - h)) / (2 * h)
+    mid = (T > 0.006) & (T < 0.044)
+    np.testing.assert_allclose(numeric[:, mid], ctrl.current_reference(T, 1)[:, mid], rtol=1e-4, atol=1e-2)
+    plain = build("microstep").current_reference(T)
+    assert np.max(np.abs(plain - ctrl.current_reference(T))) > 0.05
+
+
 @pytest.mark.parametrize("kind, law_gains", [
     ("cascade+voltage_feedforward", None),
     ("exact_linearization+feedforward", {"p3": 3000.0}),
-    ("microstep+back_emf", None),
+    ("microstep+back_emf+load_angle", None),
     ("cascade+feedforward+observer_torques+voltage_feedforward", {"k_theta": 900.0, "k_omega": 2000.0,
                                                                   "ki_omega": 1e5}),
 ])
@@ -163,7 +181,8 @@ def test_the_c_twin_matches_the_reference_with_the_new_options(kind, law_gains):
     from flatstep.studies.scenario_file import load_scenario
 
     scenario, _ = load_scenario(EXAMPLES / "compare-paper-20khz.toml")
-    sc = replace(scenario, controller_type=kind, law_gains=law_gains, lambda_ts=0.25, t_end=scenario.plan.tf)
+    gains = {ControllerSpec.parse(kind).law: law_gains} if law_gains else None
+    sc = replace(scenario, controller_type=kind, law_gains=gains, lambda_ts=0.25, t_end=scenario.plan.tf)
     c, py = sc.run("c"), sc.run("python")
     np.testing.assert_allclose(c.theta, py.theta, rtol=0, atol=1e-9)
     np.testing.assert_allclose([c.va, c.vb], [py.va, py.vb], rtol=0, atol=1e-8)

@@ -20,6 +20,7 @@ static void microstep_defaults(struct microstep_params *p)
     p->gains.current_bandwidth = 0.3 / TS;
     p->gains.feedforward = true;
     p->gains.back_emf = false;
+    p->gains.load_angle = false;
     p->Ts = TS;
     p->v_limit = INFINITY;
 }

@@ -81,7 +81,7 @@ static double check_microstep(int line, const double *a)
     uint32_t st;
     motor_from(a, &p.motor);
     p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11], NULL};
-    p.gains = (struct microstep_gains){a[12], a[13] != 0, false};
+    p.gains = (struct microstep_gains){a[12], a[13] != 0, false, false};
     p.Ts = a[14], p.v_limit = a[15];
     CHECK(microstep_init(&s, &p) == MICROSTEP_PARAMS_OK, "line %d: init", line);
     s.integral[0] = a[17], s.integral[1] = a[18];

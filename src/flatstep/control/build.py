@@ -125,7 +125,11 @@ class BuildContext:
         return self.control_period
 
     def bandwidths(self) -> tuple[float, float]:
-        r"""The baselines' ``(lambda, omega_n)`` [rad/s]: :func:`bandwidths` times ``bandwidth_scale``."""
+        r"""The baselines' ``(lambda, omega_n)`` [rad/s].
+
+        :func:`bandwidths` (or ``lambda = lambda_ts / Ts``, ``omega_n = lambda / 4`` with ``lambda_ts``), times
+        ``bandwidth_scale``.
+        """
         scale = check_positive("bandwidth_scale", self.bandwidth_scale)
         lam, wn = bandwidths(self.period, self.compute_delay)
         if self.lambda_ts is not None:
@@ -146,7 +150,7 @@ class BuildContext:
     def sliding_gains(self) -> SMCGains:
         r"""The sliding laws' gains: ``smc_gains``, ``law_gains`` over them, and the boundary layers of ``lambda_ts``.
 
-        With ``lambda_ts``, :math:`\epsilon_i = W_i/\lambda`, :math:`\lambda = \lambda T_s/T_s`, so that each
+        With ``lambda_ts``, :math:`\epsilon_i = W_i/\lambda` for :math:`\lambda` = ``lambda_ts / Ts``, so that each
         boundary layer's bandwidth :math:`W_i/\epsilon_i` is the current loop's speed asked for.
         """
         g = replace(self.smc_gains, **self.checked_gains(SMCGains)) if self.law_gains else self.smc_gains

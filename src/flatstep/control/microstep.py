@@ -22,7 +22,13 @@ feedforward stands in for that, so that the baseline is not crippled by the line
 speed (the ``back_emf`` option adds the back EMF the plan's speed gives, :math:`K_m\dot\theta^*(-\sin N_r\theta^*,
 \cos N_r\theta^*)`, as a driver with back-EMF compensation does from its commanded speed). The rotor
 lags :math:`\theta^*` by the load angle :math:`\arcsin(T/(K_m\rho^*))/N_r` for a torque demand :math:`T`, and
-rings at the stiffness :math:`\sqrt{K_m N_r\rho^*/J}` with only the motor's own damping.
+rings at the stiffness :math:`\sqrt{K_m N_r\rho^*/J}` with only the motor's own damping. The ``load_angle``
+option leads the current vector by the load angle of the torque the plan needs, as a driver with a known
+inertia can:
+
+.. math::
+    p = N_r\theta^* + \delta,\qquad \sin\delta = \mathrm{clip}\Big(\frac{J\ddot\theta^* + B\dot\theta^*}{K_m\rho^*},
+    \pm 1\Big),\qquad \dot\delta = \frac{d}{dt}\sin\delta\,\Big/\cos\delta \text{ (0 where clipped)}.
 
 **Tuning.** :math:`\omega_c = \lambda = 0.3/T_s`, the bandwidth of the sliding controller's current-norm loop
 (:func:`flatstep.loop.design.design_gains`); the run current is the plan's, the same current norm the sliding
@@ -52,12 +58,14 @@ class MicrostepGains:
     r"""Current-loop bandwidth [rad/s] of the microstepping driver (PI gains by pole-zero cancellation).
 
     ``feedforward`` adds the voltage of the current reference, :math:`R i^* + L\,di^*/dt` (default on);
-    ``back_emf`` the back EMF at the plan's angle and speed (default off; module docstring).
+    ``back_emf`` the back EMF at the plan's angle and speed, ``load_angle`` the lead of the current vector by the
+    load angle the plan's torque needs (both default off; module docstring).
     """
 
     current_bandwidth: float
     feedforward: bool = True
     back_emf: bool = False
+    load_angle: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "current_bandwidth",
@@ -66,7 +74,7 @@ class MicrostepGains:
     def as_dict(self) -> dict[str, float]:
         """The bandwidth and the feedforward switches, for JSON."""
         return {"current_bandwidth": self.current_bandwidth, "feedforward": self.feedforward,
-                "back_emf": self.back_emf}
+                "back_emf": self.back_emf, "load_angle": self.load_angle}
 
 
 class Microstepping(BaselineController[MicrostepGains]):
@@ -101,16 +109,25 @@ class Microstepping(BaselineController[MicrostepGains]):
         self.pi = PIGains.current_loop(motor, gains.current_bandwidth)
 
     def current_reference(self, t: ArrayLike, order: int = 0) -> NDArray[np.float64]:
-        """The current reference ``(ia*, ib*) = rho* (cos N_r theta*, sin N_r theta*)`` at times ``t``.
+        """The current reference ``(ia*, ib*) = rho* (cos p, sin p)``, ``p = N_r theta* [+ delta]``, at times ``t``.
 
-        Vectorized; with ``order=1``, its time derivative.
+        ``delta`` is the load angle with ``gains.load_angle`` (module docstring). Vectorized; with ``order=1``, its
+        time derivative.
         """
+        m = self.motor
         ref = self.plan.flag(t)
-        p = self.motor.Nr * ref.theta
+        p = m.Nr * ref.theta
         c, s = np.cos(p), np.sin(p)
+        dp = m.Nr * ref.dtheta
+        if self.gains.load_angle:  # sin delta = clip(T / (Km rho*)), delta' = T'/(Km rho*) ... / cos delta
+            sd = np.clip((m.J * ref.ddtheta + m.B * ref.dtheta) / (m.Km * ref.rho), -1.0, 1.0)
+            cd = np.sqrt(1 - sd * sd)
+            rate = ((m.J * ref.dddtheta + m.B * ref.ddtheta) - sd * m.Km * ref.drho) / (m.Km * ref.rho)
+            dp = dp + np.where(cd > 0, rate / np.where(cd > 0, cd, 1.0), 0.0)
+            s, c = s * cd + c * sd, c * cd - s * sd
         if order == 0:
             return np.array([ref.rho * c, ref.rho * s])
-        w = self.motor.Nr * ref.dtheta * ref.rho
+        w = dp * ref.rho
         return np.array([ref.drho * c - w * s, ref.drho * s + w * c])
 
     def initial_state(self) -> NDArray[np.float64]:
@@ -144,7 +161,7 @@ class Microstepping(BaselineController[MicrostepGains]):
         """The fields of the C ``struct microstep_params`` (csrc/microstep.h)."""
         return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(current_bandwidth=self.gains.current_bandwidth, feedforward=self.gains.feedforward,
-                               back_emf=self.gains.back_emf),
+                               back_emf=self.gains.back_emf, load_angle=self.gains.load_angle),
                     Ts=self.control_period, v_limit=self.v_limit)
 
 
@@ -152,9 +169,10 @@ def from_spec(spec: ControllerSpec, context: BuildContext) -> Microstepping:
     """The microstepping driver (flatstep.control.spec), its current loops at ``lambda`` (flatstep.control.build).
 
     Any of :class:`MicrostepGains`'s fields given in ``context.law_gains`` replaces the rule's; ``back_emf`` adds the
-    back EMF at the plan's speed.
+    back EMF at the plan's speed, ``load_angle`` leads the current vector by the plan's load angle.
     """
     lam, _ = context.bandwidths()
-    gains = context.gains(MicrostepGains, dict(current_bandwidth=lam), dict(back_emf=spec.back_emf))
+    gains = context.gains(MicrostepGains, dict(current_bandwidth=lam),
+                          dict(back_emf=spec.back_emf, load_angle=spec.load_angle))
     return Microstepping(context.motor, context.plan, gains, control_period=context.period,
                          measurement=context.measurement, v_limit=context.v_limit)

@@ -18,6 +18,7 @@ option                 what it adds                                             
 ``voltage_feedforward`` the voltage of the planned q current, ``R iq* + L diq*/dt``   cascade
                        (with the known torques along the plan when ``feedforward``)
 ``back_emf``           the back EMF at the plan's angle and speed                     microstep
+``load_angle``         lead the current vector by the plan's load angle               microstep
 =====================  =============================================================  ==============================
 
 Every combination the table allows is a controller; :meth:`ControllerSpec.name` is its name (the historical type
@@ -135,6 +136,8 @@ OPTIONS: dict[str, Option] = {
     "voltage_feedforward": Option(("cascade",), "the voltage of the planned q current, R iq* + L diq*/dt (with the "
                                   "known torques along the plan when feedforward)", "v ff", 6),
     "back_emf": Option(("microstep",), "the back EMF at the plan's angle and speed in the driver's voltages", "emf", 7),
+    "load_angle": Option(("microstep",), "lead the current vector by the load angle of the torque the plan needs",
+                         "load angle", 8),
 }
 #: The control laws, the paper's first.
 LAWS = tuple(LAW_TABLE)
@@ -170,8 +173,8 @@ class ControllerSpec:
         ``"plan"`` or ``"loss_aware"`` (:data:`RHO_PLANS`).
     voltage_feedforward : bool
         The cascade's current-reference voltage (module docstring; default off).
-    back_emf : bool
-        The microstepping driver's back-EMF feedforward (default off).
+    back_emf, load_angle : bool
+        The microstepping driver's back-EMF feedforward and load-angle lead (default off).
     """
 
     law: str = "smc"
@@ -183,6 +186,7 @@ class ControllerSpec:
     rho_plan: str = "plan"
     voltage_feedforward: bool = False
     back_emf: bool = False
+    load_angle: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.law, str) or self.law not in LAWS:

@@ -7,6 +7,7 @@ from functools import lru_cache
 from typing import Any, Mapping, Optional
 
 from ..control.smc import SMCGains
+from ..control.spec import ControllerSpec
 from ..control.tuning import AnyController, make_controller
 from ..engine.result import SimResult
 from ..engine.settings import Continuous
@@ -50,7 +51,8 @@ class Scenario:
     lambda_ts : float, optional
         The current loop's speed times the control period, for every law (``None``: the rule's 0.3).
     law_gains : mapping, optional
-        A baseline's gains by name over its rule (``CascadeGains``' ``k_theta``, say; ``None``: the rule's).
+        Each law's gains by name over its rule, by law (``{"cascade": {"k_theta": 300.0}}``, say; a law not named,
+        or ``None``: the rule's), so that one scenario can carry the gains of every law it compares.
     plant : Plant, optional
         The simulated plant (motor, effects, load); ``None``: ``Plant(motor)``, a perfect model, no load.
     loop : DriveLoop, optional
@@ -127,7 +129,8 @@ class Scenario:
                                bandwidth_scale=self.bandwidth_scale,
                                compute_delay=loop.compute_delay if loop is not None else False,
                                torques=self.torques, d_current=self.d_current, loss_aware=self.loss_aware,
-                               lambda_ts=self.lambda_ts, law_gains=self.law_gains)
+                               lambda_ts=self.lambda_ts,
+                               law_gains=(self.law_gains or {}).get(ControllerSpec.parse(self.controller_type).law))
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""

@@ -260,7 +260,7 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     scenario = wrap(where, "scenario", Scenario, name=str(doc.get("name", path.stem)), motor=motor, plan=plan,
                     gains=gains, measurement=measurement, t_end=t_end, plant=simulated,
                     loop=loop, controller_type=controller_type, bandwidth_scale=bandwidth_scale, torques=torques,
-                    lambda_ts=lambda_ts, law_gains=law_gains,
+                    lambda_ts=lambda_ts, law_gains={law: law_gains} if law_gains else None,
                     d_current=d_current, loss_aware=loss_aware)
     robustness = wrap(where, "robustness", Robustness, **sec["robustness"]) if "robustness" in doc else None
     return ScenarioFile(path, scenario, robustness, planned.planner, planned.limits, planned.steps)
