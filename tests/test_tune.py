@@ -130,7 +130,7 @@ def test_tuned_toml_keeps_the_file_and_reads_back(tiny, tuned_smc, tmp_path):
     gains = {"current_bandwidth": 3000.0, "k_theta": 100.0, "k_omega": 600.0, "ki_omega": 5e4}
     (tmp_path / "cascade.toml").write_text(tuned_toml(other, "cascade", gains, "cascade tuned"))
     cascade = read_scenario_file(tmp_path / "cascade.toml").scenario
-    assert dict(cascade.law_gains) == gains and cascade.bandwidth_scale == 1.0
+    assert dict(cascade.law_gains["cascade"]) == gains and cascade.bandwidth_scale == 1.0
     assert cascade.controller().gains.k_omega == 600.0
 
 
@@ -143,8 +143,8 @@ def test_cli_tune_writes_a_table_that_simulate_reads(tiny, cli, tmp_path):
     back = read_scenario_file(tmp_path / "t.toml")
     assert back.scenario.controller_type == "cascade"
     k_theta = float(run.stdout.split("k_theta = ")[1].split(",")[0])
-    assert back.scenario.law_gains["k_theta"] == pytest.approx(k_theta, rel=1e-4)
-    assert back.scenario.controller().gains.k_theta == back.scenario.law_gains["k_theta"]
+    assert back.scenario.law_gains["cascade"]["k_theta"] == pytest.approx(k_theta, rel=1e-4)
+    assert back.scenario.controller().gains.k_theta == back.scenario.law_gains["cascade"]["k_theta"]
     sim = cli(["simulate", "t.toml"], cwd=tmp_path)
     assert sim.returncode == 0, sim.stderr
     again = cli(["tune", "s.toml", "--law", "cascade", "--budget", "10", "--population", "5", "--out", "t.toml",

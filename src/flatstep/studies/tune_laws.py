@@ -98,8 +98,14 @@ def _sliding_apply(scenario: Scenario, values: Mapping[str, float]) -> Scenario:
 
 
 def _baseline_apply(scenario: Scenario, values: Mapping[str, float]) -> Scenario:
-    """A baseline's gains by name over its rule (``law_gains``), every one given: no scale or ``lambda_ts`` left."""
-    return replace(scenario, law_gains={**(scenario.law_gains or {}), **values}, lambda_ts=None, bandwidth_scale=1.0)
+    """A baseline's gains by name over its rule (``law_gains[law]``), every one given: no scale or ``lambda_ts`` left.
+
+    The other laws' gains in ``law_gains`` stay.
+    """
+    law = ControllerSpec.parse(scenario.controller_type).law
+    by_law = dict(scenario.law_gains or {})
+    by_law[law] = {**by_law.get(law, {}), **values}
+    return replace(scenario, law_gains=by_law, lambda_ts=None, bandwidth_scale=1.0)
 
 
 _SLIDING = LawGains(SLIDING_GAINS, _read(SLIDING_GAINS), _sliding_apply)
