@@ -21,7 +21,7 @@ from ..model.motor import MotorParams
 from ..model.plant import Plant
 from ..model.pullout import pullout_torque, top_speed
 from ..plan.baselines import trapezoid_rows
-from ..plan.open_loop import PulloutCurve, open_loop_plan, tabulated
+from ..plan.open_loop import PulloutCurve, open_loop_plan, profile_plan, speed_profile, tabulated
 from ..plan.piecewise import NCOEF, PiecewisePlan
 from .batch import run_batch
 from .robustness import plant_errors
@@ -41,6 +41,8 @@ class PlantCheck:
     runs: int
     lost: int
     worst_error: float
+    #: The plants (their index in the ``errors`` checked) that lost a step.
+    lost_plants: tuple[int, ...] = ()
 
     @property
     def safe(self) -> bool:
@@ -57,9 +59,10 @@ def check_on_plants(motor: MotorParams, plan: PiecewisePlan, v_bus: float, *, co
                      plant=Plant(motor.replace(**{k: getattr(motor, k) * (1 + e) for k, e in err.items()}),
                                  load=load), loop=loop, t_end=plan.tf + SETTLE) for err in errors]
     rows = run_batch(runs, progress=False, **batch)
-    lost = sum(r["error"] is not None or r["status"] != "ok" for r in rows)
-    worst = max(float(r["max_abs_theta_error"]) for r in rows if r["error"] is None) if lost < len(rows) else np.inf
-    return PlantCheck(len(rows), lost, worst)
+    failed = tuple(i for i, r in enumerate(rows) if r["error"] is not None or r["status"] != "ok")
+    worst = max(float(r["max_abs_theta_error"]) for r in rows if r["error"] is None) \
+        if len(failed) < len(rows) else np.inf
+    return PlantCheck(len(rows), len(failed), worst, failed)
 
 
 def trapezoid_plan(distance: float, v_max: float, a_max: float, current: float) -> PiecewisePlan:
@@ -74,13 +77,27 @@ def trapezoid_plan(distance: float, v_max: float, a_max: float, current: float) 
 Candidate = tuple[float, Callable[[float], PiecewisePlan], dict[str, float]]
 
 
+class Counter:
+    """The plant runs a search has used."""
+
+    def __init__(self) -> None:
+        self.runs = 0
+
+    def check(self, motor: MotorParams, plan: PiecewisePlan, v_bus: float, control_rate: float,
+              errors: Optional[list[dict[str, float]]] = None) -> PlantCheck:
+        """:func:`check_on_plants`, counted."""
+        check = check_on_plants(motor, plan, v_bus, control_rate=control_rate, errors=errors)
+        self.runs += check.runs
+        return check
+
+
 def _confirmed(candidates: list[Candidate], motor: MotorParams, v_bus: float, control_rate: float,
-               what: str) -> tuple[PiecewisePlan, float, PlantCheck, dict[str, float]]:
+               what: str, counter: Counter) -> tuple[PiecewisePlan, float, PlantCheck, dict[str, float]]:
     """The fastest candidate safe on all 32 plants, each tried at 1, 0.95, 0.9, 0.85 of its acceleration scale."""
     for _, make, caps in sorted(candidates, key=lambda c: c[0]):
         for scale in (1.0, 0.95, 0.9, 0.85):
             plan = make(scale)
-            check = check_on_plants(motor, plan, v_bus, control_rate=control_rate)
+            check = counter.check(motor, plan, v_bus, control_rate)
             if check.safe:
                 return plan, scale, check, caps
     raise ValueError(f"no {what} kept all 32 plants")
@@ -90,26 +107,118 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
                    speeds: int = 8, iterations: int = 7) -> tuple[PiecewisePlan, dict[str, float], PlantCheck]:
     """The fastest constant-acceleration trapezoid that loses no step on the 32 plants, and its caps.
 
-    Speed caps on a grid up to the pull-out curve's top speed; at each, the largest acceleration cap kept by the
-    weakest plant (:data:`WEAKEST`), by bisection up to twice the acceleration at rest; the candidates, fastest
-    first, are confirmed on all 32 plants (at 1, 0.95, 0.9, 0.85 of their acceleration) until one loses no step.
+    Speed caps on a grid from 0.2 to 1.2 x the chopper curve's top speed; at each, the largest acceleration cap
+    kept by the weakest plant (:data:`WEAKEST`), by bisection up to twice the acceleration at rest; the
+    candidates, fastest first, are confirmed on all 32 plants (at 1, 0.95, 0.9, 0.85 of their acceleration) until
+    one loses no step. Returns the plan, its caps ``v_max``, ``a_max`` and the plant runs of the search
+    ``runs`` and the candidates it screened ``candidates``, and its check.
     """
     t0 = float(pullout_torque(motor, "chopper", v_bus, current, 0.0)[0])
     w_top = top_speed(motor, "chopper", v_bus, current, 0.0)
+    counter = Counter()
     candidates: list[Candidate] = []
     for v in np.linspace(0.2, 1.2, speeds) * w_top:
         lo, hi = 0.0, 2.0 * t0 / motor.J
         for _ in range(iterations):
             a = 0.5 * (lo + hi)
-            ok = check_on_plants(motor, trapezoid_plan(distance, float(v), a, current), v_bus,
-                                 control_rate=control_rate, errors=[WEAKEST]).safe
+            ok = counter.check(motor, trapezoid_plan(distance, float(v), a, current), v_bus, control_rate,
+                               [WEAKEST]).safe
             lo, hi = (a, hi) if ok else (lo, a)
         if lo > 0:
             def make(scale: float, v: float = float(v), a: float = lo) -> PiecewisePlan:
                 return trapezoid_plan(distance, v, a * scale, current)
             candidates.append((make(1.0).tf, make, {"v_max": float(v), "a_max": lo}))
-    plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate, f"trapezoid over {distance} rad")
-    return plan, {"v_max": caps["v_max"], "a_max": caps["a_max"] * scale}, check
+    plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate, f"trapezoid over {distance} rad",
+                                          counter)
+    return plan, {"v_max": caps["v_max"], "a_max": caps["a_max"] * scale, "runs": float(counter.runs),
+                  "candidates": float(speeds * iterations)}, check
+
+
+#: The knots of :func:`best_profile`'s acceleration profiles, as shares of the cruise speed.
+KNOTS = (0.0, 0.4, 0.7, 0.9, 1.0)
+#: The steps of :func:`best_profile`'s pattern search, as shares of the value changed.
+PATTERN_STEPS = (0.4, 0.2, 0.1, 0.05, 0.025)
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A point of :func:`best_profile`'s search: cruise speed [rad/s], acceleration and braking at the knots."""
+
+    cruise: float
+    accel: tuple[float, ...]
+    brake: tuple[float, ...]
+
+    def plan(self, distance: float, current: float) -> PiecewisePlan:
+        """The move of :func:`~flatstep.plan.open_loop.profile_plan` with these profiles."""
+        knots = [self.cruise * k for k in KNOTS]
+        return profile_plan(distance, self.cruise, speed_profile(knots, self.accel, "accel"),
+                            speed_profile(knots, self.brake, "brake"), current)
+
+    def moves(self, s: float) -> list["Profile"]:
+        """The neighbours at step ``s``.
+
+        More acceleration or braking up to each knot (kept non-increasing in the speed), a faster cruise, and a
+        faster cruise approached along a taper (less acceleration and braking at the top one, two or three knots,
+        cut to 1 - s, 0.3 or 0.1 of it).
+        """
+        out = []
+        for side in ("accel", "brake"):
+            values = np.array(getattr(self, side))
+            for j in range(len(values)):
+                raised = values.copy()
+                raised[:j + 1] = np.maximum(raised[:j + 1], values[j] * (1 + s))
+                out.append(Profile(**{**self.__dict__, side: tuple(float(x) for x in raised)}))
+        out.append(Profile(self.cruise * (1 + s), self.accel, self.brake))
+        for top, cut in product((1, 2, 3), (1 - s, 0.3, 0.1)):
+            a, b = np.array(self.accel), np.array(self.brake)
+            a[-top:], b[-top:] = a[-top:] * cut, b[-top:] * cut
+            out.append(Profile(self.cruise * (1 + s), tuple(float(x) for x in a), tuple(float(x) for x in b)))
+        return out
+
+
+def best_profile(motor: MotorParams, v_bus: float, current: float, distance: float,
+                 seed: tuple[PiecewisePlan, dict[str, float], PlantCheck], *, budget: int,
+                 control_rate: float = 20e3) -> tuple[PiecewisePlan, dict[str, Any], PlantCheck]:
+    """The fastest speed-dependent acceleration found that loses no step on the 32 plants, from a safe trapezoid.
+
+    A pattern search over :class:`Profile` (cruise speed, acceleration and braking at the :data:`KNOTS`), started at
+    the trapezoid ``seed`` (:func:`best_trapezoid`'s result: constant profiles give the same plan, and its check).
+    Screened as the trapezoid's caps are: at each step of :data:`PATTERN_STEPS`, the neighbours
+    (:meth:`Profile.moves`) shorter than the best so far are tried, shortest first, on the screening plants (at
+    first :data:`WEAKEST`); one they keep is confirmed on all 32 plants and, if no plant loses a step, becomes the
+    best and the step starts again; a plant that loses a step joins the screening plants. When no neighbour is
+    kept, the next step. Stops when ``budget`` candidates have been screened (the trapezoid's search screens
+    ``speeds x iterations``). The family holds the trapezoid: the result is never longer than the seed.
+    Returns the plan, the profile (``cruise``, ``accel``, ``brake`` at ``knots`` [rad/s]) with the plant runs
+    ``runs`` and the candidates screened ``candidates``, and its check.
+    """
+    k = len(KNOTS)
+    v, a = seed[1]["v_max"], seed[1]["a_max"]
+    confirmed = (Profile(v, (a,) * k, (a,) * k), seed[0], seed[2])
+    everyone = plant_errors(Robustness())
+    screen = [WEAKEST]
+    counter = Counter()
+    screened = 0
+    for s in PATTERN_STEPS:
+        improved = True
+        while improved and screened < budget:
+            improved = False
+            tried = sorted(((p.plan(distance, current), p) for p in confirmed[0].moves(s)), key=lambda c: c[0].tf)
+            for cand, prof in tried:
+                if cand.tf >= confirmed[1].tf * (1 - 1e-6) or screened >= budget:
+                    continue
+                screened += 1
+                if not counter.check(motor, cand, v_bus, control_rate, screen).safe:
+                    continue
+                check = counter.check(motor, cand, v_bus, control_rate)
+                if check.safe:
+                    confirmed, improved = (prof, cand, check), True
+                    break
+                screen += [everyone[i] for i in check.lost_plants if everyone[i] not in screen]
+    prof, plan, check = confirmed
+    info = {"cruise": prof.cruise, "accel": prof.accel, "brake": prof.brake,
+            "knots": tuple(prof.cruise * x for x in KNOTS), "runs": counter.runs, "candidates": screened}
+    return plan, info, check
 
 
 def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: float, *, control_rate: float = 20e3,
@@ -142,7 +251,7 @@ def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: f
                 return make(lo * scale)
             candidates.append((at(1.0).tf, at, {"margin": lo, "w_max": float(v), "shaping": float(shaping)}))
     plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate,
-                                          f"open-loop plan over {distance} rad")
+                                          f"open-loop plan over {distance} rad", Counter())
     peak = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 2001)).dtheta)))
     return plan, {"margin": caps["margin"] * scale, "w_peak": peak, "shaping": caps["shaping"]}, check
 
