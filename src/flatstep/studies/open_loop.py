@@ -137,7 +137,11 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
 #: The knots of :func:`best_profile`'s acceleration profiles, as shares of the cruise speed.
 KNOTS = (0.0, 0.4, 0.7, 0.9, 1.0)
 #: The steps of :func:`best_profile`'s pattern search, as shares of the value changed.
-PATTERN_STEPS = (0.4, 0.2, 0.1, 0.05, 0.025)
+PATTERN_STEPS = (0.2, 0.1, 0.05, 0.025)
+#: The shares of the acceleration with which :func:`best_profile` first seeks a faster cruise.
+CRUISE_CUTS = (0.3, 0.1, 0.04)
+#: That cruise is sought up to this multiple of the seed's, by this many bisection steps per share.
+CRUISE_REACH, CRUISE_ITERATIONS = 1.4, 3
 
 
 @dataclass(frozen=True)
@@ -157,9 +161,9 @@ class Profile:
     def moves(self, s: float) -> list["Profile"]:
         """The neighbours at step ``s``.
 
-        More acceleration or braking up to each knot (kept non-increasing in the speed), a faster cruise, and a
-        faster cruise approached along a taper (less acceleration and braking at the top one, two or three knots,
-        cut to 1 - s, 0.3 or 0.1 of it).
+        More acceleration or braking up to each knot (kept non-increasing in the speed); a faster cruise; a faster
+        cruise approached with less acceleration (at the top one, two or three knots or at all, cut to 1 - s, 0.3
+        0.1 or 0.04 of it: a taper, or a gentler start that lets the rotor's load angle settle), braking as before.
         """
         out = []
         for side in ("accel", "brake"):
@@ -169,10 +173,10 @@ class Profile:
                 raised[:j + 1] = np.maximum(raised[:j + 1], values[j] * (1 + s))
                 out.append(Profile(**{**self.__dict__, side: tuple(float(x) for x in raised)}))
         out.append(Profile(self.cruise * (1 + s), self.accel, self.brake))
-        for top, cut in product((1, 2, 3), (1 - s, 0.3, 0.1)):
-            a, b = np.array(self.accel), np.array(self.brake)
-            a[-top:], b[-top:] = a[-top:] * cut, b[-top:] * cut
-            out.append(Profile(self.cruise * (1 + s), tuple(float(x) for x in a), tuple(float(x) for x in b)))
+        for top, cut in product((1, 2, 3, len(KNOTS)), (1 - s, 0.3, 0.1, 0.04)):
+            a = np.array(self.accel)
+            a[-top:] = a[-top:] * cut
+            out.append(Profile(self.cruise * (1 + s), tuple(float(x) for x in a), self.brake))
         return out
 
 
@@ -181,14 +185,19 @@ def best_profile(motor: MotorParams, v_bus: float, current: float, distance: flo
                  control_rate: float = 20e3) -> tuple[PiecewisePlan, dict[str, Any], PlantCheck]:
     """The fastest speed-dependent acceleration found that loses no step on the 32 plants, from a safe trapezoid.
 
-    A pattern search over :class:`Profile` (cruise speed, acceleration and braking at the :data:`KNOTS`), started at
-    the trapezoid ``seed`` (:func:`best_trapezoid`'s result: constant profiles give the same plan, and its check).
-    Screened as the trapezoid's caps are: at each step of :data:`PATTERN_STEPS`, the neighbours
-    (:meth:`Profile.moves`) shorter than the best so far are tried, shortest first, on the screening plants (at
-    first :data:`WEAKEST`); one they keep is confirmed on all 32 plants and, if no plant loses a step, becomes the
-    best and the step starts again; a plant that loses a step joins the screening plants. When no neighbour is
-    kept, the next step. Stops when ``budget`` candidates have been screened (the trapezoid's search screens
-    ``speeds x iterations``). The family holds the trapezoid: the result is never longer than the seed.
+    A search over :class:`Profile` (cruise speed, acceleration and braking at the :data:`KNOTS`), started at the
+    trapezoid ``seed`` (:func:`best_trapezoid`'s result: constant profiles give the same plan, and its check).
+    Every candidate is screened as the trapezoid's caps are, on the screening plants (at first :data:`WEAKEST`),
+    and one they keep is confirmed on all 32; a plant that loses a step joins the screening plants. A candidate
+    kept by all 32 and shorter than the best becomes the best.
+
+    First the cruise: for each share of :data:`CRUISE_CUTS`, the acceleration cut to it (a gentler start that lets
+    the rotor's load angle settle) and the fastest cruise held up to :data:`CRUISE_REACH` x the seed's, by
+    :data:`CRUISE_ITERATIONS` bisection steps. Then a pattern search: at each step of :data:`PATTERN_STEPS`, the
+    neighbours (:meth:`Profile.moves`) shorter than the best are tried, shortest first; the first kept becomes the
+    best and the step starts again; a move that lost a step is not tried again at that step size; when no
+    neighbour is kept, the next step. Stops when ``budget`` candidates have been screened (the trapezoid's search
+    screens ``speeds x iterations``). The family holds the trapezoid: the result is never longer than the seed.
     Returns the plan, the profile (``cruise``, ``accel``, ``brake`` at ``knots`` [rad/s]) with the plant runs
     ``runs`` and the candidates screened ``candidates``, and its check.
     """
@@ -199,22 +208,43 @@ def best_profile(motor: MotorParams, v_bus: float, current: float, distance: flo
     screen = [WEAKEST]
     counter = Counter()
     screened = 0
+
+    def kept(prof: Profile) -> Optional[tuple[Profile, PiecewisePlan, PlantCheck]]:
+        """The profile, its plan and check if the screening plants and then all 32 keep it; a screened candidate."""
+        nonlocal screened, screen
+        screened += 1
+        cand = prof.plan(distance, current)
+        if not counter.check(motor, cand, v_bus, control_rate, screen).safe:
+            return None
+        check = counter.check(motor, cand, v_bus, control_rate)
+        screen += [everyone[i] for i in check.lost_plants if everyone[i] not in screen]
+        return (prof, cand, check) if check.safe else None
+
+    for cut in CRUISE_CUTS:  # the fastest cruise held after a gentler acceleration, by bisection
+        lo, hi = confirmed[0].cruise, CRUISE_REACH * confirmed[0].cruise
+        for _ in range(CRUISE_ITERATIONS):
+            mid = 0.5 * (lo + hi)
+            trial = Profile(mid, tuple(cut * x for x in confirmed[0].accel), confirmed[0].brake)
+            if screened >= budget or trial.plan(distance, current).tf >= confirmed[1].tf * (1 - 1e-6):
+                break
+            result = kept(trial)
+            lo, hi = (mid, hi) if result is not None else (lo, mid)
+            if result is not None:
+                confirmed = result
     for s in PATTERN_STEPS:
-        improved = True
+        improved, failed = True, set()  # the moves that lost a step at this step size are not tried again
         while improved and screened < budget:
             improved = False
-            tried = sorted(((p.plan(distance, current), p) for p in confirmed[0].moves(s)), key=lambda c: c[0].tf)
-            for cand, prof in tried:
+            moves = [(p.plan(distance, current), j, p) for j, p in enumerate(confirmed[0].moves(s)) if j not in failed]
+            for cand, j, prof in sorted(moves, key=lambda c: c[0].tf):
                 if cand.tf >= confirmed[1].tf * (1 - 1e-6) or screened >= budget:
                     continue
-                screened += 1
-                if not counter.check(motor, cand, v_bus, control_rate, screen).safe:
-                    continue
-                check = counter.check(motor, cand, v_bus, control_rate)
-                if check.safe:
-                    confirmed, improved = (prof, cand, check), True
+                failed.add(j)
+                result = kept(prof)
+                if result is not None:
+                    confirmed, improved = result, True
+                    failed.discard(j)
                     break
-                screen += [everyone[i] for i in check.lost_plants if everyone[i] not in screen]
     prof, plan, check = confirmed
     info = {"cruise": prof.cruise, "accel": prof.accel, "brake": prof.brake,
             "knots": tuple(prof.cruise * x for x in KNOTS), "runs": counter.runs, "candidates": screened}
