@@ -2,9 +2,10 @@
 
 For each motor and move (docs/curves.md): the fastest trapezoid that loses no step (studies.open_loop.best_trapezoid:
 8 speed caps, 7 bisection steps of the acceleration on the weakest plant each, the candidates confirmed on all 32
-plants), then the fastest speed-dependent profile found from it (studies.open_loop.best_profile: a pattern search over
-the cruise speed and piecewise-linear acceleration and braking profiles, seeded with that trapezoid, screening as many
-candidates as the trapezoid's search did, each kept one confirmed on all 32 plants). Both run on the open-loop
+plants, then a faster cruise and more acceleration sought by bisection), then the fastest speed-dependent profile
+found from it (studies.open_loop.best_profile: the cruise speed and piecewise-linear acceleration and braking profiles,
+seeded with that trapezoid, screening as many candidates as the trapezoid's search did, each kept one confirmed on all
+32 plants). Both run on the open-loop
 microstepping drive (20 kHz, 24 V) over the 32 plants of +-10 % on R, L, Km, J, B. Prints both durations, their ratio,
 the runs lost, the worst angle error over the 32 plants, the search budget of each (candidates screened / plant runs)
 and the cruise speeds.

@@ -19,6 +19,10 @@ value one step ahead to its value two steps ahead (below the curve at every spee
 :class:`~flatstep.plan.piecewise.PiecewisePlan` of cubic segments at the run current, for
 :class:`~flatstep.control.microstep.Microstepping` or any controller. The acceleration jumps only at the start, at
 the peak and at the end, which the shaping (:func:`box_shaped`) turns into ramps.
+
+:func:`profile_plan` is the general form that a search tunes on the drive: an acceleration :math:`a(\omega)` and a
+braking :math:`b(\omega)` of their own (:func:`speed_profile`: piecewise linear in the speed), up to a cruise speed;
+constant profiles give a constant-acceleration trapezoid, so the family holds the firmware's plan.
 """
 from __future__ import annotations
 

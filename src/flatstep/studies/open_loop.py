@@ -6,6 +6,9 @@ feedback) over every sign combination of +-10 % on R, L, Km, J, B (the 32 plants
 :func:`~flatstep.studies.robustness.plant_errors`); it is safe when no plant loses a step (status ``ok``,
 docs/errors.md). :func:`best_trapezoid` searches the constant caps of the fastest safe trapezoid: speed caps on a
 grid, the largest acceleration cap by bisection on the weakest plant, the winner confirmed on all 32.
+:func:`best_profile` starts from that trapezoid and searches a speed-dependent acceleration and braking
+(:func:`flatstep.plan.open_loop.profile_plan`) and the cruise speed, screening as many candidates, each kept one
+confirmed on all 32 plants.
 """
 from __future__ import annotations
 
@@ -110,8 +113,11 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
     Speed caps on a grid from 0.2 to 1.2 x the chopper curve's top speed; at each, the largest acceleration cap
     kept by the weakest plant (:data:`WEAKEST`), by bisection up to twice the acceleration at rest; the
     candidates, fastest first, are confirmed on all 32 plants (at 1, 0.95, 0.9, 0.85 of their acceleration) until
-    one loses no step. Returns the plan, its caps ``v_max``, ``a_max`` and the plant runs of the search
-    ``runs`` and the candidates it screened ``candidates``, and its check.
+    one loses no step. Then refined as :func:`best_profile` seeks its cruise: at 1 and each share of
+    :data:`CRUISE_CUTS` of the acceleration, the fastest cruise up to :data:`CRUISE_REACH` x by
+    :data:`CRUISE_ITERATIONS` bisection steps, and then the largest acceleration up to twice, each candidate
+    screened on the weakest plant and confirmed on all 32, kept if shorter. Returns the plan, its caps ``v_max``,
+    ``a_max`` and the plant runs of the search ``runs`` and the candidates it screened ``candidates``, and its check.
     """
     t0 = float(pullout_torque(motor, "chopper", v_bus, current, 0.0)[0])
     w_top = top_speed(motor, "chopper", v_bus, current, 0.0)
@@ -130,8 +136,36 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
             candidates.append((make(1.0).tf, make, {"v_max": float(v), "a_max": lo}))
     plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate, f"trapezoid over {distance} rad",
                                           counter)
-    return plan, {"v_max": caps["v_max"], "a_max": caps["a_max"] * scale, "runs": float(counter.runs),
-                  "candidates": float(speeds * iterations)}, check
+    v_max, a_max, screened = caps["v_max"], caps["a_max"] * scale, speeds * iterations
+
+    def kept(v: float, a: float) -> Optional[tuple[PiecewisePlan, PlantCheck]]:
+        """The trapezoid and its check if it is shorter than the best and all 32 plants keep it; screened."""
+        nonlocal screened
+        trial = trapezoid_plan(distance, v, a, current)
+        if trial.tf >= plan.tf * (1 - 1e-6):
+            return None
+        screened += 1
+        if not counter.check(motor, trial, v_bus, control_rate, [WEAKEST]).safe:
+            return None
+        full = counter.check(motor, trial, v_bus, control_rate)
+        return (trial, full) if full.safe else None
+
+    for cut in (1.0,) + CRUISE_CUTS:  # a faster cruise, after a gentler acceleration, as best_profile seeks it
+        lo, hi, base = v_max, CRUISE_REACH * v_max, a_max
+        for _ in range(CRUISE_ITERATIONS):
+            mid = 0.5 * (lo + hi)
+            result = kept(mid, cut * base)
+            lo, hi = (mid, hi) if result is not None else (lo, mid)
+            if result is not None:
+                (plan, check), v_max, a_max = result, mid, cut * base
+    lo, hi = a_max, 2.0 * a_max  # then more acceleration at that cruise
+    for _ in range(CRUISE_ITERATIONS):
+        mid = 0.5 * (lo + hi)
+        result = kept(v_max, mid)
+        lo, hi = (mid, hi) if result is not None else (lo, mid)
+        if result is not None:
+            (plan, check), a_max = result, mid
+    return plan, {"v_max": v_max, "a_max": a_max, "runs": float(counter.runs), "candidates": float(screened)}, check
 
 
 #: The knots of :func:`best_profile`'s acceleration profiles, as shares of the cruise speed.
