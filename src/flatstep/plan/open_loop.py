@@ -291,10 +291,11 @@ def profile_plan(distance: float, cruise: float, accel: PulloutCurve, brake: Pul
 
     From rest the plan accelerates at :math:`a(\omega)` (``accel``, e.g. :func:`speed_profile`) up to ``cruise``,
     cruises, and brakes at :math:`b(\omega)` (``brake``) to rest; if the move is too short for the cruise, up to the
-    peak speed at which the two ramps cover it. Each ramp is a staircase in speed (:func:`_staircase`): constant
-    acceleration on each of its steps, at most the profile's value anywhere on the step, so that the plan is a
-    :class:`~flatstep.plan.piecewise.PiecewisePlan` of parabolas (bounded acceleration, as a trapezoid's).
-    Constant profiles give the trapezoid of ``cruise`` and that acceleration exactly.
+    peak speed at which the two ramps cover it. Each ramp is a staircase in speed (:data:`PROFILE_STEPS` steps up to
+    the cruise, and the knots): constant acceleration on each of its steps, at most the profile's value anywhere on
+    the step, so that the plan is a :class:`~flatstep.plan.piecewise.PiecewisePlan` of parabolas (bounded
+    acceleration, as a trapezoid's). Constant profiles give the trapezoid of ``cruise`` and that acceleration
+    exactly.
 
     Parameters
     ----------

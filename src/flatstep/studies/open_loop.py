@@ -80,7 +80,7 @@ def trapezoid_plan(distance: float, v_max: float, a_max: float, current: float) 
 Candidate = tuple[float, Callable[[float], PiecewisePlan], dict[str, float]]
 
 
-class Counter:
+class _Counter:
     """The plant runs a search has used."""
 
     def __init__(self) -> None:
@@ -95,7 +95,7 @@ class Counter:
 
 
 def _confirmed(candidates: list[Candidate], motor: MotorParams, v_bus: float, control_rate: float,
-               what: str, counter: Counter) -> tuple[PiecewisePlan, float, PlantCheck, dict[str, float]]:
+               what: str, counter: _Counter) -> tuple[PiecewisePlan, float, PlantCheck, dict[str, float]]:
     """The fastest candidate safe on all 32 plants, each tried at 1, 0.95, 0.9, 0.85 of its acceleration scale."""
     for _, make, caps in sorted(candidates, key=lambda c: c[0]):
         for scale in (1.0, 0.95, 0.9, 0.85):
@@ -121,7 +121,7 @@ def best_trapezoid(motor: MotorParams, v_bus: float, current: float, distance: f
     """
     t0 = float(pullout_torque(motor, "chopper", v_bus, current, 0.0)[0])
     w_top = top_speed(motor, "chopper", v_bus, current, 0.0)
-    counter = Counter()
+    counter = _Counter()
     candidates: list[Candidate] = []
     for v in np.linspace(0.2, 1.2, speeds) * w_top:
         lo, hi = 0.0, 2.0 * t0 / motor.J
@@ -240,7 +240,7 @@ def best_profile(motor: MotorParams, v_bus: float, current: float, distance: flo
     confirmed = (Profile(v, (a,) * k, (a,) * k), seed[0], seed[2])
     everyone = plant_errors(Robustness())
     screen = [WEAKEST]
-    counter = Counter()
+    counter = _Counter()
     screened = 0
 
     def kept(prof: Profile) -> Optional[tuple[Profile, PiecewisePlan, PlantCheck]]:
@@ -315,7 +315,7 @@ def best_open_loop(motor: MotorParams, v_bus: float, current: float, distance: f
                 return make(lo * scale)
             candidates.append((at(1.0).tf, at, {"margin": lo, "w_max": float(v), "shaping": float(shaping)}))
     plan, scale, check, caps = _confirmed(candidates, motor, v_bus, control_rate,
-                                          f"open-loop plan over {distance} rad", Counter())
+                                          f"open-loop plan over {distance} rad", _Counter())
     peak = float(np.max(np.abs(plan.flag(np.linspace(plan.t0, plan.tf, 2001)).dtheta)))
     return plan, {"margin": caps["margin"] * scale, "w_peak": peak, "shaping": caps["shaping"]}, check
 
