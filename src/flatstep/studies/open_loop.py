@@ -5,7 +5,8 @@ A plan for a step/dir drive (:func:`flatstep.plan.open_loop.open_loop_plan`, or 
 feedback) over every sign combination of +-10 % on R, L, Km, J, B (the 32 plants of ``flatstep robustness``,
 :func:`~flatstep.studies.robustness.plant_errors`); it is safe when no plant loses a step (status ``ok``,
 docs/errors.md). :func:`best_trapezoid` searches the constant caps of the fastest safe trapezoid: speed caps on a
-grid, the largest acceleration cap by bisection on the weakest plant, the winner confirmed on all 32.
+grid, the largest acceleration cap by bisection on the weakest plant, the winner confirmed on all 32, then a faster
+cruise and more acceleration sought by bisection.
 :func:`best_profile` starts from that trapezoid and searches a speed-dependent acceleration and braking
 (:func:`flatstep.plan.open_loop.profile_plan`) and the cruise speed, screening as many candidates, each kept one
 confirmed on all 32 plants.
