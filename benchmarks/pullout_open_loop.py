@@ -1,10 +1,14 @@
-"""Open-loop plans along the pull-out curve against the best safe constant-acceleration trapezoid (docs/curves.md).
+"""Open-loop plans with a speed-dependent acceleration against the best safe constant-acceleration trapezoid.
 
-For each motor and move: the fastest plan of flatstep.plan.open_loop along the drive's own pull-out curve (measured on
-the C engine, studies.open_loop.measured_pullout; the share of it used and the speed cap searched, the share printed)
-and the fastest trapezoid that loses no step (studies.open_loop.best_trapezoid), both run by the open-loop
-microstepping drive (20 kHz, 24 V) on the 32 plants of +-10 % on R, L, Km, J, B. Prints both durations, their ratio,
-the lost runs and the worst angle error over the 32 plants.
+For each motor and move (docs/curves.md): the fastest trapezoid that loses no step (studies.open_loop.best_trapezoid:
+8 speed caps, 7 bisection steps of the acceleration on the weakest plant each, the candidates confirmed on all 32
+plants, then a faster cruise and more acceleration sought by bisection), then the fastest speed-dependent profile
+found from it (studies.open_loop.best_profile: the cruise speed and piecewise-linear acceleration and braking profiles,
+seeded with that trapezoid, screening as many candidates as the trapezoid's search did, each kept one confirmed on all
+32 plants). Both run on the open-loop
+microstepping drive (20 kHz, 24 V) over the 32 plants of +-10 % on R, L, Km, J, B. Prints both durations, their ratio,
+the runs lost, the worst angle error over the 32 plants, the search budget of each (candidates screened / plant runs)
+and the cruise speeds.
 
     .venv/bin/python benchmarks/pullout_open_loop.py [--quick]
 """
@@ -16,7 +20,7 @@ from pathlib import Path
 from flatstep.model.datasheet import motor_from_table
 from flatstep.model.motor import MotorParams
 from flatstep.studies.file_values import read_toml
-from flatstep.studies.open_loop import best_open_loop, best_trapezoid, measured_pullout
+from flatstep.studies.open_loop import best_profile, best_trapezoid
 
 ROOT = Path(__file__).resolve().parent.parent
 V_BUS = 24.0
@@ -36,18 +40,24 @@ def main() -> None:
     args = parser.parse_args()
     moves = (1.0, 20.0) if args.quick else (1.0, 5.0, 20.0, 60.0)
     chosen = dict(list(motors().items())[:1]) if args.quick else motors()
-    print(f"{'motor':<20}{'move':>6}{'open loop':>10}{'trapezoid':>10}{'ratio':>7}{'lost':>6}{'worst err':>13}"
-          f"{'share':>7}{'ol peak':>8}{'trap v, a':>17}")
-    print(f"{'':<20}{'[rad]':>6}{'[ms]':>10}{'[ms]':>10}{'ol/trap':>7}{'ol/tr':>6}{'ol/tr [mrad]':>13}"
-          f"{'':>7}{'[rad/s]':>8}{'[rad/s, rad/s^2]':>17}")
+    print(f"{'motor':<20}{'move':>6}{'profile':>9}{'trapezoid':>10}{'ratio':>7}{'lost':>6}{'worst err':>12}"
+          f"{'screened':>10}{'plant runs':>12}{'cruise':>13}")
+    print(f"{'':<20}{'[rad]':>6}{'[ms]':>9}{'[ms]':>10}{'pr/tr':>7}{'pr/tr':>6}{'pr/tr[mrad]':>12}"
+          f"{'pr/tr':>10}{'pr/tr':>12}{'pr/tr[rad/s]':>13}")
     for name, (motor, current) in chosen.items():
-        curve = measured_pullout(motor, V_BUS, current)
         for d in moves:
-            plan, info, ol = best_open_loop(motor, V_BUS, current, d, pullout=curve)
-            trap, caps, tc = best_trapezoid(motor, V_BUS, current, d)
-            print(f"{name:<20}{d:>6g}{1e3 * plan.tf:>10.2f}{1e3 * trap.tf:>10.2f}{plan.tf / trap.tf:>7.3f}"
-                  f"{f'{ol.lost}/{tc.lost}':>6}{f'{1e3 * ol.worst_error:.1f}/{1e3 * tc.worst_error:.1f}':>13}"
-                  f"{info['margin']:>7.3f}{info['w_peak']:>8.1f}{caps['v_max']:>8.1f},{caps['a_max']:>8.0f}",
+            trap = best_trapezoid(motor, V_BUS, current, d)
+            plan, info, pc = best_profile(motor, V_BUS, current, d, trap, budget=int(trap[1]["candidates"]))
+            tp, caps, tc = trap
+            budget = f"{info['candidates']}/{caps['candidates']:.0f}"
+            runs = f"{info['runs']}/{caps['runs']:.0f}"
+            cruise = f"{info['cruise']:.1f}/{caps['v_max']:.1f}"
+            print(f"{name:<20}{d:>6g}{1e3 * plan.tf:>9.2f}{1e3 * tp.tf:>10.2f}{plan.tf / tp.tf:>7.3f}"
+                  f"{f'{pc.lost}/{tc.lost}':>6}{f'{1e3 * pc.worst_error:.1f}/{1e3 * tc.worst_error:.1f}':>12}"
+                  f"{budget:>10}{runs:>12}{cruise:>13}", flush=True)
+            print(f"{'':<26}profile: accel {', '.join(f'{x:.0f}' for x in info['accel'])}, brake "
+                  f"{', '.join(f'{x:.0f}' for x in info['brake'])} rad/s^2 at "
+                  f"{', '.join(f'{x:.1f}' for x in info['knots'])} rad/s; trapezoid a_max {caps['a_max']:.0f}",
                   flush=True)
 
 

@@ -19,6 +19,10 @@ value one step ahead to its value two steps ahead (below the curve at every spee
 :class:`~flatstep.plan.piecewise.PiecewisePlan` of cubic segments at the run current, for
 :class:`~flatstep.control.microstep.Microstepping` or any controller. The acceleration jumps only at the start, at
 the peak and at the end, which the shaping (:func:`box_shaped`) turns into ramps.
+
+:func:`profile_plan` is the general form that a search tunes on the drive: an acceleration :math:`a(\omega)` and a
+braking :math:`b(\omega)` of their own (:func:`speed_profile`: piecewise linear in the speed), up to a cruise speed;
+constant profiles give a constant-acceleration trapezoid, so the family holds the firmware's plan.
 """
 from __future__ import annotations
 
@@ -231,3 +235,120 @@ def box_shaped(plan: PiecewisePlan, period: float) -> PiecewisePlan:
     rho = np.zeros((rows.shape[0], NCOEF))
     rho[:, -1] = plan.rho1
     return PiecewisePlan(edges, rows, rho)
+
+
+#: Speed steps of a :func:`profile_plan` from rest to its cruise speed (the knots are added to them).
+PROFILE_STEPS = 20
+
+
+def speed_profile(speeds: ArrayLike, accelerations: ArrayLike, name: str = "accel") -> PulloutCurve:
+    """An acceleration [rad/s^2] of the speed [rad/s]: linear between the knots, held beyond the first and the last.
+
+    The knot speeds increase from 0; the accelerations are > 0 (for :func:`profile_plan`, up or down).
+    """
+    w = np.asarray(speeds, dtype=float)
+    a = np.asarray(accelerations, dtype=float)
+    if w.ndim != 1 or w.shape != a.shape or w.size < 1 or not np.isfinite(w).all() or w[0] != 0.0 \
+            or not (np.diff(w) > 0).all() or not np.isfinite(a).all() or not (a > 0).all():
+        raise InputError(name, (speeds, accelerations), f"{name}: a speed profile needs knot speeds increasing from 0 "
+                         "[rad/s] and as many finite accelerations > 0 [rad/s^2]")
+
+    def profile(x: Array) -> Array:
+        return np.interp(np.asarray(x, dtype=float), w, a)
+    profile.knots = w  # type: ignore[attr-defined]
+    return profile
+
+
+def _staircase(profile: PulloutCurve, cruise: float) -> tuple[Array, Array]:
+    """Speed edges from 0 to ``cruise`` (PROFILE_STEPS steps and the profile's knots) and the acceleration on each.
+
+    On each step the acceleration is the profile's lower end value (the profile is linear between the edges, so
+    that is its least on the step): the staircase stays below the profile at every speed.
+    """
+    knots = np.asarray(getattr(profile, "knots", np.zeros(0)), dtype=float)
+    edges = np.unique(np.concatenate([np.linspace(0.0, cruise, PROFILE_STEPS + 1), knots[knots < cruise]]))
+    values = profile(edges)
+    return edges, np.minimum(values[:-1], values[1:])
+
+
+def _ramp_to(edges: Array, acc: Array, peak: float) -> tuple[Array, Array]:
+    """The staircase cut at ``peak``: start speeds and accelerations of its steps, and the speed each ends at."""
+    n = max(int(np.searchsorted(edges, peak, side="left")), 1)
+    w0 = edges[:n]
+    w1 = np.minimum(edges[1:n + 1], peak)
+    return np.stack([w0, acc[:n]]), w1
+
+
+def _distance(edges: Array, acc: Array, peak: float) -> float:
+    """The distance from rest to ``peak`` along the staircase (or from ``peak`` to rest)."""
+    (w0, a), w1 = _ramp_to(edges, acc, peak)
+    return float(np.sum((w1 * w1 - w0 * w0) / (2 * a)))
+
+
+def profile_plan(distance: float, cruise: float, accel: PulloutCurve, brake: PulloutCurve, current: float, *,
+                 theta1: float = 0.0, t0: float = 0.0) -> PiecewisePlan:
+    r"""A rest-to-rest move whose acceleration is a function of the speed, one profile up and one down.
+
+    From rest the plan accelerates at :math:`a(\omega)` (``accel``, e.g. :func:`speed_profile`) up to ``cruise``,
+    cruises, and brakes at :math:`b(\omega)` (``brake``) to rest; if the move is too short for the cruise, up to the
+    peak speed at which the two ramps cover it. Each ramp is a staircase in speed (:data:`PROFILE_STEPS` steps up to
+    the cruise, and the knots): constant acceleration on each of its steps, at most the profile's value anywhere on
+    the step, so that the plan is a :class:`~flatstep.plan.piecewise.PiecewisePlan` of parabolas (bounded
+    acceleration, as a trapezoid's). Constant profiles give the trapezoid of ``cruise`` and that acceleration
+    exactly.
+
+    Parameters
+    ----------
+    distance : float
+        The move [rad], either sign.
+    cruise : float
+        The cruise speed [rad/s], > 0.
+    accel, brake : callable
+        Acceleration and deceleration [rad/s^2], > 0, of the speed [rad/s].
+    current : float
+        The run current the driver holds [A] (the plan's rho).
+    theta1, t0 : float
+        Start angle [rad] and time [s].
+    """
+    d = check_angle(distance, "distance")
+    if d == 0:
+        raise InputError("distance", distance, "distance=0.0 rad: a move needs a distance; a rest is a dwell")
+    v = check_quantity("speed", cruise, as_name="cruise")
+    current = check_quantity("current", current)
+    theta1, t0 = check_angle(theta1, "theta1"), check_t0(t0)
+    up, down = _staircase(accel, v), _staircase(brake, v)
+    for name, (_, acc) in (("accel", up), ("brake", down)):
+        if not (np.isfinite(acc).all() and (acc > 0).all()):
+            raise InputError(name, acc, f"{name}: the acceleration must be finite and > 0 at every speed up to "
+                             f"the cruise ({v:g} rad/s)")
+    half = abs(d)
+    peak = v
+    if _distance(*up, v) + _distance(*down, v) > half:
+        lo, hi = 0.0, v
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if _distance(*up, mid) + _distance(*down, mid) <= half else (lo, mid)
+        peak = lo
+    (w_up, a_up), e_up = _ramp_to(*up, peak)
+    (w_dn, a_dn), e_dn = _ramp_to(*down, peak)
+    cruise_distance = half - _distance(*up, peak) - _distance(*down, peak)
+    cruising = cruise_distance > 1e-12 * half
+    speed = np.concatenate([w_up, [peak] if cruising else [], e_dn[::-1]])  # at the start of each phase
+    acc = np.concatenate([a_up, [0.0] if cruising else [], -a_dn[::-1]])
+    dur = np.concatenate([(e_up - w_up) / a_up, [cruise_distance / peak] if cruising else [],
+                          ((e_dn - w_dn) / a_dn)[::-1]])
+    keep = dur > 1e-9 * float(np.sum(dur))  # not a step the peak only grazes
+    speed, acc, dur = speed[keep], acc[keep], dur[keep]
+    step = speed * dur + acc * dur * dur / 2
+    rows = np.zeros((dur.size, NCOEF))
+    rows[:, -3] = acc * dur * dur / 2
+    rows[:, -2] = speed * dur
+    rows[:, -1] = np.concatenate([[0.0], np.cumsum(step)[:-1]])
+    p = float(np.sum(step))
+    rows[-1, -1] += half - p  # the rounding of the bisection, on the last segment's constant
+    rows *= 1.0 if d > 0 else -1.0
+    rows[:, -1] += theta1
+    breaks = t0 + np.concatenate([[0.0], np.cumsum(dur)])
+    rho = np.zeros_like(rows)
+    rho[:, -1] = current
+    return PiecewisePlan(breaks, rows, rho)
