@@ -40,7 +40,8 @@ PUBLIC: dict[str, list[str]] = {
     "studies": ["studies.scenario", "studies.scenario_file", "studies.batch", "studies.robustness", "studies.compare",
                 "studies.verify", "studies.backoff", "studies.identify", "studies.identify_coverage",
                 "studies.identify_result", "studies.excitation", "studies.record", "studies.calibrate",
-                "studies.executors", "studies.pullout", "studies.open_loop"],
+                "studies.executors", "studies.pullout", "studies.open_loop", "studies.tune", "studies.tune_laws",
+                "studies.frontier"],
     "interop": ["interop"],
     "validate": ["validate", "validate.limits", "validate.paths", "errors"],
 }
@@ -57,7 +58,7 @@ INTERNAL = {
     "studies.batch_file", "studies.calibrate_accuracy", "studies.file_values", "studies.fingerprint",
     "studies.identify_accuracy", "studies.identify_checks", "studies.identify_ls", "studies.plan_compare",
     "studies.scenario_keys", "studies.scenario_plan", "studies.workers", "studies.identify_detect",
-    "studies.identify_quantization", "studies.identify_separable", "studies.identify_terms",
+    "studies.identify_quantization", "studies.tune_file", "studies.identify_separable", "studies.identify_terms",
     "interop.arguments", "interop.basis", "interop.controller_sys", "interop.dq", "interop.flat_sys",
     "interop.plant_sys",
     "validate.checks", "validate.ranges",
