@@ -30,11 +30,11 @@ lint: venv
 # The C core's unit tests (ctest), then the same tests under ASan+UBSan.
 ctest:
 	cmake -S . -B build/c -DCMAKE_BUILD_TYPE=Release
-	cmake --build build/c
-	cd build/c && ctest --output-on-failure
+	cmake --build build/c --parallel
+	cd build/c && ctest --output-on-failure --parallel 2
 	cmake -S . -B build/asan -DCMAKE_BUILD_TYPE=Debug -DFS_SANITIZE=ON
-	cmake --build build/asan
-	cd build/asan && ctest --output-on-failure
+	cmake --build build/asan --parallel
+	cd build/asan && ctest --output-on-failure --parallel 2
 
 # Fuzz the C core (smc_step, the sampled loop, the continuous loop, the time-optimal planner, the segment tables,
 # the plan and flat maps, the d-q law; libFuzzer + ASan/UBSan, installs clang if missing): 12 s per target in CI

@@ -19,23 +19,33 @@ def grid(long_end):
     return fs.scenario_grid(base, t_end=[0.06, 0.07, long_end, long_end + 0.5])
 
 
-def interrupted(call, after):
-    """Run ``call()``, send this process SIGINT (Ctrl-C) ``after`` s later; the seconds from signal to raise."""
-    sent = []
+def interrupted(call, after, rows=None):
+    """Run ``call()``, send this process SIGINT (Ctrl-C) ``after`` s later; the seconds from signal to raise.
+
+    With ``rows`` (a batch file), the signal waits until the file holds the two short runs' rows as well, so that a
+    loaded machine still interrupts the long runs, not the short ones.
+    """
+    sent, stop = [], threading.Event()
 
     def fire():
-        sent.append(time.perf_counter())
-        os.kill(os.getpid(), signal.SIGINT)
+        start = time.perf_counter()
+        while not stop.is_set():
+            late = time.perf_counter() - start >= after
+            if late and (rows is None or {0, 1} <= _done_indices(rows) or time.perf_counter() - start > 30):
+                sent.append(time.perf_counter())
+                os.kill(os.getpid(), signal.SIGINT)
+                return
+            time.sleep(0.002)
 
     # Python's own Ctrl-C handler, even when this process started with SIGINT ignored (a background job)
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(after, fire)
+    timer = threading.Thread(target=fire, daemon=True)
     timer.start()
     try:
         with pytest.raises(KeyboardInterrupt):
             call()
     finally:
-        timer.cancel()
+        stop.set()
         timer.join()
         signal.signal(signal.SIGINT, previous)
     assert sent, "the batch ended before the signal: make its runs longer"
@@ -51,7 +61,7 @@ def test_ctrl_c_stops_running_thread_chunks_within_half_a_second(tmp_path, keep)
     out = tmp_path / "rows.jsonl"
     before = threading.active_count()
     stop = interrupted(lambda: fs.run_batch(grid(60.0), workers=2, chunk_size=1, progress=False, out=out,
-                                            keep=keep), after=0.25)
+                                            keep=keep), after=0.25, rows=out)
     assert stop < 0.5, f"the batch took {stop:.3f} s to stop after Ctrl-C"
     assert threading.active_count() == before   # no chunk runs on
     assert _done_indices(out) == {0, 1}         # the finished rows are kept, no interrupted run is written
@@ -66,7 +76,7 @@ def test_ctrl_c_stops_chunks_on_a_given_thread_pool_and_the_batch_resumes(tmp_pa
     out, runs = tmp_path / "rows.jsonl", grid(30.0)
     with ThreadPoolExecutor(2) as pool:
         stop = interrupted(lambda: fs.run_batch(runs, executor=pool, chunk_size=1, progress=False, out=out),
-                           after=0.1)
+                           after=0.1, rows=out)
         assert stop < 0.5, f"the batch took {stop:.3f} s to stop after Ctrl-C"
         barrier = threading.Barrier(3)   # both workers are free at once: no interrupted chunk runs on
         free = [pool.submit(barrier.wait, 0.3) for _ in range(2)]
