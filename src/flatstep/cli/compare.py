@@ -22,6 +22,7 @@ from ..validate.paths import PNG_MARK, check_output_dir, json_marks
 from .flags import add_force, count, out_dir, quantity
 from .plan import scenario_on_drive
 from .status import EXIT_STOPPED, exit_code, warn
+from .tune import add_tune_flags
 
 #: (metric, column head, scale of the printed value: "angle" uses counts or rad)
 COLUMNS: tuple[tuple[str, str, float | Literal["angle"]], ...] = (
@@ -127,6 +128,10 @@ COMPARE_FILES = {"overlay.png": PNG_MARK, "plants.png": PNG_MARK, "compare.json"
 
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
+    if args.tuned is not None:
+        from .compare_tuned import cmd_compare_tuned
+
+        return cmd_compare_tuned(args)
     if args.out:  # before any work
         check_output_dir(args.out, "--out", COMPARE_FILES, inputs=[args.scenario], force=args.force)
     sf = read_scenario_file(args.scenario)
@@ -283,4 +288,13 @@ def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]
     cmp_.add_argument("--out", default=None, help="write overlay.png, plants.png and compare.json here")
     add_force(cmp_)
     cmp_.add_argument("--json", action="store_true", help="print the report as JSON")
+    cmp_.add_argument("--tuned", nargs="?", const="", default=None, metavar="PATH",
+                      help="compare the laws each tuned by 'flatstep tune' (the same budget, seed and caps; "
+                      "--controllers default: one type per law), or read from PATH (a tuned file, or a directory "
+                      "of them); prints the tuned rows, the frontier and how often a sliding law's |s| is outside "
+                      "its boundary layer; --out writes frontier.png and tuned.json")
+    cmp_.add_argument("--frontier", default="0.5,0.75,1", metavar="FRACTIONS",
+                      help="with --tuned: the peak-voltage caps of the frontier, fractions of the bus separated by "
+                      "commas (default 0.5,0.75,1; each is a search)")
+    add_tune_flags(cmp_)
     cmp_.set_defaults(func=cmd_compare)

@@ -1,9 +1,10 @@
 """flatstep: plan and control stepping motors by differential flatness and sliding modes.
 
 The command line: ``reproduce`` (the paper's figures), ``simulate`` (one move), ``design`` (gains for a drive),
-``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``identify``
-(motor parameters from a recording), ``bench`` (benchmarks). ``flatstep --help`` prints :data:`DESCRIPTION` (the
-commands and the exit codes, docs/errors.md); ``flatstep COMMAND --help`` lists a command's flags.
+``robustness`` (a scenario under parameter errors), ``compare`` (every controller on one scenario), ``tune`` (a
+law's gains searched under caps), ``identify`` (motor parameters from a recording), ``bench`` (benchmarks).
+``flatstep --help`` prints :data:`DESCRIPTION` (the commands and the exit codes, docs/errors.md);
+``flatstep COMMAND --help`` lists a command's flags.
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ from .motor import add_motor_command
 from .plan import add_plan_command, check_plan_file, scenario_on_drive
 from .robustness import add_robustness_command
 from .status import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_REFUSED, EXIT_STOPPED, exit_code, warn
+from .tune import add_tune_command
 
 #: The summary table's columns and their units.
 TABLE_KEYS = {"theta_final": "rad", "max_abs_theta_error": "rad", "max_abs_rho_error": "A", "max_abs_va": "V",
@@ -173,7 +175,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 DESCRIPTION = """Plan and control stepping motors by differential flatness and sliding modes.
 
 Commands: reproduce (the paper's figures), simulate (one move), design (gains for a drive), robustness (a
-scenario under parameter errors), compare (every controller on one scenario), identify (motor parameters
+scenario under parameter errors), compare (every controller on one scenario), tune (a law's gains searched
+on the scenario's plants under caps), identify (motor parameters
 from a recording), calibrate (detent, friction and load from the drive's own sensors), plan (the fastest
 moves through waypoints under the motor's limits), motor (a motor from its datasheet, with what was assumed),
 export (a plan as step timestamps or a setpoint stream), curve (pull-out torque against speed for a drive),
@@ -254,6 +257,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_design_command(sub)
     add_robustness_command(sub)
     add_compare_command(sub)
+    add_tune_command(sub)
     add_identify_command(sub)
     add_plan_command(sub)
     add_calibrate_command(sub)
