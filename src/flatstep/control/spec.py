@@ -369,6 +369,35 @@ CONTINUOUS_TYPES = tuple(k for k, s in ALIASES.items() if s.continuous)
 FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
 
 
+#: The controller a scenario file with a drive (``[drive] control_rate``) runs when its ``[controller]`` table names
+#: none: the law that comes closest to the best tuned law on every scenario of docs/comparison.md, the cascade with
+#: the flat feedforward of its planned q current (``R iq* + L diq*/dt``).
+DEFAULT_TYPE = "cascade+voltage_feedforward"
+#: The same with the file's ``[feedforward]`` torques in its q-current command and its observer.
+DEFAULT_TYPE_TORQUES = "cascade+feedforward+observer_torques+voltage_feedforward"
+#: The controller of a file without a drive: the paper's law, in continuous time as in the paper.
+DEFAULT_TYPE_CONTINUOUS = "smc"
+
+
+def default_type(*, sampled: bool, torques: bool) -> str:
+    """The controller type a scenario file runs when its ``[controller]`` table gives no ``type`` or ``law``.
+
+    Parameters
+    ----------
+    sampled : bool
+        Whether the file has a drive (``[drive] control_rate``); without one the law runs in continuous time.
+    torques : bool
+        Whether the file has a ``[feedforward]`` table (known torques).
+
+    Returns
+    -------
+    str
+        :data:`DEFAULT_TYPE_TORQUES` or :data:`DEFAULT_TYPE` with a drive, :data:`DEFAULT_TYPE_CONTINUOUS` without.
+    """
+    if not sampled:
+        return DEFAULT_TYPE_CONTINUOUS
+    return DEFAULT_TYPE_TORQUES if torques else DEFAULT_TYPE
+
 def label(kind: str) -> str:
     """The label of a controller name (:data:`LABELS`, or the spec's own for a ``law+option+...`` name)."""
     return LABELS[kind]
