@@ -37,3 +37,10 @@ def test_sliding_gains_without_a_type_name_the_default(tmp_path):
     path.write_text(DRIVE + "[controller]\nW1 = 50.0\n")
     with pytest.raises(ValueError, match=r"controller.W1: W1 is not a gain of law 'cascade' \(the file names no type"):
         load_scenario(path)
+
+
+def test_without_torques_turns_off_what_needs_them():
+    spec = ControllerSpec.parse(DEFAULT_TYPE_TORQUES).without_torques()
+    assert spec.name() == DEFAULT_TYPE
+    assert ControllerSpec.parse("dq_smc_i_ff_km").without_torques().name() == "dq_smc_i"
+    assert ControllerSpec.parse("smc_la").without_torques().name() == "smc_la"

@@ -30,7 +30,7 @@ file and the law's file alone.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Any, Callable, Mapping
 
 from ..validate import InputError
@@ -238,6 +238,16 @@ class ControllerSpec:
     def needs_torques(self) -> bool:
         """Whether a torque model (a scenario's ``[feedforward]``) must be given."""
         return "torques" in self.needs()
+
+    def without_torques(self) -> "ControllerSpec":
+        """The same law with every option that needs the torques off (and the options that require those)."""
+        off = {name for name in self.options_on() if "torques" in OPTIONS[name].needs}
+        while True:
+            more = {name for name in self.options_on() if name not in off and set(OPTIONS[name].requires) & off}
+            if not more:
+                break
+            off |= more
+        return replace(self, **{name: _off(name) for name in off})
 
     @property
     def sliding(self) -> bool:
