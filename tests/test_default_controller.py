@@ -1,4 +1,6 @@
 """The controller a scenario file runs when it names none (docs/comparison.md, "The default controller")."""
+from pathlib import Path
+
 import pytest
 
 from flatstep.control.spec import (DEFAULT_TYPE, DEFAULT_TYPE_CONTINUOUS, DEFAULT_TYPE_TORQUES, ControllerSpec,
@@ -44,3 +46,12 @@ def test_without_torques_turns_off_what_needs_them():
     assert spec.name() == DEFAULT_TYPE
     assert ControllerSpec.parse("dq_smc_i_ff_km").without_torques().name() == "dq_smc_i"
     assert ControllerSpec.parse("smc_la").without_torques().name() == "smc_la"
+
+
+def test_compare_clean_runs_a_file_whose_default_knows_the_torques(cli):
+    """--clean drops [feedforward]: the file's default law runs without the options that need it."""
+    path = Path(__file__).parent.parent / "examples" / "compare-paper-20khz.toml"
+    run = cli(["compare", str(path), "--tuned", "--clean", "--controllers", "cascade", "--budget", "10",
+               "--population", "5", "--frontier", "1", "--quiet"])
+    assert run.returncode == 0, run.stderr
+    assert "compare-paper-20khz (clean)" in run.stdout and "cascade" in run.stdout
