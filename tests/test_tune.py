@@ -236,6 +236,9 @@ def test_each_row_reads_and_applies_the_controller_as_built(tiny, kind):
     assert row.read(same) == pytest.approx(centre, rel=1e-12)  # the rule's scaling moved into the gains, unchanged
     doubled = row.apply(base, {k: 2 * v for k, v in centre.items()})
     assert row.read(doubled) == pytest.approx({k: 2 * v for k, v in centre.items()}, rel=1e-12)
+    if kind != "smc" and kind != "dq_smc":  # a baseline's gains go under its law, the other laws' stay
+        other = dc.replace(base, law_gains={"microstep" if kind != "microstep" else "cascade": {"x": 1.0}})
+        assert len(row.apply(other, centre).law_gains) == 2
 
 
 @pytest.mark.slow
