@@ -71,7 +71,7 @@ def test_simulate_hold_damping_flag(capsys):
 def test_a_lost_move_exits_3_and_says_when(tmp_path, capsys):
     """The paper's gains on a 20 kHz drive lose the move (docs/drive.md): exit code 3 and a warning."""
     path = tmp_path / "lost.toml"
-    path.write_text("[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n[controller]\nmeasurement = \"model\"\n"
+    path.write_text("[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n[controller]\ntype = \"smc\"\nmeasurement = \"model\"\n"
                     "[load]\ntorque = 1e-5\n")
     assert main(["simulate", str(path), "--json"]) == 3
     captured = capsys.readouterr()

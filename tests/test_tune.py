@@ -205,7 +205,7 @@ def test_api_refuses_bad_input(tiny):
     with pytest.raises(ValueError, match="caps=.* is not a flatstep Caps"):
         tune(tiny.scenario, "smc", caps={"peak_voltage": 3}, **FAST)
     with pytest.raises(ValueError, match="no drive loop"):
-        tune(dataclasses.replace(tiny.scenario, loop=None), "smc", **FAST)
+        tune(dataclasses.replace(tiny.scenario, loop=None, controller_type="smc"), "smc", **FAST)
     with pytest.raises(ValueError, match="needs the torques"):
         tune(tiny.scenario, "smc_ff", **FAST)
     with pytest.raises(ValueError, match="give at least 10"):

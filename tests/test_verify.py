@@ -100,7 +100,7 @@ v_bus = 24.0
 [sensors]
 encoder_counts = 16384
 {controller}"""
-DESIGNED = "[controller]\ndesign = true\n"
+DESIGNED = "[controller]\ntype = \"smc\"\ndesign = true\n"
 DERIVED = "i_hold = 0.504\nspeed_corner = 11.79\ntorque_angle_max = 0.8181\nv_use = 0.8182\nspeed_max = 60.0"
 
 
@@ -123,8 +123,8 @@ def test_cli_json_verified(cli, tmp_path):
 
 
 def test_cli_checks_the_files_controller(cli, tmp_path):
-    """Without [controller] the law runs the default gains: the drive loses the move and the refusal says to design."""
-    (tmp_path / "move.toml").write_text(MOVE.format(extra=DERIVED, controller=""))
+    """The paper's law on its default gains: the drive loses the move and the refusal says to design."""
+    (tmp_path / "move.toml").write_text(MOVE.format(extra=DERIVED, controller='[controller]\ntype = "smc"\n'))
     run = cli(["plan", "move.toml", "--json"], cwd=tmp_path)
     report = json.loads(run.stdout)
     assert run.returncode == 2 and not report["feasible"] and not report["verify"]["verified"]
@@ -156,3 +156,12 @@ def test_cli_refuses_or_backs_off_and_no_verify(cli, tmp_path):
         assert run.returncode == 2 and not v["verified"] and v["binds"] in ADVICE and "binds" in run.stderr
     skipped = cli(["plan", "move.toml", "--no-verify"], cwd=tmp_path)
     assert skipped.returncode == 0 and "not verified on the drive (--no-verify)" in skipped.stdout
+
+
+def test_cli_without_controller_runs_the_default_law(cli, tmp_path):
+    """Without [controller] a file with a drive runs the default law, the cascade with the flat voltage feedforward."""
+    (tmp_path / "move.toml").write_text(MOVE.format(extra=DERIVED, controller=""))
+    run = cli(["plan", "move.toml", "--json"], cwd=tmp_path)
+    report = json.loads(run.stdout)
+    assert report["verify"]["controller"].startswith("cascade+voltage_feedforward")
+    assert run.returncode == 0 and report["verify"]["verified"], run.stderr

@@ -8,7 +8,7 @@ import time
 from dataclasses import replace
 from typing import Any, Literal, Optional, Sequence
 
-from ..control.spec import is_controller
+from ..control.spec import ControllerSpec, is_controller
 from ..control.tuning import CONTROLLER_TYPES, FEEDFORWARD_TYPES, LABELS, SMC_TYPES
 from ..json_out import strict_json
 from ..studies.calibrate import calibration_horizon
@@ -137,7 +137,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     sf = read_scenario_file(args.scenario)
     scenario, study = scenario_on_drive(sf, skip=args.no_verify), sf.robustness
     if args.clean:  # the plant equal to the model: no load, no effects, so nothing to feed forward
-        scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None)
+        scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None,
+                           controller_type=ControllerSpec.parse(scenario.controller_type).without_torques().name())
     if scenario.control_period is None:
         raise ValueError(f"{args.scenario} has no [drive] control_rate: the baselines run on the sampled drive loop")
     if args.samples is not None and (study is None or args.no_robustness):

@@ -6,7 +6,7 @@ import sys
 from dataclasses import replace
 from typing import Any
 
-from ..control.spec import LAWS
+from ..control.spec import LAWS, ControllerSpec
 from ..json_out import strict_json
 from ..studies.frontier import Frontier, FrontierPoint, check_fractions, frontier, outside_layer
 from ..studies.robustness import encoder_count
@@ -49,7 +49,8 @@ def cmd_compare_tuned(args: argparse.Namespace) -> int:
     caps = caps_of(args)
     scenario = scenario_on_drive(sf, skip=args.no_verify)
     if args.clean:
-        scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None)
+        scenario = replace(scenario, name=f"{scenario.name} (clean)", plant=None, torques=None,
+                           controller_type=ControllerSpec.parse(scenario.controller_type).without_torques().name())
     study = sf.robustness
     if args.samples is not None:
         study = replace(study, samples=args.samples) if study is not None else None

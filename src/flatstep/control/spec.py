@@ -30,7 +30,7 @@ file and the law's file alone.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Any, Callable, Mapping
 
 from ..validate import InputError
@@ -239,6 +239,16 @@ class ControllerSpec:
         """Whether a torque model (a scenario's ``[feedforward]``) must be given."""
         return "torques" in self.needs()
 
+    def without_torques(self) -> "ControllerSpec":
+        """The same law with every option that needs the torques off (and the options that require those)."""
+        off = {name for name in self.options_on() if "torques" in OPTIONS[name].needs}
+        while True:
+            more = {name for name in self.options_on() if name not in off and set(OPTIONS[name].requires) & off}
+            if not more:
+                break
+            off |= more
+        return replace(self, **{name: _off(name) for name in off})
+
     @property
     def sliding(self) -> bool:
         """Whether the gains are the run's SMCGains (else tuned by rule from the control period)."""
@@ -368,6 +378,35 @@ CONTINUOUS_TYPES = tuple(k for k, s in ALIASES.items() if s.continuous)
 #: The types that need a torque model.
 FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
 
+
+#: The controller a scenario file with a drive (``[drive] control_rate``) runs when its ``[controller]`` table names
+#: none: the law that comes closest to the best tuned law on every scenario of docs/comparison.md, the cascade with
+#: the flat feedforward of its planned q current (``R iq* + L diq*/dt``).
+DEFAULT_TYPE = "cascade+voltage_feedforward"
+#: The same with the file's ``[feedforward]`` torques in its q-current command and its observer.
+DEFAULT_TYPE_TORQUES = "cascade+feedforward+observer_torques+voltage_feedforward"
+#: The controller of a file without a drive: the paper's law, in continuous time as in the paper.
+DEFAULT_TYPE_CONTINUOUS = "smc"
+
+
+def default_type(*, sampled: bool, torques: bool) -> str:
+    """The controller type a scenario file runs when its ``[controller]`` table gives no ``type`` or ``law``.
+
+    Parameters
+    ----------
+    sampled : bool
+        Whether the file has a drive (``[drive] control_rate``); without one the law runs in continuous time.
+    torques : bool
+        Whether the file has a ``[feedforward]`` table (known torques).
+
+    Returns
+    -------
+    str
+        :data:`DEFAULT_TYPE_TORQUES` or :data:`DEFAULT_TYPE` with a drive, :data:`DEFAULT_TYPE_CONTINUOUS` without.
+    """
+    if not sampled:
+        return DEFAULT_TYPE_CONTINUOUS
+    return DEFAULT_TYPE_TORQUES if torques else DEFAULT_TYPE
 
 def label(kind: str) -> str:
     """The label of a controller name (:data:`LABELS`, or the spec's own for a ``law+option+...`` name)."""

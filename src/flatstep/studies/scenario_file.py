@@ -14,7 +14,7 @@ from typing import Any, Optional, Union
 
 from ..control.build import check_lambda_ts
 from ..control.smc import MEASUREMENTS, SMCGains
-from ..control.spec import LAW_GAINS, LAW_TABLE, OPTION_LAWS, ControllerSpec
+from ..control.spec import LAW_GAINS, LAW_TABLE, OPTION_LAWS, ControllerSpec, default_type
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.design import design_gains
 from ..loop.drive import Drive
@@ -206,7 +206,9 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     if spec_keys:
         controller_type = ControllerSpec.parse(spec_keys, f"{where}:controller").name()
     else:
-        given = ctrl.pop("type", "smc")
+        given = ctrl.pop("type", None)
+        if given is None:  # the default law (docs/comparison.md, "The default controller")
+            given = default_type(sampled=period is not None, torques="feedforward" in doc)
         if not isinstance(given, str):
             raise InputError("type", given, f"{where}:controller.type: type={given!r} is unknown; valid: "
                              f"{list(CONTROLLER_TYPES)}, or law+option+...")
@@ -238,8 +240,10 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     sliding_keys, law_gains = (ctrl, None) if LAW_TABLE[law].sliding else ({}, ctrl)
     for key in ctrl:
         if key not in LAW_GAINS[law]:
-            raise InputError(key, ctrl[key], f"{where}:controller.{key}: {key} is not a gain of law {law!r}; its "
-                             f"gains: {list(LAW_GAINS[law])}")
+            unnamed = "" if spec_keys or "type" in sec["controller"] else (
+                f" (the file names no type: {controller_type!r} is the default; type = \"smc\" for the paper's law)")
+            raise InputError(key, ctrl[key], f"{where}:controller.{key}: {key} is not a gain of law {law!r}{unnamed}; "
+                             f"its gains: {list(LAW_GAINS[law])}")
     observer = None
     if design:
         if period is None or drive is None:  # no control_rate: neither a period nor a drive

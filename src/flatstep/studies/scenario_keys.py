@@ -11,7 +11,7 @@ from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
 from ..control.smc import MEASUREMENTS, SMCGains
-from ..control.spec import LAWS, OPTIONS
+from ..control.spec import DEFAULT_TYPE, DEFAULT_TYPE_CONTINUOUS, DEFAULT_TYPE_TORQUES, LAWS, OPTIONS
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.drive import PWM_MODES, Drive
 from ..loop.observers import Observer
@@ -145,8 +145,11 @@ KEYS: dict[str, dict[str, Key]] = {
     "limits": {k: Key(*_LIMIT_DOCS[k][:2], _fmt(_default(MotorLimits, k)), _LIMIT_DOCS[k][2])
                for k in _LIMIT_DOCS},
     "controller": {
-        "type": Key("", ", ".join(f'"{c}"' for c in CONTROLLER_TYPES) + ", or law+option+...", '"smc"',
-                    "the controller by name (flatstep.control.spec: each name is a law and its options)"),
+        "type": Key("", ", ".join(f'"{c}"' for c in CONTROLLER_TYPES) + ", or law+option+...",
+                    f'"{DEFAULT_TYPE}"; "{DEFAULT_TYPE_TORQUES}" with [feedforward]; "{DEFAULT_TYPE_CONTINUOUS}" '
+                    "without [drive] control_rate",
+                    "the controller by name (flatstep.control.spec: each name is a law and its options; the default "
+                    "is the law docs/comparison.md recommends)"),
         "law": Key("", ", ".join(f'"{c}"' for c in LAWS), '"smc"',
                    "the control law, with the options below (instead of type)"),
         **{k: Key("", ", ".join(f'"{v}"' for v in opt.values) if opt.values else "true, false",

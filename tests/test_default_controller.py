@@ -1,0 +1,57 @@
+"""The controller a scenario file runs when it names none (docs/comparison.md, "The default controller")."""
+from pathlib import Path
+
+import pytest
+
+from flatstep.control.spec import (DEFAULT_TYPE, DEFAULT_TYPE_CONTINUOUS, DEFAULT_TYPE_TORQUES, ControllerSpec,
+                                   default_type)
+from flatstep.studies.scenario_file import load_scenario
+
+DRIVE = "[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n"
+TORQUES = "[feedforward]\ndetent_torque = 1e-3\n"
+
+
+def test_the_default_types():
+    assert default_type(sampled=True, torques=False) == DEFAULT_TYPE == "cascade+voltage_feedforward"
+    assert default_type(sampled=True, torques=True) == DEFAULT_TYPE_TORQUES
+    assert ControllerSpec.parse(DEFAULT_TYPE_TORQUES) == ControllerSpec(
+        "cascade", feedforward=True, observer_torques=True, voltage_feedforward=True)
+    assert default_type(sampled=False, torques=True) == DEFAULT_TYPE_CONTINUOUS == "smc"
+
+
+@pytest.mark.parametrize("text, kind", [
+    (DRIVE, DEFAULT_TYPE),
+    (DRIVE + TORQUES, DEFAULT_TYPE_TORQUES),
+    ("[controller]\nW1 = 50.0\n", "smc"),                      # no drive: the paper's law in continuous time
+    (DRIVE + '[controller]\ntype = "smc"\n', "smc"),          # the paper's law by name
+    (DRIVE + '[controller]\nlaw = "dq_smc"\n', "dq_smc"),
+])
+def test_a_file_runs_the_default_unless_it_names_a_law(tmp_path, text, kind):
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    scenario = load_scenario(path)[0]
+    assert scenario.controller_type == kind
+    assert ControllerSpec.parse(scenario.controller_type).law == ControllerSpec.parse(kind).law
+
+
+def test_sliding_gains_without_a_type_name_the_default(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(DRIVE + "[controller]\nW1 = 50.0\n")
+    with pytest.raises(ValueError, match=r"controller.W1: W1 is not a gain of law 'cascade' \(the file names no type"):
+        load_scenario(path)
+
+
+def test_without_torques_turns_off_what_needs_them():
+    spec = ControllerSpec.parse(DEFAULT_TYPE_TORQUES).without_torques()
+    assert spec.name() == DEFAULT_TYPE
+    assert ControllerSpec.parse("dq_smc_i_ff_km").without_torques().name() == "dq_smc_i"
+    assert ControllerSpec.parse("smc_la").without_torques().name() == "smc_la"
+
+
+def test_compare_clean_runs_a_file_whose_default_knows_the_torques(cli):
+    """--clean drops [feedforward]: the file's default law runs without the options that need it."""
+    path = Path(__file__).parent.parent / "examples" / "compare-paper-20khz.toml"
+    run = cli(["compare", str(path), "--tuned", "--clean", "--controllers", "cascade", "--budget", "10",
+               "--population", "5", "--frontier", "1", "--quiet"])
+    assert run.returncode == 0, run.stderr
+    assert "compare-paper-20khz (clean)" in run.stdout and "cascade" in run.stdout
