@@ -94,7 +94,7 @@ def journey_file(name: str, table: dict[str, Any], i_max: float) -> str:
     lines += [f"uncertainty = {UNCERTAINTY!r}", "", "[plan]", 'planner = "time_optimal"', "t0 = 0.005",
               f"waypoints = [0.0, {DISTANCE!r}]", "", "[drive]", f"control_rate = {RATE!r}", f"v_bus = {V_BUS!r}",
               "", "[sensors]", f"encoder_counts = {COUNTS}", "current_bits = 12",
-              f"current_range = {float(current_range)!r}", "", "[controller]", "design = true", ""]
+              f"current_range = {float(current_range)!r}", "", "[controller]", 'type = "smc"', "design = true", ""]
     return "\n".join(lines)
 
 
