@@ -81,6 +81,17 @@ def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> f
     return min(cap, limits.speed_max) if limits.speed_max else cap
 
 
+def _duration(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float,
+              passes: int) -> float:
+    """The duration [s] of the table at ``kappa`` and ``width`` without building it (inf when none is built)."""
+    try:
+        env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CURRENT_PLAN * limits.i_max, CAP_PLAN * cap)
+        tm = timing(d, Envelope(env.omega, env.a_plus, env.a_minus), width)
+    except ValueError:
+        return math.inf
+    return (tm.n + passes * (tm.n_box - 1) - 1) * tm.dt
+
+
 def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float,
          passes: int) -> tuple[float, Optional[DQCandidate]]:
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
@@ -96,9 +107,18 @@ def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: f
 
 
 def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float,
-                 start: float = 1.0, passes: int = 2) -> Optional[DQCandidate]:
-    """The shortest feasible table at ``width``: the secant on kappa from ``start``, then regula falsi in a bracket."""
+                 start: float = 1.0, passes: int = 2,
+                 shortest: float = math.inf) -> tuple[Optional[DQCandidate], float]:
+    """The shortest feasible table at ``width`` shorter than ``shortest`` [s], and the width's least duration.
+
+    The secant on kappa from ``start``, then regula falsi in a bracket. A table's duration is known before it is
+    built (:func:`_duration`) and falls as kappa rises: a width whose duration at kappa = 1 is not below
+    ``shortest`` builds no table (None and that duration).
+    """
     best: Optional[DQCandidate] = None
+    least = _duration(d, motor, limits, cap, 1.0, width, passes)
+    if not least < shortest:
+        return None, least
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
     k, k_prev, s_prev = start, math.nan, math.nan
     for _ in range(SEARCH):
@@ -125,7 +145,7 @@ def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, 
         k_prev, s_prev, k = k, aim, min(k_next, 1.0)
         if k < 0.05 or hi - lo < 1e-4:
             break
-    return best
+    return best, least
 
 
 def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, voltage: str = "phase",
@@ -163,7 +183,7 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
 
     def run(i: int) -> float:
         nonlocal best, start
-        c = search_kappa(d, motor, limits, cap, ws[i], start, passes)
+        c, _ = search_kappa(d, motor, limits, cap, ws[i], start, passes, best.tf if best else math.inf)
         if c is None:
             return math.inf
         start = c.kappa  # the next width's search starts at this one's bus share
