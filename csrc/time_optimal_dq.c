@@ -70,22 +70,22 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
 {
     struct to_move mv;
     struct to_work *w = &s->w;
-    fs_real t, total, speed, *x = s->x, *y = s->y;
-    size_t i, len, half, at, r, k, nk = w->tr.n + 1, j_acc = 0, j_dec = TO_GRID - 2, j_id = 0;
+    fs_real t, total, cruise, *x = s->x, *y = s->y;
+    size_t i, len, half, at, r, k, nk = w->tr.n + 1, j_acc = 0, j_dec = TO_GRID - 2;
     to_bang_bang(s->d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
-    for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt, as the speed
+    cruise = to_interp(mv.w_peak, w->omega, s->idp, TO_GRID);
+    // the d current of the side at the speed of the bang-bang move, read against time: the envelope's speed and d
+    // current are both linear between the same grid points (the top while speeding up and cruising, the bottom
+    // while braking)
+    for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt
         t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
         if (t <= mv.t1)
-            speed = to_interp_walk(t, w->tacc, w->omega, TO_GRID, &j_acc);
+            x[i] = to_interp_walk(t, w->tacc, s->idp, TO_GRID, &j_acc);
         else if (t < mv.t1 + mv.cruise)
-            speed = mv.w_peak;
+            x[i] = cruise;
         else
-            speed = to_interp_walk(total - t, w->tdec, w->omega, TO_GRID, &j_dec);
-        if (i == mv.n - mv.k - 1)
-            speed = 0;
-        // the d current of the side: the top while speeding up and cruising, the bottom while braking
-        x[i] = to_interp_walk(speed, w->omega, t >= mv.t1 + mv.cruise ? s->idm : s->idp, TO_GRID, &j_id);
+            x[i] = to_interp_walk(total - t, w->tdec, s->idm, TO_GRID, &j_dec);
     }
     x[mv.n - mv.k - 1] = 0;
     len = box(x, mv.n - mv.k, mv.n_box, s->s, y);
