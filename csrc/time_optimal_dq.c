@@ -120,7 +120,7 @@ static struct tod_margins margins(const struct tod_search *s, const fs_real *kid
     const struct traj *tr = &s->w.tr;
     struct tod_margins g = {0, 0, 0, 0, (fs_real)INFINITY, 0};
     fs_real v_limit = s->lim->v_use * s->lim->v_bus, h, tau, w, acc, jerk, id, did, iq, diq, x, vd, vq, v2 = 0, i2 = 0;
-    fs_real r1[TRAJ_NCOEF - 1], r2[TRAJ_NCOEF - 2], r3[TRAJ_NCOEF - 3], p0, p1, m0, m1;
+    fs_real r1[TRAJ_NCOEF - 1], r2[TRAJ_NCOEF - 2], r3[TRAJ_NCOEF - 3], p0, p1, m0, m1, h1, h2, h3, u;
     size_t i, j, n = tr->n, last;
     int k;
     for (i = 0; i < n; i++) {
@@ -128,12 +128,13 @@ static struct tod_margins margins(const struct tod_search *s, const fs_real *kid
         h = tr->breaks[i + 1] - tr->breaks[i];
         for (k = 0; k < TRAJ_NCOEF - 1; k++) {  // highest power first: row[k] multiplies tau^(7 - k)
             fs_real p = (fs_real)(TRAJ_NCOEF - 1 - k);
-            r1[k] = row[k] * p / h;
+            r1[k] = row[k] * p;
             if (k < TRAJ_NCOEF - 2)
-                r2[k] = row[k] * p * (p - 1) / (h * h);
+                r2[k] = row[k] * (p * (p - 1));
             if (k < TRAJ_NCOEF - 3)
-                r3[k] = row[k] * p * (p - 1) * (p - 2) / (h * h * h);
+                r3[k] = row[k] * (p * (p - 1) * (p - 2));
         }
+        h1 = fs_pow(h, 1), h2 = fs_pow(h, 2), h3 = fs_pow(h, 3);
         p0 = kid[i], p1 = kid[i + 1], m0 = kdid[i] * h, m1 = kdid[i + 1] * h;
         last = i == n - 1 ? (size_t)TO_CHECK : (size_t)TO_CHECK - 1;
         for (j = 0; j <= last; j++) {
@@ -144,12 +145,13 @@ static struct tod_margins margins(const struct tod_search *s, const fs_real *kid
                 acc = acc * tau + r2[k];
             for (jerk = r3[0], k = 1; k < TRAJ_NCOEF - 3; k++)
                 jerk = jerk * tau + r3[k];
-            id = ((2 * tau - 3) * tau * tau + 1) * p0 + ((tau - 2) * tau + 1) * tau * m0
-                 + (3 - 2 * tau) * tau * tau * p1 + (tau - 1) * tau * tau * m1;
-            did =
-                (i == 0 && j == 0) || (i == n - 1 && j == last)
-                    ? 0
-                    : (6 * (tau - 1) * tau * (p0 - p1) + ((3 * tau - 4) * tau + 1) * m0 + (3 * tau - 2) * tau * m1) / h;
+            w /= h1, acc /= h2, jerk /= h3;
+            u = (fs_min(tr->breaks[i] + tau * h, tr->breaks[i + 1]) - tr->breaks[i]) / h;  // as hermite_cubic
+            id = ((2 * u - 3) * u * u + 1) * p0 + ((u - 2) * u + 1) * u * m0 + (3 - 2 * u) * u * u * p1
+                 + (u - 1) * u * u * m1;
+            did = (i == 0 && j == 0) || (i == n - 1 && j == last)
+                      ? 0
+                      : (6 * (u - 1) * u * (p0 - p1) + ((3 * u - 4) * u + 1) * m0 + (3 * u - 2) * u * m1) / h;
             iq = (m->J * acc + m->B * w) / m->Km;
             diq = (m->J * jerk + m->B * acc) / m->Km;
             x = (fs_real)m->Nr * w * m->L;
@@ -193,13 +195,14 @@ static fs_real duration(struct tod_search *s, fs_real kappa, fs_real width)
     return ((fs_real)(mv.n + (size_t)s->passes * (mv.n_box - 1)) - 1) * mv.dt;
 }
 
-// Returns the measure s of the table at kappa and width (inf when none is built); a feasible table shorter than
-// the best becomes the best (time_optimal_dq._try).
-static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
+// Returns the measure s of the table at kappa and width (inf when none is built) and writes its duration into
+// tf_out (inf when none); a feasible table shorter than the best becomes the best (time_optimal_dq._try).
+static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width, fs_real *tf_out)
 {
     struct tod_result *out = s->out;
     struct tod_margins g;
     fs_real kid[TO_MAX_SEGMENTS + 1], kdid[TO_MAX_SEGMENTS + 1], tf;
+    *tf_out = (fs_real)INFINITY;
     if (!envelope_at(s, kappa))
         return (fs_real)INFINITY;
     if (!to_smoothed_table(s->m, &s->any, s->d, width, s->passes, &s->w) || !d_current(s, width, kid, kdid))
@@ -207,6 +210,7 @@ static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
     out->tables++;
     g = margins(s, kid, kdid);
     tf = s->w.breaks[s->w.tr.n];
+    *tf_out = tf;
     if (g.worst <= 0 && tf < s->width_tf)
         s->width_tf = tf, s->width_kappa = kappa;
     if (g.worst <= 0 && (!s->found || tf < out->breaks[out->n])) {
@@ -228,21 +232,24 @@ static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
 static fs_real search_kappa(struct tod_search *s, fs_real width)
 {
     const fs_real nan = (fs_real)NAN, inf = (fs_real)INFINITY;
-    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = s->start, k_prev = nan, s_prev = nan, x, aim, next, least;
+    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = s->start, k_prev = nan, s_prev = nan, x, aim, next, least, tf;
     int it;
     s->width_tf = inf, s->width_kappa = 0;
     least = duration(s, 1, width);
     if (!(least < (s->found ? s->out->breaks[s->out->n] : inf)))  // no table of this width could be shorter
         return least;
     for (it = 0; it < TOD_SEARCH; it++) {
-        x = try_table(s, k, width);
+        x = try_table(s, k, width, &tf);
         aim = x + FS_C(0.5) * TOD_S_TOL;
         if (x <= 0) {
             lo = k, s_lo = aim;
             if (k >= 1 || x > -TOD_S_TOL)
                 break;
-        } else
+        } else {
             hi = k, s_hi = aim;
+            if (s->found && tf >= s->out->breaks[s->out->n])  // every table below this bus share is longer
+                break;
+        }
         if (!isnan(s_lo) && fs_isfinite(s_hi)) {
             next = lo + (hi - lo) * s_lo / (s_lo - s_hi);
             next = fs_min(fs_max(next, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));

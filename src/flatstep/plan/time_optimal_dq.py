@@ -113,7 +113,8 @@ def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, 
 
     The secant on kappa from ``start``, then regula falsi in a bracket. A table's duration is known before it is
     built (:func:`_duration`) and falls as kappa rises: a width whose duration at kappa = 1 is not below
-    ``shortest`` builds no table (None and that duration).
+    ``shortest`` builds no table (None and that duration), and an infeasible table not shorter than the best so far
+    ends the search (every table below its kappa is longer).
     """
     best: Optional[DQCandidate] = None
     least = _duration(d, motor, limits, cap, 1.0, width, passes)
@@ -127,11 +128,14 @@ def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, 
         if c is not None and s <= 0:
             if best is None or c.tf < best.tf:
                 best = c
+            shortest = min(shortest, c.tf)
             lo, s_lo = k, aim
             if k >= 1.0 or s > -_S_TOL:
                 break
         else:
             hi, s_hi = k, aim
+            if shortest < math.inf and (c.tf if c is not None else math.inf) >= shortest:
+                break  # no table below this bus share can be shorter than the best
         if not math.isnan(s_lo) and math.isfinite(s_hi):
             k_next = lo + (hi - lo) * s_lo / (s_lo - s_hi)
             k_next = min(max(k_next, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
