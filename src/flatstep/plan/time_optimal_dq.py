@@ -15,7 +15,9 @@ width :math:`w` (once or twice), fits both as a table and measures the voltages 
 is driven to the table's worst margin 0 by the secant, then regula falsi, in at most :data:`SEARCH` tables,
 from the bus share the previous width found. With the box once (the jerk jumps; the d-q law takes it), then
 twice, the widths are walked from the middle one down while the duration falls, then up unless the way down found
-a shorter table; the shortest feasible table wins.
+a shorter table; the shortest feasible table wins. A table's duration is known before it is built and falls as
+kappa rises: a width whose duration at kappa = 1 is not shorter than the best builds no table, and an infeasible
+table no shorter than the best ends its width's search.
 
 **Limits.** The bus :math:`|v| \le v_{use}v_{bus}` (``voltage="phase"``: the inscribed circle of each phase's
 :math:`\pm v_{use}v_{bus}`, met once per electrical turn; ``"vector"``: the norm itself), :math:`|i| \le i_{max}`,
