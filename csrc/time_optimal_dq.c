@@ -24,6 +24,7 @@ struct tod_search {
     struct tod_result *out;
     bool found;
     fs_real start, width_tf, width_kappa;  // the next search's first kappa; the last width's best
+    fs_real env_kappa;                     // the bus share of the envelope in w (NAN: none)
     int passes;                            // box filters of the candidates: 1 or 2
 };
 
@@ -69,22 +70,22 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
 {
     struct to_move mv;
     struct to_work *w = &s->w;
-    fs_real t, total, speed, *x = s->x, *y = s->y;
-    size_t i, len, half, at, r, k, nk = w->tr.n + 1, j_acc = 0, j_dec = TO_GRID - 2, j_id = 0;
+    fs_real t, total, cruise, *x = s->x, *y = s->y;
+    size_t i, len, half, at, r, k, nk = w->tr.n + 1, j_acc = 0, j_dec = TO_GRID - 2;
     to_bang_bang(s->d, width, w, &mv);
     total = mv.t1 + mv.cruise + mv.t2;
-    for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt, as the speed
+    cruise = to_interp(mv.w_peak, w->omega, s->idp, TO_GRID);
+    // the d current of the side at the speed of the bang-bang move, read against time: the envelope's speed and d
+    // current are both linear between the same grid points (the top while speeding up and cruising, the bottom
+    // while braking)
+    for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt
         t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
         if (t <= mv.t1)
-            speed = to_interp_walk(t, w->tacc, w->omega, TO_GRID, &j_acc);
+            x[i] = to_interp_walk(t, w->tacc, s->idp, TO_GRID, &j_acc);
         else if (t < mv.t1 + mv.cruise)
-            speed = mv.w_peak;
+            x[i] = cruise;
         else
-            speed = to_interp_walk(total - t, w->tdec, w->omega, TO_GRID, &j_dec);
-        if (i == mv.n - mv.k - 1)
-            speed = 0;
-        // the d current of the side: the top while speeding up and cruising, the bottom while braking
-        x[i] = to_interp_walk(speed, w->omega, t >= mv.t1 + mv.cruise ? s->idm : s->idp, TO_GRID, &j_id);
+            x[i] = to_interp_walk(total - t, w->tdec, s->idm, TO_GRID, &j_dec);
     }
     x[mv.n - mv.k - 1] = 0;
     len = box(x, mv.n - mv.k, mv.n_box, s->s, y);
@@ -110,90 +111,106 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
     return true;
 }
 
-// Returns the k-th tau-derivative of a theta row at tau (piecewise.horner_rows).
-static fs_real row_deriv(const fs_real *row, int k, fs_real tau)
-{
-    fs_real a = 0, f;
-    int j, p, q;
-    for (j = 0; j < TRAJ_NCOEF - k; j++) {
-        p = TRAJ_NCOEF - 1 - j;
-        for (f = 1, q = 0; q < k; q++)
-            f *= (fs_real)(p - q);
-        a = j == 0 ? row[0] * f : a * tau + row[j] * f;
-    }
-    return a;
-}
-
-// Returns the d current and writes its rate at t (d_current.hermite_cubic, held outside the knots).
-static fs_real hermite(const fs_real *kt, const fs_real *v, const fs_real *sl, size_t n, fs_real t, fs_real *dv)
-{
-    size_t lo = 0, hi = n - 1, mid;
-    fs_real tc = fs_min(fs_max(t, kt[0]), kt[n - 1]), h, u, p0, p1, m0, m1;
-    while (hi - lo > 1) {
-        mid = (lo + hi) / 2;
-        if (kt[mid] <= tc)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    h = kt[lo + 1] - kt[lo], u = (tc - kt[lo]) / h;
-    p0 = v[lo], p1 = v[lo + 1], m0 = sl[lo] * h, m1 = sl[lo + 1] * h;
-    *dv = t > kt[0] && t < kt[n - 1]
-              ? (6 * (u - 1) * u * (p0 - p1) + ((3 * u - 4) * u + 1) * m0 + (3 * u - 2) * u * m1) / h
-              : 0;
-    return ((2 * u - 3) * u * u + 1) * p0 + ((u - 2) * u + 1) * u * m0 + (3 - 2 * u) * u * u * p1
-           + (u - 1) * u * u * m1;
-}
-
 // Returns the margins of the table (time_optimal_dq_profile.dq_margins): TO_CHECK samples per segment and the end.
+// Per segment, theta's rate, acceleration and jerk rows are formed once in time (not tau) and the d current's
+// cubic Hermite piece is the segment's own; the norms are compared squared and rooted once.
 static struct tod_margins margins(const struct tod_search *s, const fs_real *kid, const fs_real *kdid)
 {
     const struct motor_params *m = s->m;
     const struct traj *tr = &s->w.tr;
     struct tod_margins g = {0, 0, 0, 0, (fs_real)INFINITY, 0};
-    fs_real v_limit = s->lim->v_use * s->lim->v_bus, h, tau, w, acc, jerk, id, did, iq, diq, x, vd, vq;
-    size_t i, j, n = tr->n;
-    for (i = 0; i < n; i++)
-        for (j = 0; j <= (i == n - 1 ? (size_t)TO_CHECK : (size_t)TO_CHECK - 1); j++) {
-            const fs_real *row = tr->theta + i * TRAJ_NCOEF;
-            h = tr->breaks[i + 1] - tr->breaks[i], tau = (fs_real)j / (fs_real)TO_CHECK;
-            w = row_deriv(row, 1, tau) / fs_pow(h, 1);
-            acc = row_deriv(row, 2, tau) / fs_pow(h, 2);
-            jerk = row_deriv(row, 3, tau) / fs_pow(h, 3);
-            id = hermite(tr->breaks, kid, kdid, n + 1, tr->breaks[i] + tau * h, &did);
+    fs_real v_limit = s->lim->v_use * s->lim->v_bus, h, tau, w, acc, jerk, id, did, iq, diq, x, vd, vq, v2 = 0, i2 = 0;
+    fs_real r1[TRAJ_NCOEF - 1], r2[TRAJ_NCOEF - 2], r3[TRAJ_NCOEF - 3], p0, p1, m0, m1, h1, h2, h3, u;
+    size_t i, j, n = tr->n, last;
+    int k;
+    for (i = 0; i < n; i++) {
+        const fs_real *row = tr->theta + i * TRAJ_NCOEF;
+        h = tr->breaks[i + 1] - tr->breaks[i];
+        for (k = 0; k < TRAJ_NCOEF - 1; k++) {  // highest power first: row[k] multiplies tau^(7 - k)
+            fs_real p = (fs_real)(TRAJ_NCOEF - 1 - k);
+            r1[k] = row[k] * p;
+            if (k < TRAJ_NCOEF - 2)
+                r2[k] = row[k] * (p * (p - 1));
+            if (k < TRAJ_NCOEF - 3)
+                r3[k] = row[k] * (p * (p - 1) * (p - 2));
+        }
+        h1 = fs_pow(h, 1), h2 = fs_pow(h, 2), h3 = fs_pow(h, 3);
+        p0 = kid[i], p1 = kid[i + 1], m0 = kdid[i] * h, m1 = kdid[i + 1] * h;
+        last = i == n - 1 ? (size_t)TO_CHECK : (size_t)TO_CHECK - 1;
+        for (j = 0; j <= last; j++) {
+            tau = (fs_real)j / (fs_real)TO_CHECK;
+            for (w = r1[0], k = 1; k < TRAJ_NCOEF - 1; k++)
+                w = w * tau + r1[k];
+            for (acc = r2[0], k = 1; k < TRAJ_NCOEF - 2; k++)
+                acc = acc * tau + r2[k];
+            for (jerk = r3[0], k = 1; k < TRAJ_NCOEF - 3; k++)
+                jerk = jerk * tau + r3[k];
+            w /= h1, acc /= h2, jerk /= h3;
+            u = (fs_min(tr->breaks[i] + tau * h, tr->breaks[i + 1]) - tr->breaks[i]) / h;  // as hermite_cubic
+            id = ((2 * u - 3) * u * u + 1) * p0 + ((u - 2) * u + 1) * u * m0 + (3 - 2 * u) * u * u * p1
+                 + (u - 1) * u * u * m1;
+            did = (i == 0 && j == 0) || (i == n - 1 && j == last)
+                      ? 0
+                      : (6 * (u - 1) * u * (p0 - p1) + ((3 * u - 4) * u + 1) * m0 + (3 * u - 2) * u * m1) / h;
             iq = (m->J * acc + m->B * w) / m->Km;
             diq = (m->J * jerk + m->B * acc) / m->Km;
             x = (fs_real)m->Nr * w * m->L;
             vd = m->R * id + m->L * did - x * iq;
             vq = m->R * iq + m->L * diq + x * id + m->Km * w;
-            g.voltage = fs_max(g.voltage, fs_hypot(vd, vq));
-            g.current = fs_max(g.current, fs_hypot(id, iq));
+            v2 = fs_max(v2, vd * vd + vq * vq);
+            i2 = fs_max(i2, id * id + iq * iq);
             g.speed_peak = fs_max(g.speed_peak, fs_fabs(w));
             g.i_d_min = fs_min(g.i_d_min, id);
         }
-    g.voltage /= v_limit, g.current /= s->lim->i_max, g.speed = g.speed_peak / s->cap;
+    }
+    g.voltage = fs_sqrt(v2) / v_limit, g.current = fs_sqrt(i2) / s->lim->i_max, g.speed = g.speed_peak / s->cap;
     g.worst = fs_max(fs_max(g.voltage / TOD_V_MARGIN, g.current), g.speed) - 1;
     if (!fs_isfinite(g.worst))
         g.worst = (fs_real)INFINITY;
     return g;
 }
 
-// Returns the measure s of the table at kappa and width (inf when none is built); a feasible table shorter than
-// the best becomes the best (time_optimal_dq._try).
-static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
+// Returns true and builds the envelope at kappa in s->w (kept while kappa does not change).
+static bool envelope_at(struct tod_search *s, fs_real kappa)
+{
+    const struct tod_limits *l = s->lim;
+    if (kappa == s->env_kappa)
+        return true;
+    s->env_kappa = (fs_real)NAN;
+    if (!tod_envelope(s->m, kappa * l->v_use * l->v_bus, TOD_CURRENT_PLAN * l->i_max, TOD_CAP_PLAN * s->cap, &s->w,
+                      s->idp, s->idm))
+        return false;
+    s->env_kappa = kappa;
+    return true;
+}
+
+// Returns the duration [s] of the table at kappa and width without building it (inf when none is built;
+// time_optimal_dq._duration).
+static fs_real duration(struct tod_search *s, fs_real kappa, fs_real width)
+{
+    struct to_move mv;
+    if (!envelope_at(s, kappa))
+        return (fs_real)INFINITY;
+    to_bang_bang(s->d, width, &s->w, &mv);
+    return ((fs_real)(mv.n + (size_t)s->passes * (mv.n_box - 1)) - 1) * mv.dt;
+}
+
+// Returns the measure s of the table at kappa and width (inf when none is built) and writes its duration into
+// tf_out (inf when none); a feasible table shorter than the best becomes the best (time_optimal_dq._try).
+static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width, fs_real *tf_out)
 {
     struct tod_result *out = s->out;
     struct tod_margins g;
     fs_real kid[TO_MAX_SEGMENTS + 1], kdid[TO_MAX_SEGMENTS + 1], tf;
-    const struct tod_limits *l = s->lim;
-    if (!tod_envelope(s->m, kappa * l->v_use * l->v_bus, TOD_CURRENT_PLAN * l->i_max, TOD_CAP_PLAN * s->cap, &s->w,
-                      s->idp, s->idm))
+    *tf_out = (fs_real)INFINITY;
+    if (!envelope_at(s, kappa))
         return (fs_real)INFINITY;
     if (!to_smoothed_table(s->m, &s->any, s->d, width, s->passes, &s->w) || !d_current(s, width, kid, kdid))
         return (fs_real)INFINITY;
     out->tables++;
     g = margins(s, kid, kdid);
     tf = s->w.breaks[s->w.tr.n];
+    *tf_out = tf;
     if (g.worst <= 0 && tf < s->width_tf)
         s->width_tf = tf, s->width_kappa = kappa;
     if (g.worst <= 0 && (!s->found || tf < out->breaks[out->n])) {
@@ -208,23 +225,31 @@ static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width)
     return g.worst;
 }
 
-// Returns nothing; the secant on kappa from s->start, then regula falsi once bracketed (time_optimal_dq.search_kappa);
-// s->width_tf and s->width_kappa are the width's shortest feasible table's duration and bus share (inf and 0: none).
-static void search_kappa(struct tod_search *s, fs_real width)
+// Returns the width's least duration (at kappa = 1); none of its tables is built when that is not shorter than the
+// best; else the secant on kappa from s->start, then regula falsi once bracketed (time_optimal_dq.search_kappa);
+// s->width_tf and
+// s->width_kappa are the width's shortest feasible table's duration and bus share (inf and 0: none).
+static fs_real search_kappa(struct tod_search *s, fs_real width)
 {
-    const fs_real nan = (fs_real)NAN;
-    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = s->start, k_prev = nan, s_prev = nan, x, aim, next;
+    const fs_real nan = (fs_real)NAN, inf = (fs_real)INFINITY;
+    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = s->start, k_prev = nan, s_prev = nan, x, aim, next, least, tf;
     int it;
-    s->width_tf = (fs_real)INFINITY, s->width_kappa = 0;
+    s->width_tf = inf, s->width_kappa = 0;
+    least = duration(s, 1, width);
+    if (!(least < (s->found ? s->out->breaks[s->out->n] : inf)))  // no table of this width could be shorter
+        return least;
     for (it = 0; it < TOD_SEARCH; it++) {
-        x = try_table(s, k, width);
+        x = try_table(s, k, width, &tf);
         aim = x + FS_C(0.5) * TOD_S_TOL;
         if (x <= 0) {
             lo = k, s_lo = aim;
             if (k >= 1 || x > -TOD_S_TOL)
                 break;
-        } else
+        } else {
             hi = k, s_hi = aim;
+            if (s->found && tf >= s->out->breaks[s->out->n])  // every table below this bus share is longer
+                break;
+        }
         if (!isnan(s_lo) && fs_isfinite(s_hi)) {
             next = lo + (hi - lo) * s_lo / (s_lo - s_hi);
             next = fs_min(fs_max(next, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));
@@ -239,6 +264,7 @@ static void search_kappa(struct tod_search *s, fs_real width)
         if (k < FS_C(0.05) || hi - lo < FS_C(1e-4))
             break;
     }
+    return least;
 }
 
 // Returns the duration of width i's shortest feasible table (inf when none); the next width's search starts at its
@@ -283,6 +309,7 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     if (!work || work_len < time_optimal_dq_work_len())
         return TOD_EWORK;
     s.m = m, s.lim = lim, s.any = any, s.d = fs_fabs(distance), s.out = out, s.found = false;
+    s.env_kappa = (fs_real)NAN;
     s.cap = time_optimal_dq_speed_cap(m, lim);
     s.w.omega = work, s.w.ap = work + TO_GRID, s.w.am = work + 2 * TO_GRID, s.w.tacc = work + 3 * TO_GRID;
     s.w.tdec = work + 4 * TO_GRID, s.w.dboth = work + 5 * TO_GRID;
@@ -294,8 +321,7 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     s.w.tr.breaks = s.w.breaks, s.w.tr.theta = s.w.theta, s.w.tr.rho = s.w.rho;
     s.idp = work + time_optimal_work_len(), s.idm = s.idp + TO_GRID;
     s.x = s.idm + TO_GRID, s.y = s.x + TO_FINE_LEN + 1, s.s = s.y + TO_FINE_LEN + 1;
-    if (!tod_envelope(m, lim->v_use * lim->v_bus, TOD_CURRENT_PLAN * lim->i_max, TOD_CAP_PLAN * s.cap, &s.w, s.idp,
-                      s.idm))
+    if (!envelope_at(&s, 1))
         return TOD_ESTART;
     rise = m->L * lim->i_max / (lim->v_use * lim->v_bus);
     for (i = 0; i < TOD_WIDTHS; i++)

@@ -25,7 +25,7 @@ def limits(v_bus: float = 24.0, **kw: float) -> MotorLimits:
     return MotorLimits(v_bus=v_bus, i_max=1.0, v_use=0.84, **kw)
 
 
-@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.1), (24.0, 5.0), (12.0, 0.3)])
+@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.1), (24.0, 5.0), (12.0, 0.1)])
 def test_c_and_reference_plan_the_same_move(v_bus: float, distance: float) -> None:
     py = plan_dq_move(distance, NEMA17, limits(v_bus), engine="python")
     c = plan_dq_move(distance, NEMA17, limits(v_bus), engine="c")
@@ -35,10 +35,11 @@ def test_c_and_reference_plan_the_same_move(v_bus: float, distance: float) -> No
     np.testing.assert_allclose(c.table.theta, py.table.theta, rtol=1e-7, atol=1e-9)
 
 
-@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.3), (12.0, 1.0)])
+@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.3), (12.0, 1.0), (12.0, 0.3)])
 def test_c_and_reference_agree_where_a_near_tie_may_flip(v_bus: float, distance: float) -> None:
     # a one-box candidate's margin at a jump of the jerk, or two widths of nearly equal duration: a rounding may
-    # send the search another way; the durations still agree to 0.1 %
+    # send the search another way (at 12 V 0.3 rad the regula falsi's last steps lie 1e-7 apart in kappa, and the
+    # durations 3e-8 apart); the durations still agree to 0.1 %
     py = plan_dq_move(distance, NEMA17, limits(v_bus), engine="python")
     c = plan_dq_move(distance, NEMA17, limits(v_bus), engine="c")
     assert c.tf == pytest.approx(py.tf, rel=1e-3)

@@ -15,7 +15,9 @@ width :math:`w` (once or twice), fits both as a table and measures the voltages 
 is driven to the table's worst margin 0 by the secant, then regula falsi, in at most :data:`SEARCH` tables,
 from the bus share the previous width found. With the box once (the jerk jumps; the d-q law takes it), then
 twice, the widths are walked from the middle one down while the duration falls, then up unless the way down found
-a shorter table; the shortest feasible table wins.
+a shorter table; the shortest feasible table wins. A table's duration is known before it is built and falls as
+kappa rises: a width whose duration at kappa = 1 is not shorter than the best builds no table, and an infeasible
+table no shorter than the best ends its width's search.
 
 **Limits.** The bus :math:`|v| \le v_{use}v_{bus}` (``voltage="phase"``: the inscribed circle of each phase's
 :math:`\pm v_{use}v_{bus}`, met once per electrical turn; ``"vector"``: the norm itself), :math:`|i| \le i_{max}`,
@@ -81,6 +83,17 @@ def speed_cap(motor: MotorParams, limits: MotorLimits, control_rate: float) -> f
     return min(cap, limits.speed_max) if limits.speed_max else cap
 
 
+def _duration(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float,
+              passes: int) -> float:
+    """The duration [s] of the table at ``kappa`` and ``width`` without building it (inf when none is built)."""
+    try:
+        env = dq_envelope(motor, kappa * limits.v_use * limits.v_bus, CURRENT_PLAN * limits.i_max, CAP_PLAN * cap)
+        tm = timing(d, Envelope(env.omega, env.a_plus, env.a_minus), width)
+    except ValueError:
+        return math.inf
+    return (tm.n + passes * (tm.n_box - 1) - 1) * tm.dt
+
+
 def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: float, width: float,
          passes: int) -> tuple[float, Optional[DQCandidate]]:
     """The measure s of the table at ``kappa`` and ``width`` and the table (inf and None when none is built)."""
@@ -96,9 +109,19 @@ def _try(d: float, motor: MotorParams, limits: MotorLimits, cap: float, kappa: f
 
 
 def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, width: float,
-                 start: float = 1.0, passes: int = 2) -> Optional[DQCandidate]:
-    """The shortest feasible table at ``width``: the secant on kappa from ``start``, then regula falsi in a bracket."""
+                 start: float = 1.0, passes: int = 2,
+                 shortest: float = math.inf) -> tuple[Optional[DQCandidate], float]:
+    """The shortest feasible table at ``width`` shorter than ``shortest`` [s], and the width's least duration.
+
+    The secant on kappa from ``start``, then regula falsi in a bracket. A table's duration is known before it is
+    built (:func:`_duration`) and falls as kappa rises: a width whose duration at kappa = 1 is not below
+    ``shortest`` builds no table (None and that duration), and an infeasible table not shorter than the best so far
+    ends the search (every table below its kappa is longer).
+    """
     best: Optional[DQCandidate] = None
+    least = _duration(d, motor, limits, cap, 1.0, width, passes)
+    if not least < shortest:
+        return None, least
     lo, hi, s_lo, s_hi = 0.0, 1.0, math.nan, math.nan
     k, k_prev, s_prev = start, math.nan, math.nan
     for _ in range(SEARCH):
@@ -107,11 +130,14 @@ def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, 
         if c is not None and s <= 0:
             if best is None or c.tf < best.tf:
                 best = c
+            shortest = min(shortest, c.tf)
             lo, s_lo = k, aim
             if k >= 1.0 or s > -_S_TOL:
                 break
         else:
             hi, s_hi = k, aim
+            if shortest < math.inf and (c.tf if c is not None else math.inf) >= shortest:
+                break  # no table below this bus share can be shorter than the best
         if not math.isnan(s_lo) and math.isfinite(s_hi):
             k_next = lo + (hi - lo) * s_lo / (s_lo - s_hi)
             k_next = min(max(k_next, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
@@ -125,7 +151,7 @@ def search_kappa(d: float, motor: MotorParams, limits: MotorLimits, cap: float, 
         k_prev, s_prev, k = k, aim, min(k_next, 1.0)
         if k < 0.05 or hi - lo < 1e-4:
             break
-    return best
+    return best, least
 
 
 def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, voltage: str = "phase",
@@ -163,7 +189,7 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
 
     def run(i: int) -> float:
         nonlocal best, start
-        c = search_kappa(d, motor, limits, cap, ws[i], start, passes)
+        c, _ = search_kappa(d, motor, limits, cap, ws[i], start, passes, best.tf if best else math.inf)
         if c is None:
             return math.inf
         start = c.kappa  # the next width's search starts at this one's bus share

@@ -58,12 +58,11 @@ def dq_table(distance: float, env: DQEnvelope, width: float, motor: MotorParams,
     total = b.t1 + b.cruise + b.t2
     i = np.arange(n - k)
     t = np.where(i < r, i, i + k) * dt
-    braking = t >= b.t1 + b.cruise
-    speed = np.where(t <= b.t1, np.interp(t, b.t_acc, env.omega),
-                     np.where(~braking, b.w_peak, np.interp(total - t, b.t_dec, env.omega)))
-    speed[-1] = 0.0
-    # the d current of the side: the envelope's top while speeding up and cruising, its bottom while braking
-    i_d = np.where(braking, np.interp(speed, env.omega, env.id_minus), np.interp(speed, env.omega, env.id_plus))
+    # the d current of the side at the bang-bang move's speed, read against time (the envelope's speed and d current
+    # are both linear between the same grid points): the top while speeding up and cruising, the bottom while braking
+    cruise = np.interp(b.w_peak, env.omega, env.id_plus)
+    i_d = np.where(t <= b.t1, np.interp(t, b.t_acc, env.id_plus),
+                   np.where(t < b.t1 + b.cruise, cruise, np.interp(total - t, b.t_dec, env.id_minus)))
     i_d[-1] = 0.0
     for _ in range(passes):
         i_d = _box(i_d, n_box)
