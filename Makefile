@@ -18,7 +18,9 @@ $(STAMP): pyproject.toml $(wildcard setup.py) $(wildcard src/flatstep/*.py src/f
 demo: venv
 	$(BIN)/flatstep reproduce --out $(OUT)
 
-test: venv lint ctest
+# lint (one core) runs beside the C builds and tests; then the Python tests on every core.
+test: venv
+	$(MAKE) --no-print-directory -j2 lint ctest
 	$(BIN)/python -m pytest -q -n auto
 
 # ruff (pyflakes, isort, bugbear, numpydoc docstrings) and mypy on the package; clang-format on the C core.
