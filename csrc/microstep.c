@@ -14,18 +14,17 @@ static void microstep_reference(const struct microstep *s, fs_real t, fs_real i[
     // With the load angle the vector leads N_r theta* by delta, sin delta = c = (J theta*'' + B theta*') / (Km rho*)
     // clipped to [-1, 1]; delta' = c' / cos delta inside (0 where clipped).
     const struct motor_params *m = &s->p.motor;
-    fs_real ref[PLAN_FLAG_LEN], sn, cs, w, dp, c, cd, sp, cp;
+    fs_real ref[PLAN_FLAG_LEN], sn, cs, w, dp, c, cd, sp, cp, den;
     plan_flag(&s->plan, t, ref);
     fs_sincos(m->Nr * ref[PLAN_THETA], &sn, &cs);
     dp = m->Nr * ref[PLAN_DTHETA];
-    if (s->p.gains.load_angle) {
-        c = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA]) / (m->Km * ref[PLAN_RHO]);
+    den = m->Km * ref[PLAN_RHO];
+    c = den > 0 ? (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA]) / den : 0;
+    if (s->p.gains.load_angle && den > 0 && c == c) {  // no lead for a zero current vector (or a NaN demand)
         c = c > 1 ? 1 : c < -1 ? -1 : c;
         cd = fs_sqrt(1 - c * c);
         if (cd > 0)
-            dp = dp
-                 + ((m->J * ref[PLAN_DDDTHETA] + m->B * ref[PLAN_DDTHETA]) - c * m->Km * ref[PLAN_DRHO])
-                       / (m->Km * ref[PLAN_RHO]) / cd;
+            dp = dp + ((m->J * ref[PLAN_DDDTHETA] + m->B * ref[PLAN_DDTHETA]) - c * m->Km * ref[PLAN_DRHO]) / den / cd;
         sp = sn * cd + cs * c;
         cp = cs * cd - sn * c;
         sn = sp;
