@@ -39,32 +39,6 @@ fs_real time_optimal_dq_speed_cap(const struct motor_params *m, const struct tod
     return lim->speed_max > 0 ? fs_min(cap, lim->speed_max) : cap;
 }
 
-// Returns the length of x after a box of n samples (smoothing._box), through the running sum in s.
-static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
-{
-    size_t i, out_len = len + n - 1;
-    fs_real unit = 1 / (fs_real)n;
-    for (i = 0; i < n; i++)
-        s[i] = 0;
-    for (i = 0; i < len; i++)
-        s[n + i] = s[n - 1 + i] + x[i];
-    for (i = n + len; i < len + 2 * n - 1; i++)
-        s[i] = s[i - 1];
-    for (i = 0; i < out_len; i++)
-        out[i] = (s[i + n] - s[i]) * unit;
-    return out_len;
-}
-
-// Returns the central difference of x at i (one-sided at the ends) over dt.
-static fs_real gradient(const fs_real *x, size_t len, size_t i, fs_real dt)
-{
-    if (i == 0)
-        return (x[1] - x[0]) / dt;
-    if (i == len - 1)
-        return (x[len - 1] - x[len - 2]) / dt;
-    return (x[i + 1] - x[i - 1]) / (2 * dt);
-}
-
 // Returns true and writes the d current's knots of the table in s->w.tr (time_optimal_dq_profile.dq_table).
 static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_real *knot_did)
 {
@@ -88,9 +62,9 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
             x[i] = to_interp_walk(total - t, w->tdec, s->idm, TO_GRID, &j_dec);
     }
     x[mv.n - mv.k - 1] = 0;
-    len = box(x, mv.n - mv.k, mv.n_box, s->s, y);
+    len = to_box(x, mv.n - mv.k, mv.n_box, s->s, y);
     if (s->passes == 2)
-        len = box(y, len, mv.n_box, s->s, x);
+        len = to_box(y, len, mv.n_box, s->s, x);
     else
         memcpy(x, y, len * sizeof *x);
     s->s[0] = 0;  // the running mean of TOD_ID_SPREAD widths either side, narrowed at the ends
@@ -106,7 +80,7 @@ static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_
         k = (size_t)w->knot[i];
         at = k < r ? k : k >= r + mv.k ? k - mv.k : r;
         knot_id[i] = y[at];
-        knot_did[i] = i == 0 || i == nk - 1 ? 0 : gradient(y, len, at, mv.dt);
+        knot_did[i] = i == 0 || i == nk - 1 ? 0 : to_gradient(y, len, at, mv.dt);
     }
     return true;
 }

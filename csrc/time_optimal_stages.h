@@ -57,6 +57,13 @@ struct to_hcoef to_hcoef(const struct motor_params *m, fs_real k, fs_real f, fs_
 fs_real to_h(const struct to_hcoef *hc, fs_real u, fs_real *dh);
 size_t to_envelope(const struct motor_params *m, const struct to_limits *lim, fs_real gamma, struct to_work *w);
 fs_real to_interp(fs_real x, const fs_real *xs, const fs_real *ys, size_t n);
+
+// Returns the length of x after a box of n samples: x convolved with it through the running sum in s, which holds
+// len + 2 n - 1 values (smoothing._box; out may not alias x).
+size_t to_box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out);
+
+// Returns the central difference of x at i (one-sided at the ends) over dt (smoothing._gradient).
+fs_real to_gradient(const fs_real *x, size_t len, size_t i, fs_real dt);
 // Returns y at x as to_interp does, for x rising (dir 1) or falling (dir -1) between calls: *j walks to the bracket.
 static inline fs_real to_interp_walk(fs_real x, const fs_real *xs, const fs_real *ys, size_t n, size_t *j)
 {

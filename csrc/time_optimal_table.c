@@ -5,7 +5,7 @@
 
 // Returns the length of x after a box of n samples: x convolved with it through the running sum in s
 // (smoothing._box; out may not alias x).
-static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
+size_t to_box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out)
 {
     size_t i, out_len = len + n - 1;
     fs_real unit = 1 / (fs_real)n;  // the box's height (unit area)
@@ -21,7 +21,7 @@ static size_t box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *o
 }
 
 // Returns the central difference of x at i (one-sided at the ends) over dt (smoothing._gradient).
-static fs_real gradient(const fs_real *x, size_t len, size_t i, fs_real dt)
+fs_real to_gradient(const fs_real *x, size_t len, size_t i, fs_real dt)
 {
     if (i == 0)
         return (x[1] - x[0]) / dt;
@@ -34,10 +34,10 @@ static fs_real gradient(const fs_real *x, size_t len, size_t i, fs_real dt)
 static fs_real gradient2(const fs_real *x, size_t len, size_t i, fs_real dt)
 {
     if (i == 0)
-        return (gradient(x, len, 1, dt) - gradient(x, len, 0, dt)) / dt;
+        return (to_gradient(x, len, 1, dt) - to_gradient(x, len, 0, dt)) / dt;
     if (i == len - 1)
-        return (gradient(x, len, len - 1, dt) - gradient(x, len, len - 2, dt)) / dt;
-    return (gradient(x, len, i + 1, dt) - gradient(x, len, i - 1, dt)) / (2 * dt);
+        return (to_gradient(x, len, len - 1, dt) - to_gradient(x, len, len - 2, dt)) / dt;
+    return (to_gradient(x, len, i + 1, dt) - to_gradient(x, len, i - 1, dt)) / (2 * dt);
 }
 
 // Returns the number of knots; writes their sample indices (smoothing._knots).
@@ -109,7 +109,7 @@ static fs_real rho_star(const struct to_limits *lim, fs_real cot, fs_real iq, fs
 static fs_real rho_at(const struct motor_params *m, const struct to_limits *lim, fs_real cot, const fs_real *v,
                       size_t len, size_t i, fs_real dt)
 {
-    return rho_star(lim, cot, (m->J * gradient(v, len, i, dt) + m->B * v[i]) / m->Km, v[i]);
+    return rho_star(lim, cot, (m->J * to_gradient(v, len, i, dt) + m->B * v[i]) / m->Km, v[i]);
 }
 
 // Returns true and builds the candidate table w->tr of the move over d > 0 at width (smoothing.smoothed_table);
@@ -137,9 +137,9 @@ bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim
             speed[i] = to_interp_walk(total - t, w->tdec, w->omega, TO_GRID, &j_dec);
     }
     speed[mv.n - mv.k - 1] = 0;
-    len = box(speed, mv.n - mv.k, mv.n_box, w->c, w->b);
+    len = to_box(speed, mv.n - mv.k, mv.n_box, w->c, w->b);
     if (passes == 2)
-        len = box(w->b, len, mv.n_box, w->c, speed);
+        len = to_box(w->b, len, mv.n_box, w->c, speed);
     else
         memcpy(speed, w->b, len * sizeof *speed);
     sum = 0;
@@ -169,7 +169,7 @@ bool to_smoothed_table(const struct motor_params *m, const struct to_limits *lim
         at = k < r ? k : k >= r + mv.k ? k - mv.k : r;
         s1[0] = 0;
         s1[1] = speed[at];
-        s1[2] = gradient(speed, len, at, mv.dt);
+        s1[2] = to_gradient(speed, len, at, mv.dt);
         s1[3] = gradient2(speed, len, at, mv.dt);
         r1[0] = rho_at(m, lim, cot, speed, len, at, mv.dt);
         r1[1] = at == 0 ? (rho_at(m, lim, cot, speed, len, 1, mv.dt) - r1[0]) / mv.dt
