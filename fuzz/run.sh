@@ -4,6 +4,7 @@
 #   sampled     sampled_init/sampled_run, every law    (fuzz/fuzz_sampled.c)
 #   continuous  continuous_run, every law              (fuzz/fuzz_continuous.c)
 #   time_optimal time_optimal_plan/time_optimal_margins (fuzz/fuzz_time_optimal.c)
+#   time_optimal_dq time_optimal_dq_plan, field weakening (fuzz/fuzz_time_optimal_dq.c)
 #   traj        traj_* and plan_flag on a table        (fuzz/fuzz_traj.c)
 #   flat        plan_*, the flat maps, motor_*, arrays_* (fuzz/fuzz_flat.c)
 #   dq_smc      dq_smc_init/dq_smc_step, arrays_controller_step (fuzz/fuzz_dq_smc.c)
@@ -15,7 +16,7 @@ set -eu
 cd "$(dirname "$0")/.."
 SECONDS_TO_RUN="${1:-12}"
 [ $# -gt 0 ] && shift
-TARGETS="${*:-smc sampled continuous time_optimal traj flat dq_smc}"
+TARGETS="${*:-smc sampled continuous time_optimal time_optimal_dq traj flat dq_smc}"
 SAN="-fsanitize=address,undefined,float-divide-by-zero -fno-sanitize-recover=all -fno-omit-frame-pointer"
 FLAGS="-std=c99 -g -O1 -Wall -Wextra -Werror -Icsrc -Ifuzz"
 mkdir -p build/fuzz
@@ -33,9 +34,9 @@ sources() {
     smc) echo "fuzz/fuzz_smc.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     sampled) echo "fuzz/fuzz_sampled.c fuzz/laws.c fuzz/sampled_check.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     continuous) echo "fuzz/fuzz_continuous.c fuzz/laws.c $(ls csrc/*.c | tr '\n' ' ')" ;;
-    time_optimal | traj) echo "fuzz/fuzz_$1.c $(ls csrc/*.c | tr '\n' ' ')" ;;
+    time_optimal | time_optimal_dq | traj) echo "fuzz/fuzz_$1.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     flat | dq_smc) echo "fuzz/fuzz_$1.c fuzz/laws.c $(ls csrc/*.c | tr '\n' ' ')" ;;
-    *) echo "fuzz: unknown target $1 (smc, sampled, continuous, time_optimal, traj, flat, dq_smc)" >&2; exit 2 ;;
+    *) echo "fuzz: unknown target $1 (smc, sampled, continuous, time_optimal, time_optimal_dq, traj, flat, dq_smc)" >&2; exit 2 ;;
     esac
 }
 
