@@ -9,11 +9,13 @@ static bool best_currents(const struct motor_params *m, fs_real w, fs_real v, fs
     fs_real x = (fs_real)m->Nr * w * m->L, e = m->Km * w, z2, cd, cq, r, dist, a, h, ux, uy, p1[2], p2[2];
     const fs_real *hi, *lo;
     z2 = m->R * m->R + x * x;
+    if (!(z2 > 0))  // R^2 + (Nr w L)^2 underflows: no impedance to divide by, no envelope
+        return false;
     cd = -e * x / z2, cq = -e * m->R / z2, r = v / fs_sqrt(z2);
     dist = fs_hypot(cd, cq);
     if (!(dist <= i_max + r))
         return false;
-    if (dist <= fs_fabs(i_max - r)) {  // one disc inside the other: the smaller one's top and bottom
+    if (dist <= fs_fabs(i_max - r) || !(dist > 0)) {  // one disc inside the other (or the same disc)
         if (r <= i_max)
             c[0] = cd, c[1] = cq + r, c[2] = cd, c[3] = cq - r;
         else

@@ -54,11 +54,13 @@ def best_currents(omega: float, motor: MotorParams, v: float, i_max: float) -> t
     m = motor
     x, e = m.Nr * omega * m.L, m.Km * omega
     z2 = m.R * m.R + x * x
+    if not z2 > 0.0:  # R^2 + (Nr w L)^2 underflows: no impedance to divide by, no envelope
+        return math.nan, math.nan, math.nan, math.nan
     cd, cq, r = -e * x / z2, -e * m.R / z2, v / math.sqrt(z2)
     dist = math.hypot(cd, cq)
     if dist > i_max + r:
         return math.nan, math.nan, math.nan, math.nan
-    if dist <= abs(i_max - r):  # one disc inside the other: the smaller one's top and bottom
+    if dist <= abs(i_max - r) or not dist > 0.0:  # one disc inside the other (or the same disc)
         if r <= i_max:
             return cd, cq + r, cd, cq - r
         return 0.0, i_max, 0.0, -i_max
