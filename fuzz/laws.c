@@ -102,8 +102,9 @@ bool fz_acceleration_ok(const struct plant *p, const double x[4])
            + 8 * DBL_EPSILON
                  * ((fabs(terms[0]) + fabs(terms[1]) + fabs(m->Km * x[0]) + fabs(m->Km * x[1])) * fabs(a)
                     + e->detent_torque * fabs((double)e->detent_harmonic * a));
-    // and of subnormal terms (each carries an absolute error up to the smallest subnormal, DBL_MIN DBL_EPSILON)
-    size += 16 * DBL_MIN * DBL_EPSILON;
+    // and of subnormal terms and products (each carries an absolute error up to the smallest subnormal,
+    // DBL_MIN DBL_EPSILON; the core forms ib cos - ia sin before it multiplies by Km, which scales that error)
+    size += 16 * DBL_MIN * DBL_EPSILON * (1 + m->Km + m->B + e->detent_torque + e->coulomb_torque);
     return fabs(acc - sum / m->J) <= size / m->J + 1e-300;
 }
 
