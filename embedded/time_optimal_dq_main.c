@@ -41,7 +41,7 @@ int main(void)
         rc = traced_step(&m, &l, DISTANCES[i], work, work_len);
         stack = stack_used();
         semihost_write0(rc == TOD_OK && out.n > 0 && out.margins.worst <= 0 ? "time_optimal_dq_plan ok"
-                                                                           : "time_optimal_dq_plan bad");
+                                                                            : "time_optimal_dq_plan bad");
         put_field("distance_mrad", scaled(DISTANCES[i], 1000));
         put_field("rc", rc);
         put_field("segments", (int32_t)out.n);

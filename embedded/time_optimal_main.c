@@ -26,7 +26,8 @@ int main(void)
     stack_paint();
     rc = traced_step(&m, &l, work, work_len);
     stack = stack_used();
-    semihost_write0(rc == TO_OK && out.n > 0 && out.margins.worst <= 0 ? "time_optimal_plan ok" : "time_optimal_plan bad");
+    semihost_write0(rc == TO_OK && out.n > 0 && out.margins.worst <= 0 ? "time_optimal_plan ok"
+                                                                       : "time_optimal_plan bad");
     put_field("rc", rc);
     put_field("duration_us", out.n > 0 ? (int32_t)(out.breaks[out.n] * FS_C(1e6) + FS_C(0.5)) : 0);
     put_field("stack_bytes", (int32_t)stack);
