@@ -1,6 +1,7 @@
 #!/bin/sh
 # Cross-build csrc/ for an ARM Cortex-M4F in single precision; print code sizes, the static instruction count
-# of smc_step, and (with QEMU) the instructions one smc_step call executes. Run from the repo root: make embedded
+# of smc_step, and (with QEMU) the instructions one smc_step call executes and the cycles they take.
+# Run from the repo root: sh embedded/build.sh (make embedded runs it and the other scripts of embedded/)
 set -eu
 
 . embedded/common.sh
@@ -37,10 +38,7 @@ printf '   %-20s %5d  (smc_step and the core functions it calls; libm not includ
 
 # 3. A bare-metal image for QEMU's mps2-an386 (Cortex-M4): one smc_step call between markers.
 elf="$OUT/smc_step_m4.elf"
-# shellcheck disable=SC2086
-if ! "${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/count_main.c csrc/motor.c csrc/plan.c csrc/trajectory.c csrc/flat.c \
-        csrc/smc.c csrc/torque_model.c -nostartfiles --specs=nosys.specs -Wl,--gc-sections -T embedded/mps2_an386.ld -lm \
-        -o "$elf" 2>"$OUT/link.log"; then
+if ! link_image "$elf" embedded/count_main.c 2>"$OUT/link.log"; then
     echo "-- emulation: skipped: the link failed (see $OUT/link.log; without newlib's libm:" \
          "Debian: apt-get install libnewlib-arm-none-eabi)"
     exit 0
@@ -52,17 +50,8 @@ if ! command -v "$QEMU" >/dev/null 2>&1; then
     exit 0
 fi
 
-# 4. Executed instructions: QEMU runs one instruction per translation block and logs each executed block
-#    with its symbol; the lines from traced_step's entry back to main are the call's instructions.
-run_trace() {  # extra QEMU options -> trace in $OUT/trace.log; the program writes to stderr (semihosting)
-    timeout 120 "$QEMU" -M mps2-an386 -nographic -semihosting "$@" -d exec,nochain -D "$OUT/trace.log" \
-        -kernel "$elf" 2>"$OUT/qemu.log"
-}
-run_trace -accel tcg,one-insn-per-tb=on || run_trace -singlestep  # the option's name before QEMU 8.1
-echo "-- one smc_step call on $QEMU -M mps2-an386 (Cortex-M4F, newlib libm):" \
-     "$(grep -a 'smc_step status' "$OUT/qemu.log")"
-awk '{sym = $NF} sym == "traced_step" {on = 1; next} on && sym == "main" {exit}
-     on {n++; by[sym]++} END {
-        printf "   executed instructions: %d\n", n
-        for (s in by) printf "     %-24s %5d\n", s, by[s] | "sort -k2 -n -r"
-     }' "$OUT/trace.log"
+# 4. Executed instructions (embedded/common.sh, count_calls) and the cycles they take at least and at most.
+echo "-- one smc_step call on $QEMU -M mps2-an386 (Cortex-M4F, newlib libm):"
+# shellcheck disable=SC2046
+count_calls "$elf" "$OUT/qemu.log" $(one_insn_per_tb)
+grep -a 'smc_step status' "$OUT/qemu.log" || echo "   (the program printed nothing: see $OUT/qemu.log)"

@@ -17,32 +17,14 @@ for f in $PLANNER; do "${PREFIX}objdump" -d "$OUT/$f.o"; done | awk '
          printf "   %-24s %5d\n", "total", total}'
 
 elf="$OUT/time_optimal_m4.elf"
-# shellcheck disable=SC2086
-"${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/time_optimal_main.c csrc/time_optimal.c \
-    csrc/time_optimal_envelope.c csrc/time_optimal_table.c csrc/motor.c \
-    -nostartfiles --specs=nosys.specs -Wl,--gc-sections -T embedded/mps2_an386.ld -lm -o "$elf"
-echo "-- firmware image with the planner, its 15000-float workspace and result, and the libm it needs (bytes):"
+link_image "$elf" embedded/time_optimal_main.c
+echo "-- firmware image with the planner, its result and the libm it needs (bytes; the workspace is the RAM above .bss):"
 "${PREFIX}size" "$elf"
 if ! command -v "$QEMU" >/dev/null 2>&1; then
     echo "-- emulation: skipped: $QEMU not found (apt-get install qemu-system-arm)"
     exit 0
 fi
-# One instruction per translation block, each logged with its symbol: the lines from traced_step's entry back
-# to main are the plan's instructions (counted as they stream, the trace is millions of lines).
-run_count() {
-    timeout 1200 "$QEMU" -M mps2-an386 -nographic -semihosting "$@" -d exec,nochain -D /dev/stdout \
-        -kernel "$elf" 2>"$OUT/time_optimal_qemu.log" |
-        awk '{sym = $NF} sym == "traced_step" {on = 1; next} on && sym == "main" {exit}
-             on {n++; by[sym]++} END {
-                printf "   executed instructions: %d\n", n
-                for (s in by) printf "     %-24s %9d\n", s, by[s] | "sort -k2 -n -r"
-             }'
-}
 echo "-- one time_optimal_plan call (1 rad, 24 V) on $QEMU -M mps2-an386 (Cortex-M4F, newlib libm):"
-if timeout 120 "$QEMU" -M mps2-an386 -nographic -semihosting -accel tcg,one-insn-per-tb=on -kernel "$elf" \
-        >/dev/null 2>&1; then
-    run_count -accel tcg,one-insn-per-tb=on
-else
-    run_count -singlestep  # the option's name before QEMU 8.1
-fi
-grep -a 'time_optimal_plan' "$OUT/time_optimal_qemu.log" || true
+# shellcheck disable=SC2046
+count_calls "$elf" "$OUT/time_optimal_qemu.log" $(one_insn_per_tb)
+grep -a 'time_optimal_plan' "$OUT/time_optimal_qemu.log" || echo "   (the program printed nothing: see $OUT/time_optimal_qemu.log)"

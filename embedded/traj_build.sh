@@ -15,21 +15,12 @@ for f in traj_flag traj_flag_seg traj_segment traj_value traj_eval traj_valid; d
 done
 
 elf="$OUT/traj_m4.elf"
-# shellcheck disable=SC2086
-"${PREFIX}gcc" $CFLAGS embedded/startup.c embedded/traj_main.c csrc/trajectory.c csrc/plan.c -nostartfiles \
-    --specs=nosys.specs -Wl,--gc-sections -T embedded/mps2_an386.ld -lm -o "$elf"
+link_image "$elf" embedded/traj_main.c
 if ! command -v "$QEMU" >/dev/null 2>&1; then
     echo "-- emulation: skipped: $QEMU not found (apt-get install qemu-system-arm)"
     exit 0
 fi
-run_trace() {
-    timeout 120 "$QEMU" -M mps2-an386 -nographic -semihosting "$@" -d exec,nochain -D "$OUT/traj_trace.log" \
-        -kernel "$elf" 2>"$OUT/traj_qemu.log"
-}
-run_trace -accel tcg,one-insn-per-tb=on || run_trace -singlestep
-echo "-- one traj_flag call (16 segments, bisection) on $QEMU -M mps2-an386: $(grep -a 'traj_flag' "$OUT/traj_qemu.log")"
-awk '{sym = $NF} sym == "traced_step" {on = 1; next} on && sym == "main" {exit}
-     on {n++; by[sym]++} END {
-        printf "   executed instructions: %d\n", n
-        for (s in by) printf "     %-24s %5d\n", s, by[s] | "sort -k2 -n -r"
-     }' "$OUT/traj_trace.log"
+echo "-- one traj_flag call (16 segments, bisection) on $QEMU -M mps2-an386 (Cortex-M4F):"
+# shellcheck disable=SC2046
+count_calls "$elf" "$OUT/traj_qemu.log" $(one_insn_per_tb)
+grep -a 'traj_flag' "$OUT/traj_qemu.log" || echo "   (the program printed nothing: see $OUT/traj_qemu.log)"

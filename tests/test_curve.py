@@ -135,3 +135,23 @@ def test_cli_curve_of_a_datasheet_motor_defaults_to_its_rated_current_and_gives_
     assert run.returncode == 0 and '"band"' in run.stdout
     run = cli(["curve", "m.toml", "--out", "m.toml", "--v-bus", "24"], cwd=tmp_path)
     assert run.returncode == 2 and "input" in run.stderr
+
+
+def test_figure_legend_names_the_drives_in_the_docs_words(cli, tmp_path):
+    """The legend says what docs/curves.md says (open-loop chopper, field-oriented with i_d = 0 or field weakening),
+    not the drive kinds' internal names."""
+    import json
+
+    import matplotlib.pyplot as plt
+
+    from flatstep.cli.curve import _plot
+
+    (tmp_path / "s.toml").write_text(SCENARIO)
+    run = cli(["curve", "s.toml", "--current", "1.0", "--points", "5", "--json"], cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    fig = _plot(json.loads(run.stdout))
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    plt.close(fig)
+    assert labels[:3] == ["open-loop chopper (step/dir driver)", "field-oriented, i_d = 0",
+                          "field-oriented, field weakening"]
+    assert not set(labels) & set(DRIVE_KINDS)

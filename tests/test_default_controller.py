@@ -55,3 +55,26 @@ def test_compare_clean_runs_a_file_whose_default_knows_the_torques(cli):
                "--population", "5", "--frontier", "1", "--quiet"])
     assert run.returncode == 0, run.stderr
     assert "compare-paper-20khz (clean)" in run.stdout and "cascade" in run.stdout
+
+
+@pytest.mark.parametrize("text, kind", [
+    # options without a law are set over the default's law and options, not over the paper's law
+    (DRIVE + TORQUES + "[controller]\nfeedforward = true\n", DEFAULT_TYPE_TORQUES),
+    (DRIVE + TORQUES + "[controller]\nobserver_torques = false\n", "cascade+feedforward+voltage_feedforward"),
+    (DRIVE + "[controller]\nvoltage_feedforward = false\n", "cascade"),
+    (TORQUES + "[controller]\nfeedforward = true\n", "smc_ff"),  # no drive: the default is the paper's law
+])
+def test_options_without_a_law_follow_the_default(tmp_path, text, kind):
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    assert load_scenario(path)[0].controller_type == kind
+
+
+def test_an_option_the_default_law_does_not_take_needs_a_law(tmp_path):
+    """integral is an option of dq_smc alone: without a law the default (the cascade) cannot take it."""
+    path = tmp_path / "s.toml"
+    path.write_text(DRIVE + "[controller]\nintegral = true\n")
+    with pytest.raises(ValueError, match=r"s.toml:controller.integral: the table names no law, so the controller is "
+                                         r"the default 'cascade\+voltage_feedforward' \(law 'cascade'.*law = one of "
+                                         r"\['dq_smc'\]"):
+        load_scenario(path)

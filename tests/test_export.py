@@ -202,3 +202,12 @@ def test_export_command(cli, tmp_path):
     assert run.returncode == 2 and "C header" in run.stderr
     run = cli(["export", str(VIA), "--no-verify", "--steps", "--microsteps", "0", "--out", "s.csv"], cwd=tmp_path)
     assert run.returncode == 2 and "microsteps" in run.stderr
+
+
+def test_the_via_example_is_kept_on_its_own_drive(cli, tmp_path):
+    """The README exports hermite-via.toml without --no-verify: flatstep plan keeps it on its drive and controller."""
+    run = cli(["plan", str(VIA)], cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "verified on the drive" in run.stdout and "every run ok" in run.stdout
+    run = cli(["export", str(VIA), "--steps", "--out", "steps.csv"], cwd=tmp_path)
+    assert run.returncode == 0, run.stderr

@@ -19,6 +19,7 @@ from ..studies.scenario_file import Robustness, read_scenario_file
 from ..validate import InputError, check_quantity
 from ..validate.limits import check_study, estimate
 from ..validate.paths import PNG_MARK, check_output_dir, json_marks
+from .columns import name_width
 from .flags import add_force, count, out_dir, quantity
 from .plan import scenario_on_drive
 from .status import EXIT_STOPPED, exit_code, warn
@@ -43,9 +44,10 @@ def _cell(value: Optional[float], scale: float | Literal["angle"], count: Option
 def table(rows: dict[str, dict[str, Optional[float]]], count: Optional[float]) -> str:
     """The metrics as a fixed-width table, one row per controller (angles in encoder counts when ``count``)."""
     unit = "counts" if count else "rad"
-    lines = [f"{'controller':<22}" + "".join(f"{head:>11}" for _, head, _ in COLUMNS) + f"   [angles in {unit}]"]
+    width = name_width((LABELS.get(kind, kind) for kind in rows), "controller", 22)
+    lines = [f"{'controller':<{width}}" + "".join(f"{head:>11}" for _, head, _ in COLUMNS) + f"   [angles in {unit}]"]
     for kind, m in rows.items():
-        lines.append(f"{LABELS.get(kind, kind):<22}" + "".join(_cell(m[k], s, count) for k, _, s in COLUMNS))
+        lines.append(f"{LABELS.get(kind, kind):<{width}}" + "".join(_cell(m[k], s, count) for k, _, s in COLUMNS))
     return "\n".join(lines)
 
 
@@ -247,9 +249,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.scales:
         where = "worst over the plants" if worst is not None else "the scenario's plant"
         print(f"\nbaselines with every bandwidth scaled ({where}): max error during the move, peak voltage")
-        for s, res in report["bandwidth_sweep"].items():
-            print(f"  x{float(s):<5g}" + "".join(f"{LABELS[k]:>24}: {_cell(m['move_max'], 'angle', count).strip():>8}"
-                                                 f" {m['peak_voltage']:6.3g} V" if m else f"{LABELS[k]:>24}: no result"
+        sweep = report["bandwidth_sweep"]
+        w = name_width((LABELS[k] for res in sweep.values() for k in res), "", 24)
+        for s, res in sweep.items():
+            print(f"  x{float(s):<5g}" + "".join(f"{LABELS[k]:>{w}}: {_cell(m['move_max'], 'angle', count).strip():>8}"
+                                                 f" {m['peak_voltage']:6.3g} V" if m else f"{LABELS[k]:>{w}}: no result"
                                                  for k, m in res.items()))
     if line:
         print("\n" + line)

@@ -16,6 +16,7 @@ from ..studies.tune_file import read_tuned
 from ..studies.tune_laws import law_gains
 from ..validate import InputError
 from ..validate.paths import PNG_MARK, check_output_dir, json_marks
+from .columns import name_width
 from .flags import out_dir
 from .plan import scenario_on_drive
 from .status import EXIT_LOST, EXIT_OK
@@ -107,20 +108,22 @@ def _print(name: str, frontiers: dict[str, Frontier], layers: dict[str, Any], co
     """The tuned laws at the full cap, then each law's frontier and the sliding laws' share outside the layer."""
     print(f"{name}: each law tuned, worst of {plants} plants")
     print(caps_line(caps))
-    print(header(count))
+    width = name_width(frontiers, "law", 40)
+    print(header(count, width))
     for kind, fr in frontiers.items():
         best = fr.points[-1].best
         if best is None:
-            print(f"{kind:<40}{'no candidate met the caps':>40}")
+            print(f"{kind:<{width}}{'no candidate met the caps':>40}")
             continue
-        print(row(kind, best, count, f"  {fr.wall_time:.1f} s" if fr.results else "  (read)"))
+        print(row(kind, best, count, f"  {fr.wall_time:.1f} s" if fr.results else "  (read)", width))
         print("  " + ", ".join(f"{k} = {v:.5g}" for k, v in best.gains.items()))
     if any(len(f.points) > 1 for f in frontiers.values()):
         unit = "counts" if count else "rad"
         print(f"\nfrontier: worst-of-plants max error during the move [{unit}] (copper [mJ]) under each peak-voltage "
               "cap")
         caps_v = [p.cap for p in next(iter(frontiers.values())).points]
-        print(f"{'law':<30}" + "".join(f"{f'<= {c:.3g} V':>22}" for c in caps_v))
+        width = name_width(frontiers, "law", 30)
+        print(f"{'law':<{width}}" + "".join(f"{f'<= {c:.3g} V':>22}" for c in caps_v))
         for kind, fr in frontiers.items():
             cells = []
             for p in fr.points:
@@ -129,7 +132,7 @@ def _print(name: str, frontiers: dict[str, Frontier], layers: dict[str, Any], co
                 else:
                     e = p.best.move_max / count if count else p.best.move_max
                     cells.append(f"{f'{e:.3f} ({p.best.copper * 1e3:.4g})':>22}")
-            print(f"{kind:<30}" + "".join(cells))
+            print(f"{kind:<{width}}" + "".join(cells))
     for kind, share in layers.items():
         if share is not None:
             print(f"{kind}: |s| outside its boundary layer at {share['either']:.1%} of the control instants from t0 "

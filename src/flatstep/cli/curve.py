@@ -122,8 +122,13 @@ def _to_rad_s(n: Any) -> Any:
     return np.asarray(n, dtype=float) / RPM
 
 
-def _figure(report: dict[str, Any], path: str) -> None:
-    """The curve against rad/s, with rpm on the top axis, the band shaded."""
+#: The figure's legend for each drive kind, in the words of docs/curves.md.
+DRIVE_LABELS = {"chopper": "open-loop chopper (step/dir driver)", "foc": "field-oriented, i_d = 0",
+                "foc_weakening": "field-oriented, field weakening"}
+
+
+def _plot(report: dict[str, Any]) -> Any:
+    """The figure (a matplotlib ``Figure``): the curve against rad/s, with rpm on the top axis, the band shaded."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -133,7 +138,7 @@ def _figure(report: dict[str, Any], path: str) -> None:
     fig, ax = plt.subplots(figsize=(7, 4.2))
     widths = {"chopper": (3.0, "-"), "foc": (1.2, "--"), "foc_weakening": (1.5, "-")}
     for kind, t in report["torque"].items():
-        line = ax.plot(w, t, label=kind, lw=widths[kind][0], ls=widths[kind][1])[0]
+        line = ax.plot(w, t, label=DRIVE_LABELS[kind], lw=widths[kind][0], ls=widths[kind][1])[0]
         if "band" in report:
             lo, hi = report["band"][kind]
             ax.fill_between(w, lo, hi, color=line.get_color(), alpha=0.15)
@@ -149,6 +154,14 @@ def _figure(report: dict[str, Any], path: str) -> None:
     top.set_xlabel("speed [rpm]")
     ax.legend(fontsize=8, title=f"v_bus {report['v_bus']:g} V, {report['current']:.3g} A", title_fontsize=8)
     fig.tight_layout()
+    return fig
+
+
+def _figure(report: dict[str, Any], path: str) -> None:
+    """Write :func:`_plot`'s figure to ``path`` (PNG)."""
+    import matplotlib.pyplot as plt
+
+    fig = _plot(report)
     fig.savefig(path)
     plt.close(fig)
 

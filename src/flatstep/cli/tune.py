@@ -19,6 +19,7 @@ from ..studies.tune_laws import law_gains
 from ..validate import InputError
 from ..validate.limits import check_study, estimate
 from ..validate.paths import check_output
+from .columns import name_width
 from .flags import add_force, count, quantity
 from .plan import scenario_on_drive
 from .status import EXIT_LOST, EXIT_OK
@@ -97,18 +98,18 @@ def check_work(scenario: Scenario, sf: ScenarioFile, budget: int) -> None:
         raise InputError("--budget", budget, f"--budget {budget}: {exc}; or lower --budget") from None
 
 
-def row(label: str, ev: Evaluation, count: Optional[float], extra: str = "") -> str:
-    """One line of the table: worst move error, peak voltage, copper, settling, plants not ok."""
+def row(label: str, ev: Evaluation, count: Optional[float], extra: str = "", width: int = 40) -> str:
+    """One line of the table: worst move error, peak voltage, copper, settling, plants not ok (label ``width`` wide)."""
     move = f"{ev.move_max / count:11.3f}" if count else f"{ev.move_max:11.3e}"
     settling = f"{ev.settling * 1e3:11.3g}" if ev.settling is not None else f"{'unsettled':>11}"
-    return (f"{label:<40}{move}{ev.peak_voltage:11.3g}{ev.copper * 1e3:11.4g}{settling}"
+    return (f"{label:<{width}}{move}{ev.peak_voltage:11.3g}{ev.copper * 1e3:11.4g}{settling}"
             f"{ev.bad_plants:>7}/{ev.plants:<3}{extra}").rstrip()
 
 
-def header(count: Optional[float]) -> str:
-    """The table's header."""
+def header(count: Optional[float], width: int = 40) -> str:
+    """The table's header (its first column ``width`` wide, as :func:`row`'s)."""
     unit = "counts" if count else "rad"
-    return (f"{'law':<40}{'worst move':>11}{'peak |v|':>11}{'copper':>11}{'settling':>11}{'not ok':>11}"
+    return (f"{'law':<{width}}{'worst move':>11}{'peak |v|':>11}{'copper':>11}{'settling':>11}{'not ok':>11}"
             f"   [{unit}, V, mJ, ms]")
 
 
@@ -164,10 +165,11 @@ def report(scenario: Scenario, results: dict[str, TuneResult], budget: int, seed
     first = next(iter(results.values()))
     print(f"{scenario.name}: {first.best.plants} plants, {budget} evaluations per law, seed {seed}")
     print(caps_line(first.caps))
-    print(header(count))
+    width = name_width((f"{kind} (scenario's gains)" for kind in results), "law", 40)
+    print(header(count, width))
     for kind, res in results.items():
-        print(row(f"{kind} (scenario's gains)", res.start, count))
-        print(row(f"{kind} tuned", res.best, count, f"  {res.wall_time:.1f} s"))
+        print(row(f"{kind} (scenario's gains)", res.start, count, width=width))
+        print(row(f"{kind} tuned", res.best, count, f"  {res.wall_time:.1f} s", width))
         print("  " + ", ".join(f"{k} = {v:.5g}" for k, v in res.gains.items()))
 
 

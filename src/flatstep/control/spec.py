@@ -408,6 +408,36 @@ def default_type(*, sampled: bool, torques: bool) -> str:
         return DEFAULT_TYPE_CONTINUOUS
     return DEFAULT_TYPE_TORQUES if torques else DEFAULT_TYPE
 
+def spec_without_law(options: Mapping[str, Any], default: str, where: str = "controller") -> ControllerSpec:
+    """The controller of a ``[controller]`` table that gives options but no ``law``.
+
+    It is the default type's law and options (``default``, from :func:`default_type`), the given options set over them.
+
+    Parameters
+    ----------
+    options : mapping
+        The table's option keys (of :data:`OPTIONS`) and their values.
+    default : str
+        The controller the file runs when it names none.
+    where : str
+        The table, for messages (``file:controller``).
+
+    Raises
+    ------
+    InputError
+        Naming the first option set (not at its off value) that the default's law does not take: which law was
+        meant is ambiguous, so the table must name it.
+    """
+    base = ControllerSpec.parse(default)
+    for key, value in options.items():
+        if key in OPTIONS and base.law not in OPTIONS[key].laws and value != _off(key):
+            raise InputError(key, value, f"{where}.{key}: the table names no law, so the controller is the default "
+                             f"{default!r} (law {base.law!r}, docs/controllers.md), which has no option {key}; name "
+                             f"the law: law = one of {list(OPTIONS[key].laws)}, or give type")
+    return ControllerSpec.parse({"law": base.law, **{k: getattr(base, k) for k in base.options_on()}, **options},
+                                where)
+
+
 def label(kind: str) -> str:
     """The label of a controller name (:data:`LABELS`, or the spec's own for a ``law+option+...`` name)."""
     return LABELS[kind]

@@ -14,7 +14,7 @@ from typing import Any, Optional, Union
 
 from ..control.build import check_lambda_ts
 from ..control.smc import MEASUREMENTS, SMCGains
-from ..control.spec import LAW_GAINS, LAW_TABLE, OPTION_LAWS, ControllerSpec, default_type
+from ..control.spec import LAW_GAINS, LAW_TABLE, OPTION_LAWS, ControllerSpec, default_type, spec_without_law
 from ..control.tuning import CONTROLLER_TYPES
 from ..loop.design import design_gains
 from ..loop.drive import Drive
@@ -203,7 +203,11 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     if spec_keys and "type" in ctrl:
         raise InputError("type", ctrl["type"], f"{where}:controller: give the controller by type={ctrl['type']!r} or "
                          f"by law and options ({sorted(spec_keys)}), not both")
-    if spec_keys:
+    if spec_keys and "law" not in spec_keys:  # options over the default law (docs/controllers.md)
+        controller_type = spec_without_law(spec_keys, default_type(sampled=period is not None,
+                                                                   torques="feedforward" in doc),
+                                           f"{where}:controller").name()
+    elif spec_keys:
         controller_type = ControllerSpec.parse(spec_keys, f"{where}:controller").name()
     else:
         given = ctrl.pop("type", None)
@@ -240,7 +244,7 @@ def read_scenario_file(path: Union[str, Path]) -> ScenarioFile:
     sliding_keys, law_gains = (ctrl, None) if LAW_TABLE[law].sliding else ({}, ctrl)
     for key in ctrl:
         if key not in LAW_GAINS[law]:
-            unnamed = "" if spec_keys or "type" in sec["controller"] else (
+            unnamed = "" if "law" in spec_keys or "type" in sec["controller"] else (
                 f" (the file names no type: {controller_type!r} is the default; type = \"smc\" for the paper's law)")
             raise InputError(key, ctrl[key], f"{where}:controller.{key}: {key} is not a gain of law {law!r}{unnamed}; "
                              f"its gains: {list(LAW_GAINS[law])}")

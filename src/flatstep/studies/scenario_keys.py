@@ -150,8 +150,9 @@ KEYS: dict[str, dict[str, Key]] = {
                     "without [drive] control_rate",
                     "the controller by name (flatstep.control.spec: each name is a law and its options; the default "
                     "is the law docs/comparison.md recommends)"),
-        "law": Key("", ", ".join(f'"{c}"' for c in LAWS), '"smc"',
-                   "the control law, with the options below (instead of type)"),
+        "law": Key("", ", ".join(f'"{c}"' for c in LAWS), "the default type's law",
+                   "the control law, with the options below (instead of type); options without a law are set over "
+                   "the default type's law and options, and one that law does not take is refused"),
         **{k: Key("", ", ".join(f'"{v}"' for v in opt.values) if opt.values else "true, false",
                   f'"{opt.values[0]}"' if opt.values else "false", f"with law: {opt.doc} ({', '.join(opt.laws)})")
            for k, opt in OPTIONS.items()},
