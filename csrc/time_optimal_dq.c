@@ -10,6 +10,8 @@
 #define TOD_CURRENT_PLAN FS_C(0.995)      // of i_max, the share the move is first shot at
 #define TOD_V_MARGIN FS_C(0.995)          // of the bus, the voltage a table may reach at its samples
 #define TOD_EXTRA FS_C(0.002)             // of the excess, the extra a share shrinks by
+#define TOD_POWER FS_C(1.5)               // the power of the excess a share shrinks by
+#define TOD_SHARE FS_C(0.98)              // of v_use v_bus, the bus the move is first shot at
 #define TOD_TIME_WEIGHT FS_C(1.0)         // the measure's share of one rise time against a full change of a rate
 #define TOD_CLOSE FS_C(0.25)              // of a step, samples closer than this to the one before are dropped
 #define TOD_PI FS_C(3.14159265358979323846)
@@ -256,8 +258,9 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     struct tod_shot sh;
     struct samples s;
     struct tod_margins g;
-    fs_real sign = distance < 0 ? -1 : 1, d = fs_fabs(distance), cap, v_bus, share = 1, current = TOD_CURRENT_PLAN;
-    fs_real speed = TOD_CAP_PLAN, v, i_max, c[4], *p = work;
+    fs_real sign = distance < 0 ? -1 : 1, d = fs_fabs(distance), cap, v_bus, share = TOD_SHARE,
+            current = TOD_CURRENT_PLAN;
+    fs_real speed = TOD_CAP_PLAN, ramp = 1, v, i_max, c[4], *p = work;
     fs_real **arrays[12] = {&sh.acc.theta, &sh.acc.omega, &sh.acc.i_d, &sh.acc.i_q, &sh.acc.t_d, &sh.acc.t_q,
                             &sh.brk.theta, &sh.brk.omega, &sh.brk.i_d, &sh.brk.i_q, &sh.brk.t_d, &sh.brk.t_q};
     fs_real **sarrays[9] = {&s.t, &s.th, &s.w, &s.id, &s.iq, &s.did, &s.diq, &s.keep, &s.meas};
@@ -281,8 +284,9 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
         return TOD_ESTART;
     for (attempt = 0; attempt <= TOD_SHRINKS; attempt++) {
         v = share * v_bus, i_max = current * lim->i_max;
-        if (!tod_shoot(m, d, v, i_max, speed * cap, &sh))
+        if (!tod_shoot(m, d, v, i_max, speed * cap, ramp, &sh))
             break;
+        ramp = sh.ramp;
         samples(m, &sh, d, &s);
         nk = pick_knots(&s, m->L * i_max / v, v / m->L, knots);
         if (nk < 2 || nk > TO_MAX_SEGMENTS + 1)
@@ -298,11 +302,11 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
             return TOD_OK;
         }
         if (g.voltage / TOD_V_MARGIN - 1 > 0)
-            share /= g.voltage / TOD_V_MARGIN + TOD_EXTRA;
+            share /= fs_pow(g.voltage / TOD_V_MARGIN + TOD_EXTRA, TOD_POWER);
         if (g.current > 1)
-            current /= g.current + TOD_EXTRA;
+            current /= fs_pow(g.current + TOD_EXTRA, TOD_POWER);
         if (g.speed > 1)
-            speed /= g.speed + TOD_EXTRA;
+            speed /= fs_pow(g.speed + TOD_EXTRA, TOD_POWER);
         if (!fs_isfinite(share) || !fs_isfinite(current) || !fs_isfinite(speed))
             break;
     }

@@ -268,25 +268,34 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
     return true;
 }
 
-bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, struct tod_shot *shot)
+bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, fs_real ramp_rate,
+               struct tod_shot *shot)
 {
     struct model md;
-    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess;
+    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt;
     size_t n_acc = 0, n_b, k;
     bool cruise = false, landed;
     int dbl, tries;
     for (dbl = 0; dbl <= TOD_DOUBLINGS; dbl++, h *= 2) {
         model_init(&md, m, v, i_max, cap, h);
+        md.end_rate = ramp_rate * md.rate;
         landed = false;
+        prev = e_prev = (fs_real)NAN;
         if (speed_up(&md, d, &shot->acc, &n_acc, &cruise))
             for (tries = 0; tries <= TOD_RAMP_TRIES; tries++) {
                 landed = land(&md, &shot->acc, n_acc, cruise, d, &t_s, &shot->end);
                 if (!landed)
                     break;
                 excess = ramp_voltage(&md, &shot->end);
-                if (excess <= TOD_RAMP_SHARE)
+                if (excess <= 1)
                     break;
-                md.end_rate *= (TOD_RAMP_SHARE / excess) * (TOD_RAMP_SHARE / excess);
+                rate = md.end_rate;
+                if (fs_isfinite(e_prev) && excess != e_prev) {
+                    nxt = rate + (TOD_RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev);
+                    nxt = fs_min(fs_max(nxt, FS_C(0.25) * rate), rate);
+                } else
+                    nxt = rate * ((TOD_RAMP_SHARE / excess) * (TOD_RAMP_SHARE / excess));
+                prev = rate, e_prev = excess, md.end_rate = TOD_RAMP_AIM * nxt;
             }
         if (!landed || !brake(&md, &shot->acc, n_acc, cruise, t_s, &shot->brk, &shot->end, &n_b))
             continue;
@@ -295,6 +304,7 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
         k = k < n_acc - 1 ? k : n_acc - 1;
         shot->n_acc = shot->cruise ? n_acc : k + 1;
         shot->n_brake = n_b, shot->t_s = t_s, shot->v = v, shot->gain = md.lk, shot->h = h;
+        shot->ramp = md.end_rate / md.rate;
         return true;
     }
     return false;

@@ -10,7 +10,8 @@
 
 #define TOD_LAG FS_C(0.5)          // the current's time constant under the policy, in current rise times
 #define TOD_Q_RATE FS_C(0.9)       // of V / L, the current's rate of the approach to the cap and the ramp
-#define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the most the terminal ramp may use
+#define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
+#define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
 #define TOD_TOP_SHARE FS_C(0.995)  // of the top speed, the cruise speed where that speed is below the cap
 #define TOD_SETTLE FS_C(1e-7)      // a cruise has settled this close to its speed and currents, relatively
 #define TOD_ROOT_TOL FS_C(1e-10)   // the root finder stops this close to the distance, relatively
@@ -39,12 +40,14 @@ struct tod_shot {
     struct tod_phase acc, brk;
     size_t n_acc, n_brake;
     bool cruise;
-    fs_real t_s, v, gain, h;
+    fs_real t_s, v, gain, h, ramp;  // ramp: the terminal ramp's rate, of TOD_Q_RATE V / L
     struct tod_end end;
 };
 
 // Returns true and writes the move over d > 0 at bus v, current i_max and speed cap into shot (its phases' arrays
-// set by the caller); false when a phase needs too many steps at every step size.
-bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, struct tod_shot *shot);
+// set by the caller), the terminal ramp's rate starting at ramp_rate of TOD_Q_RATE V / L; false when a phase needs
+// too many steps at every step size.
+bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, fs_real ramp_rate,
+               struct tod_shot *shot);
 
 #endif

@@ -47,15 +47,17 @@ __all__ = ["CAP_PLAN", "CURRENT_PLAN", "ELECTRICAL_SHARE", "SHARE", "SHRINKS", "
 #: The largest electrical frequency over the control rate (csrc/time_optimal_dq.h ``TOD_ELECTRICAL_SHARE``).
 ELECTRICAL_SHARE = 0.035
 #: Of v_use v_bus, the bus the move is first shot at.
-SHARE = 1.0
+SHARE = 0.98
 #: Of the speed cap, the share the move is shot at.
 CAP_PLAN = 0.995
 #: Of i_max, the share the move is first shot at.
 CURRENT_PLAN = 0.995
 #: Shots after the first, at most: each shrinks the share of the limit the last fitted table crossed.
 SHRINKS = 6
-#: Of the excess, the extra the share shrinks by (so that the next shot lands inside).
+#: Of the excess, the extra the share shrinks by, and the power of the excess it shrinks by (a smaller share
+#: lowers the fitted table's peak by less: so that the next shot lands inside).
 _EXTRA = 0.002
+_POWER = 1.5
 VOLTAGES = ("phase", "vector")
 #: Of i_max, the least floor of the plan's rho channel (DQPlan).
 RHO_FLOOR = 0.1
@@ -107,24 +109,25 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
         return DQCandidate(float(table.breaks[-1]), kappa, step, margins, table)
     cap = speed_cap(motor, limits, control_rate)
     v_bus = limits.v_use * limits.v_bus
-    share, current, speed = SHARE, CURRENT_PLAN, CAP_PLAN
+    share, current, speed, ramp = SHARE, CURRENT_PLAN, CAP_PLAN, 1.0
     if not best_currents(0.0, motor, share * v_bus, current * limits.i_max)[1] > 0:
         raise ValueError(f"the motor cannot start: at rest {v_bus:g} V and {limits.i_max:g} A give no torque")
     for _ in range(SHRINKS + 1):
         v, i_max = share * v_bus, current * limits.i_max
-        shot = shoot(d, motor, v, i_max, speed * cap)
+        shot = shoot(d, motor, v, i_max, speed * cap, ramp)
         if shot is None:
             break
+        ramp = shot.ramp
         table = dq_fit(shot, d, motor, v, i_max)
         mg = dq_margins(table, motor, v_bus, limits.i_max, cap)
         if mg["worst"] <= 0:
             return DQCandidate(float(table.breaks[-1]), share, shot.h, mg, table)
         if mg["voltage"] / V_MARGIN - 1.0 > 0:
-            share /= mg["voltage"] / V_MARGIN + _EXTRA
+            share /= (mg["voltage"] / V_MARGIN + _EXTRA) ** _POWER
         if mg["current"] > 1.0:
-            current /= mg["current"] + _EXTRA
+            current /= (mg["current"] + _EXTRA) ** _POWER
         if mg["speed"] > 1.0:
-            speed /= mg["speed"] + _EXTRA
+            speed /= (mg["speed"] + _EXTRA) ** _POWER
     raise ValueError(f"no feasible field-weakening plan of {distance} rad within {limits}: raise v_bus or i_max")
 
 

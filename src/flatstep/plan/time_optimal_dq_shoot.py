@@ -67,9 +67,12 @@ BRIDGE = 0.05
 #: Of V / L, the torque current's rate the approach to the speed cap and the terminal ramp count on (the ramp's
 #: falls where it would leave the bus).
 Q_RATE = 0.9
-#: Of the bus, the most the terminal ramp may use; and the ramp's rate changes at most this many times.
+#: Of the bus, the voltage the terminal ramp's rate aims at where the ramp would leave the bus; and the ramp's rate
+#: changes at most this many times.
 RAMP_SHARE = 0.99
 RAMP_TRIES = 4
+#: Of the secant's rate, the one tried (a little below, so that the next try lands within the bus).
+RAMP_AIM = 0.995
 #: Of the top speed where no torque is left, the cruise speed when that speed is below the cap.
 TOP_SHARE = 0.995
 #: A cruise has settled when its speed and currents are this close to their targets, relatively.
@@ -132,6 +135,7 @@ class Shot(NamedTuple):
     v: float  # the bus [V], the policy's gain L / T_c [ohm] and the step [s] of the shot
     gain: float
     h: float
+    ramp: float  # the terminal ramp's rate, of Q_RATE V / L
 
 
 class _Model:
@@ -341,27 +345,37 @@ def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float) -> O
     return t_s, end
 
 
-def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float) -> Optional[Shot]:
+def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp: float = 1.0) -> Optional[Shot]:
     """The move over ``d`` > 0 at bus ``v`` [V], current ``i_max`` [A] and speed cap [rad/s] (None: not found).
 
-    Where the terminal ramp would leave the bus (at its start or its end), its rate falls by the square of the
-    excess and the switch is found again, at most :data:`RAMP_TRIES` times.
+    ``ramp``: the terminal ramp's rate to start from, of :data:`Q_RATE` ``v / L``. Where the ramp would leave the
+    bus (at its start or its end), its rate is set by the secant on the ramp's voltage towards :data:`RAMP_SHARE`
+    of the bus (the first step scales it by the square of the excess) and the switch is found again, at most
+    :data:`RAMP_TRIES` times; the shot keeps the rate (the planner starts its next shot from it).
     """
     h = motor.L * i_max / v / STEPS
     for _ in range(DOUBLINGS + 1):
         md = _Model(motor, v, i_max, cap, h)
+        md.end_rate = ramp * md.rate
         up = _speed_up(md, d)
         landed = None
         if up is not None:
             acc, n_acc, cruise = up
+            prev, e_prev = math.nan, math.nan
             for _ in range(RAMP_TRIES + 1):
                 landed = _land(md, acc, n_acc, cruise, d)
                 if landed is None:
                     break
                 excess = ramp_voltage(md, landed[1])
-                if excess <= RAMP_SHARE:
+                if excess <= 1.0:
                     break
-                md.end_rate *= (RAMP_SHARE / excess) ** 2
+                rate = md.end_rate
+                if math.isfinite(e_prev) and excess != e_prev:
+                    nxt = rate + (RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev)
+                    nxt = min(max(nxt, 0.25 * rate), rate)
+                else:
+                    nxt = rate * (RAMP_SHARE / excess) ** 2
+                prev, e_prev, md.end_rate = rate, excess, RAMP_AIM * nxt
         if landed is None:
             h *= 2.0
             continue
@@ -373,5 +387,5 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float) -> O
             continue
         cruising = cruise and t_s >= (n_acc - 1) * h
         k_s = n_acc if cruising else min(int(t_s / h), n_acc - 1) + 1
-        return Shot(Phase(*acc), k_s, cruising, t_s, Phase(*out), n_b, end, v, md.lk, h)
+        return Shot(Phase(*acc), k_s, cruising, t_s, Phase(*out), n_b, end, v, md.lk, h, md.end_rate / md.rate)
     return None
