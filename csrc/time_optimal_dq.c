@@ -56,7 +56,7 @@ static void push(struct samples *s, fs_real t, fs_real th, fs_real w, fs_real id
 }
 
 // Returns nothing; writes the shot's samples in time order, a sample closer than TOD_CLOSE h to the one before
-// dropped (a kept one replaces one not kept; time_optimal_dq_profile.samples).
+// dropped (a kept one replaces one not kept, the end any; time_optimal_dq_profile.samples).
 static void samples(const struct motor_params *m, const struct tod_shot *sh, fs_real d, struct samples *s)
 {
     const struct tod_phase *a = &sh->acc, *b = &sh->brk;
@@ -87,8 +87,8 @@ static void samples(const struct motor_params *m, const struct tod_shot *sh, fs_
         if (s->t[i] - t >= TOD_CLOSE * sh->h
             || (s->keep[i] != 0 && s->keep[last] != 0 && s->t[i] > t * (1 + FS_C(1e-12))))
             last++;
-        else if (!(s->keep[i] != 0 && s->keep[last] == 0))
-            continue;
+        else if (!(s->keep[i] != 0 && (s->keep[last] == 0 || i == s->n - 1) && last > 0))
+            continue;  // (the end at rest is never dropped: it replaces the one before it)
         s->t[last] = s->t[i], s->th[last] = s->th[i], s->w[last] = s->w[i], s->id[last] = s->id[i];
         s->iq[last] = s->iq[i], s->did[last] = s->did[i], s->diq[last] = s->diq[i], s->keep[last] = s->keep[i];
     }
@@ -217,6 +217,11 @@ static struct tod_margins margins(const struct motor_params *m, const struct tod
                 r3[k] = row[k] * (p * (p - 1) * (p - 2));
         }
         h1 = h, h2 = h * h, h3 = h * h * h;
+        u = 1 / h;
+        if (!fs_isfinite(u * u * u * u)) {  // a segment too short for a table (traj_valid): none
+            g.worst = (fs_real)INFINITY;
+            return g;
+        }
         p0 = kid[i], p1 = kid[i + 1], m0 = kdid[i] * h, m1 = kdid[i + 1] * h;
         last = i == n - 1 ? (size_t)TO_CHECK : (size_t)TO_CHECK - 1;
         for (j = 0; j <= last; j++) {
@@ -284,6 +289,8 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
         return TOD_ESTART;
     for (attempt = 0; attempt <= TOD_SHRINKS; attempt++) {
         v = share * v_bus, i_max = current * lim->i_max;
+        if (!(v > 0 && i_max > 0 && cap > 0 && m->L * i_max / v > 0))
+            break;
         if (!tod_shoot(m, d, v, i_max, speed * cap, ramp, &sh))
             break;
         ramp = sh.ramp;
@@ -294,6 +301,8 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
         fit(m, &s, knots, nk, out);
         out->tables++;
         g = margins(m, lim, cap, out);
+        if (!fs_isfinite(g.worst))
+            break;
         if (g.worst <= 0) {
             out->kappa = share, out->width = sh.h, out->margins = g;
             for (i = 0; i < out->n; i++)  // a negative move mirrors the positive one

@@ -8,6 +8,8 @@ bool tod_best_currents(const struct motor_params *m, fs_real w, fs_real v, fs_re
     fs_real x = (fs_real)m->Nr * w * m->L, e = m->Km * w, z2, cd, cq, r, dist, a, h, ux, uy, p1[2], p2[2];
     const fs_real *hi, *lo;
     z2 = m->R * m->R + x * x;
+    if (!(z2 > 0))  // R underflows when squared
+        return false;
     cd = -e * x / z2, cq = -e * m->R / z2, r = v / fs_sqrt(z2);
     dist = fs_hypot(cd, cq);
     if (!(dist <= i_max + r))

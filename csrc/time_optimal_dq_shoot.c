@@ -7,7 +7,7 @@
 struct model {
     const struct motor_params *m;
     fs_real R, L, Km, J, B, Nr;
-    fs_real v, i_max, h, lk, rate, end_rate, cap, hold, band;
+    fs_real v, i_max, h, lk, tc, rate, end_rate, cap, hold, band;
 };
 
 // A state: theta, omega, i_d, i_q.
@@ -15,19 +15,32 @@ struct state {
     fs_real th, w, id, iq;
 };
 
-static void model_init(struct model *md, const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap, fs_real h)
+// Returns true when the run's constants are finite and positive and writes them (hostile limits can underflow or
+// overflow them: every divisor is checked before it divides).
+static bool model_init(struct model *md, const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap, fs_real h)
 {
-    fs_real top, k;
+    fs_real top, k, den = TOD_LAG * i_max;
     md->m = m, md->R = m->R, md->L = m->L, md->Km = m->Km, md->J = m->J, md->B = m->B, md->Nr = (fs_real)m->Nr;
     md->v = v, md->i_max = i_max, md->h = h;
-    md->lk = v / (TOD_LAG * i_max);
+    if (!(den > 0 && fs_isfinite(h) && h > 0))
+        return false;
+    md->lk = v / den;
+    if (!(fs_isfinite(md->lk) && md->lk > 0))
+        return false;
+    md->tc = m->L / md->lk;
     md->rate = TOD_Q_RATE * v / m->L * (m->J / m->Km);
     md->end_rate = md->rate;
     top = tod_top_speed(m, v, i_max, cap);
     md->cap = top >= cap ? cap : TOD_TOP_SHARE * top;
     md->hold = m->B * md->cap / m->Km;
-    k = m->J / (4 * h * m->Km);
+    den = 4 * h * m->Km;
+    if (!(fs_isfinite(md->rate) && md->rate > 0 && fs_isfinite(md->cap) && md->cap > 0 && den > 0))
+        return false;
+    k = m->J / den;
+    if (!(k * k > 0 && fs_isfinite(k * k)))
+        return false;
     md->band = 2 * md->rate / (k * k);
+    return fs_isfinite(md->band) && md->band > 0;
 }
 
 // Returns nothing; writes (di_d, di_q, dw) of the model under the policy towards the target (td, tq).
@@ -45,8 +58,8 @@ static void deriv(const struct model *md, fs_real id, fs_real iq, fs_real w, fs_
 }
 
 // Returns nothing; writes the target at speed w (braking: the envelope's bottom; else its top, held to the cap's
-// approach).
-static void target(const struct model *md, fs_real w, bool braking, fs_real t[2])
+// approach, which counts lead [rad/s] more for the current's lag).
+static void target(const struct model *md, fs_real w, bool braking, fs_real lead, fs_real t[2])
 {
     fs_real c[4], e, g;
     if (!tod_best_currents(md->m, fs_min(fs_max(w, 0), md->cap), md->v, md->i_max, c))
@@ -55,14 +68,15 @@ static void target(const struct model *md, fs_real w, bool braking, fs_real t[2]
         t[0] = c[2], t[1] = c[3];
         return;
     }
-    e = md->cap - w;
+    e = md->cap - w - lead;
     g = e >= md->band ? fs_sqrt(2 * md->rate * e) : e * fs_sqrt(2 * md->rate / md->band);
     t[0] = c[0], t[1] = fs_min(c[1], md->hold + g);
 }
 
 static void next_target(const struct model *md, const struct state *s, bool braking, fs_real t[2])
 {
-    target(md, s->w + md->h * (md->Km * s->iq - md->B * s->w) / md->J, braking, t);
+    fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J;
+    target(md, s->w + md->h * alpha, braking, md->tc * alpha, t);
 }
 
 // Returns the state RK4 takes s to over f h, the target moving from t0 towards t1 (reached at a full step).
@@ -98,7 +112,7 @@ static bool speed_up(const struct model *md, fs_real d, const struct tod_phase *
     struct state s = {0, 0, 0, 0};
     fs_real tg[2], nxt[2];
     size_t k;
-    target(md, 0, false, tg);
+    target(md, 0, false, 0, tg);
     for (k = 0; k <= TOD_MAX_STEPS; k++) {
         a->theta[k] = s.th, a->omega[k] = s.w, a->i_d[k] = s.id, a->i_q[k] = s.iq, a->t_d[k] = tg[0], a->t_q[k] = tg[1];
         if (s.th >= d) {
@@ -129,6 +143,8 @@ static struct tod_end ramp(const struct model *md, fs_real t, const struct state
     if (!(a0 < 0 && s->w > 0))
         return e;
     tau0 = -2 * s->w / a0;
+    if (!(tau0 > 0))
+        return e;
     dt = fs_min(TOD_BRIDGE * md->h, FS_C(0.5) * tau0);
     deriv(md, s->id, s->iq, s->w, tg[0], tg[1], r);
     j_l = (md->Km * r[1] - md->B * a0) / md->J;
@@ -145,6 +161,15 @@ static struct tod_end ramp(const struct model *md, fs_real t, const struct state
     return e;
 }
 
+// Returns the speeding-up step that time t >= 0 lies in, at most n_acc - 1 (int(t / h) clipped, as the reference).
+static size_t step_index(fs_real t, fs_real h, size_t n_acc)
+{
+    fs_real k = t / h;
+    if (!(k > 0))
+        return 0;
+    return k < (fs_real)(n_acc - 1) ? (size_t)k : n_acc - 1;
+}
+
 // Returns the state at the switch t_s and writes the speeding-up target there (time_optimal_dq_shoot.switch_state).
 static struct state switch_state(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise,
                                  fs_real t_s, fs_real tg[2])
@@ -159,8 +184,7 @@ static struct state switch_state(const struct model *md, const struct tod_phase 
         tg[0] = a->t_d[k], tg[1] = a->t_q[k];
         return s;
     }
-    k = (size_t)(t_s / h);
-    k = k < n_acc - 1 ? k : n_acc - 1;
+    k = step_index(t_s, h, n_acc);
     s.th = a->theta[k], s.w = a->omega[k], s.id = a->i_d[k], s.iq = a->i_q[k];
     t0[0] = a->t_d[k], t0[1] = a->t_q[k];
     if (!(t_s > (fs_real)k * h)) {
@@ -241,17 +265,25 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
     fs_real last = (fs_real)(n_acc - 1) * md->h, t_s, hi, lo = 0, f_lo = -d, f_hi, f;
     size_t n_b;
     int it, side = 0;
+    if (cruise && !(a->omega[n_acc - 1] > 0))  // a cruise at no speed: the cap is 0 in fs_real
+        return false;
     t_s = hi = cruise ? last + (d - a->theta[n_acc - 1]) / a->omega[n_acc - 1] : last;
     if (!brake(md, a, n_acc, cruise, hi, NULL, end, &n_b))
         return false;
     f_hi = f = end->theta1 + end->omega1 * end->tau / 3 - d;
+    if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
+        return false;
     for (it = 0; it < TOD_ROOT; it++) {
         if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > FS_C(1e-15) * hi))
+            break;
+        if (!(f_hi - f_lo > 0))
             break;
         t_s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
         if (!brake(md, a, n_acc, cruise, t_s, NULL, end, &n_b))
             return false;
         f = end->theta1 + end->omega1 * end->tau / 3 - d;
+        if (!fs_isfinite(f))
+            return false;
         if (f < 0) {
             lo = t_s, f_lo = f;
             if (side == -1)
@@ -277,7 +309,8 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
     bool cruise = false, landed;
     int dbl, tries;
     for (dbl = 0; dbl <= TOD_DOUBLINGS; dbl++, h *= 2) {
-        model_init(&md, m, v, i_max, cap, h);
+        if (!model_init(&md, m, v, i_max, cap, h))
+            return false;
         md.end_rate = ramp_rate * md.rate;
         landed = false;
         prev = e_prev = (fs_real)NAN;
@@ -299,9 +332,11 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
             }
         if (!landed || !brake(&md, &shot->acc, n_acc, cruise, t_s, &shot->brk, &shot->end, &n_b))
             continue;
+        excess = shot->end.theta1 + shot->end.omega1 * shot->end.tau / 3 - d;
+        if (!(fs_fabs(excess) <= TOD_LAND_TOL * d))  // the root finder stopped short of the distance
+            return false;
         shot->cruise = cruise && t_s >= (fs_real)(n_acc - 1) * h;
-        k = (size_t)(t_s / h);
-        k = k < n_acc - 1 ? k : n_acc - 1;
+        k = step_index(t_s, h, n_acc);
         shot->n_acc = shot->cruise ? n_acc : k + 1;
         shot->n_brake = n_b, shot->t_s = t_s, shot->v = v, shot->gain = md.lk, shot->h = h;
         shot->ramp = md.end_rate / md.rate;

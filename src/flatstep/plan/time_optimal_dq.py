@@ -114,12 +114,16 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
         raise ValueError(f"the motor cannot start: at rest {v_bus:g} V and {limits.i_max:g} A give no torque")
     for _ in range(SHRINKS + 1):
         v, i_max = share * v_bus, current * limits.i_max
+        if not (v > 0 and i_max > 0 and cap > 0 and motor.L * i_max / v > 0):
+            break
         shot = shoot(d, motor, v, i_max, speed * cap, ramp)
         if shot is None:
             break
         ramp = shot.ramp
         table = dq_fit(shot, d, motor, v, i_max)
         mg = dq_margins(table, motor, v_bus, limits.i_max, cap)
+        if not math.isfinite(mg["worst"]):
+            break
         if mg["worst"] <= 0:
             return DQCandidate(float(table.breaks[-1]), share, shot.h, mg, table)
         if mg["voltage"] / V_MARGIN - 1.0 > 0:

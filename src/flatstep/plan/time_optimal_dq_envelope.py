@@ -54,6 +54,8 @@ def best_currents(omega: float, motor: MotorParams, v: float, i_max: float) -> t
     m = motor
     x, e = m.Nr * omega * m.L, m.Km * omega
     z2 = m.R * m.R + x * x
+    if not z2 > 0:  # R underflows when squared
+        return math.nan, math.nan, math.nan, math.nan
     cd, cq, r = -e * x / z2, -e * m.R / z2, v / math.sqrt(z2)
     dist = math.hypot(cd, cq)
     if dist > i_max + r:

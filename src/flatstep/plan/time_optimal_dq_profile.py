@@ -12,6 +12,7 @@ d-q flat inverse on the fitted table, the :math:`L\dot i` terms included.
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -102,13 +103,13 @@ def samples(shot: Shot, d: float, m: MotorParams) -> Samples:
     did = np.concatenate([did, r_d, [ramp_d, ramp_d]])
     diq = np.concatenate([diq, r_q, [(m.J * jerk + m.B * alpha1) / m.Km, m.J * jerk / m.Km]])
     keep = np.concatenate([keep, [True, True, True]])
-    # a sample closer than CLOSE h to the one before is dropped (a kept one replaces one not kept)
+    # a sample closer than CLOSE h to the one before is dropped (a kept one replaces one not kept, the end any)
     idx = [0]
     for i in range(1, tt.size):
         if tt[i] - tt[idx[-1]] >= CLOSE * h or keep[i] and keep[idx[-1]] and tt[i] > tt[idx[-1]] * (1 + 1e-12):
             idx.append(i)
-        elif keep[i] and not keep[idx[-1]]:
-            idx[-1] = i
+        elif keep[i] and (not keep[idx[-1]] or i == tt.size - 1) and len(idx) > 1:
+            idx[-1] = i  # (the end at rest is never dropped: it replaces the one before it)
     th, w, i_d, i_q = s[:, idx]
     return Samples(tt[idx], th, w, i_d, i_q, did[idx], diq[idx], keep[idx])
 
@@ -154,6 +155,10 @@ def dq_margins(table: DQTable, motor: MotorParams, v_limit: float, i_max: float,
     """
     m = motor
     hs = np.diff(table.breaks)
+    ih = 1.0 / hs
+    if not np.all(np.isfinite(ih * ih * ih * ih)):  # a segment too short for a table (traj_valid): none
+        return dict(voltage=math.inf, current=math.inf, speed=math.inf, i_d_min=math.nan, speed_peak=math.nan,
+                    worst=math.inf)
     tau = np.arange(samples) / samples
     seg = np.append(np.repeat(np.arange(hs.size), tau.size), hs.size - 1)
     tt = np.append(np.tile(tau, hs.size), 1.0)

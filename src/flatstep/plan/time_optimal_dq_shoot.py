@@ -60,8 +60,10 @@ SWITCH = 3
 DOUBLINGS = 8
 #: Braking phases tried by the root finder on the switch time, at most (``TOD_ROOT``).
 ROOT = 48
-#: The root finder stops when the end angle is this close to the distance, relatively.
+#: The root finder stops when the end angle is this close to the distance, relatively; a shot that does not land
+#: within LAND_TOL of it is refused.
 ROOT_TOL = 1e-10
+LAND_TOL = 1e-6
 #: Of a step, the bridge from the braking rates to the terminal ramp's.
 BRIDGE = 0.05
 #: Of V / L, the torque current's rate the approach to the speed cap and the terminal ramp count on (the ramp's
@@ -74,7 +76,7 @@ RAMP_TRIES = 4
 #: Of the secant's rate, the one tried (a little below, so that the next try lands within the bus).
 RAMP_AIM = 0.995
 #: Of the top speed where no torque is left, the cruise speed when that speed is below the cap.
-TOP_SHARE = 0.995
+TOP_SHARE = 0.999
 #: A cruise has settled when its speed and currents are this close to their targets, relatively.
 SETTLE = 1e-7
 
@@ -144,14 +146,32 @@ class _Model:
     def __init__(self, m: MotorParams, v: float, i_max: float, cap: float, h: float) -> None:
         self.R, self.L, self.Km, self.J, self.B, self.Nr = m.R, m.L, m.Km, m.J, m.B, float(m.Nr)
         self.m, self.v, self.i_max, self.h = m, v, i_max, h
-        self.lk = v / (LAG * i_max)  # the current loop's gain L / T_c
+        self.lk = self.tc = self.rate = self.end_rate = self.cap = self.hold = self.band = math.nan
+        self.valid = self._constants(cap)
+
+    def _constants(self, cap: float) -> bool:
+        """Whether the run's constants are finite and positive (every divisor checked before it divides)."""
+        m, v, i_max, h = self.m, self.v, self.i_max, self.h
+        den = LAG * i_max
+        if not (den > 0 and math.isfinite(h) and h > 0):
+            return False
+        self.lk = v / den  # the current loop's gain L / T_c
+        if not (math.isfinite(self.lk) and self.lk > 0):
+            return False
+        self.tc = m.L / self.lk
         self.rate = Q_RATE * v / m.L * (m.J / m.Km)  # the cap's approach law's current rate times J / Km
         self.end_rate = self.rate  # the terminal ramp's (lowered where the ramp would leave the bus)
         top = top_speed(m, v, i_max, cap)
         self.cap = cap if top >= cap else TOP_SHARE * top
         self.hold = m.B * self.cap / m.Km
-        k = m.J / (4.0 * h * m.Km)  # the linear band's slope: the speed error falls by a quarter per step
+        den = 4.0 * h * m.Km
+        if not (math.isfinite(self.rate) and self.rate > 0 and math.isfinite(self.cap) and self.cap > 0 and den > 0):
+            return False
+        k = m.J / den  # the linear band's slope: the speed error falls by a quarter per step
+        if not (k * k > 0 and math.isfinite(k * k)):
+            return False
         self.band = 2.0 * self.rate / (k * k)
+        return math.isfinite(self.band) and self.band > 0
 
     def policy(self, i_d: float, i_q: float, w: float, t_d: float, t_q: float) -> tuple[float, float]:
         """The voltage towards the target (module docstring)."""
@@ -170,20 +190,24 @@ class _Model:
         return ((v_d - self.R * i_d + x * i_q) / self.L, (v_q - self.R * i_q - x * i_d - self.Km * w) / self.L,
                 (self.Km * i_q - self.B * w) / self.J)
 
-    def target(self, w: float, braking: bool) -> tuple[float, float]:
-        """The target current at speed ``w`` (module docstring)."""
+    def target(self, w: float, braking: bool, lead: float = 0.0) -> tuple[float, float]:
+        """The target current at speed ``w`` (module docstring); ``lead``: the speed the current's lag adds [rad/s]."""
         c = best_currents(min(max(w, 0.0), self.cap), self.m, self.v, self.i_max)
         if math.isnan(c[1]):  # the discs do not meet (not below the top speed): no current
             c = (0.0, 0.0, 0.0, 0.0)
         if braking:
             return c[2], c[3]
-        e = self.cap - w
+        e = self.cap - w - lead
         g = math.sqrt(2.0 * self.rate * e) if e >= self.band else e * math.sqrt(2.0 * self.rate / self.band)
         return c[0], min(c[1], self.hold + g)
 
     def next_target(self, s: State, braking: bool) -> tuple[float, float]:
-        """The target at the end of the step from ``s``: at the speed predicted there."""
-        return self.target(s[1] + self.h * (self.Km * s[3] - self.B * s[1]) / self.J, braking)
+        """The target at the end of the step from ``s``: at the speed predicted there.
+
+        The approach to the cap counts the speed the current's lag behind its target adds (T_c times the acceleration).
+        """
+        alpha = (self.Km * s[3] - self.B * s[1]) / self.J
+        return self.target(s[1] + self.h * alpha, braking, self.tc * alpha)
 
     def step(self, s: State, t0: tuple[float, float], t1: tuple[float, float], f: float = 1.0) -> State:
         """RK4 over ``f h`` from ``s``, the target moving from ``t0`` towards ``t1`` (reached at a full step)."""
@@ -242,6 +266,8 @@ def _ramp(md: _Model, t: float, s: State, tg: tuple[float, float]) -> End:
     if not (a0 < 0 and w > 0):
         return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
     tau0 = -2.0 * w / a0
+    if not tau0 > 0:
+        return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
     dt = min(BRIDGE * md.h, 0.5 * tau0)
     did, diq, _ = md.deriv(i_d, i_q, w, tg[0], tg[1])
     j_l = (md.Km * diq - md.B * a0) / md.J
@@ -254,6 +280,14 @@ def _ramp(md: _Model, t: float, s: State, tg: tuple[float, float]) -> End:
     return End(t, th, w, i_d, i_q, tg[0], tg[1], dt, th1, max(w1, 0.0), i_d1, (md.J * a1 + md.B * w1) / md.Km, tau)
 
 
+def _step_index(t: float, h: float, n_acc: int) -> int:
+    """The speeding-up step that time ``t`` >= 0 lies in, at most ``n_acc`` - 1."""
+    k = t / h
+    if not k > 0:
+        return 0
+    return int(k) if k < n_acc - 1 else n_acc - 1
+
+
 def switch_state(md: _Model, acc: list[Array], n_acc: int, cruise: bool,
                  t_s: float) -> tuple[State, tuple[float, float]]:
     """The state at the switch ``t_s`` and the speeding-up target there."""
@@ -262,7 +296,7 @@ def switch_state(md: _Model, acc: list[Array], n_acc: int, cruise: bool,
     if cruise and t_s >= (n_acc - 1) * h:
         k = n_acc - 1
         return (th[k] + w[k] * (t_s - k * h), w[k], i_d[k], i_q[k]), (t_d[k], t_q[k])
-    k = min(int(t_s / h), n_acc - 1)
+    k = _step_index(t_s, h, n_acc)
     s: State = (th[k], w[k], i_d[k], i_q[k])
     t0 = (float(t_d[k]), float(t_q[k]))
     if not t_s > k * h:
@@ -317,21 +351,29 @@ def ramp_voltage(md: _Model, e: End) -> float:
 def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float) -> Optional[tuple[float, End]]:
     """The switch time that lands the move on ``d`` and its end (None: a braking phase too long)."""
     last = (n_acc - 1) * md.h
+    if cruise and not acc[1][n_acc - 1] > 0:  # a cruise at no speed: the cap is 0 in floating point
+        return None
     t_s = hi = last + (d - acc[0][n_acc - 1]) / acc[1][n_acc - 1] if cruise else last
     end, _ = _brake(md, acc, n_acc, cruise, hi, None)
     if end is None:
         return None
     lo, f_lo = 0.0, -d
     f_hi = f = end.angle - d
+    if not (math.isfinite(f) and t_s >= 0) or f < 0:  # the bracket's top must not fall short
+        return None
     side = 0
     for _ in range(ROOT):
         if abs(f) <= ROOT_TOL * d or not hi - lo > 1e-15 * hi:
+            break
+        if not f_hi - f_lo > 0:
             break
         t_s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         end, _ = _brake(md, acc, n_acc, cruise, t_s, None)
         if end is None:
             return None
         f = end.angle - d
+        if not math.isfinite(f):
+            return None
         if f < 0:
             lo, f_lo = t_s, f
             if side == -1:
@@ -356,6 +398,8 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
     h = motor.L * i_max / v / STEPS
     for _ in range(DOUBLINGS + 1):
         md = _Model(motor, v, i_max, cap, h)
+        if not md.valid:
+            return None
         md.end_rate = ramp * md.rate
         up = _speed_up(md, d)
         landed = None
@@ -385,7 +429,9 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
         if end is None:
             h *= 2.0
             continue
+        if not abs(end.angle - d) <= LAND_TOL * d:  # the root finder stopped short of the distance
+            return None
         cruising = cruise and t_s >= (n_acc - 1) * h
-        k_s = n_acc if cruising else min(int(t_s / h), n_acc - 1) + 1
+        k_s = n_acc if cruising else _step_index(t_s, h, n_acc) + 1
         return Shot(Phase(*acc), k_s, cruising, t_s, Phase(*out), n_b, end, v, md.lk, h, md.end_rate / md.rate)
     return None
