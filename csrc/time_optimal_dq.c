@@ -38,12 +38,12 @@ fs_real time_optimal_dq_speed_cap(const struct motor_params *m, const struct tod
 static void rates(const struct motor_params *m, const struct tod_shot *sh, fs_real w, fs_real id, fs_real iq,
                   fs_real td, fs_real tq, fs_real *did, fs_real *diq)
 {
-    fs_real x = (fs_real)m->Nr * w * m->L, ad, aq, vd, vq, n, scale;
+    fs_real x = (fs_real)m->Nr * w * m->L, ad, aq, vd, vq, n2, scale, inv_l = 1 / m->L;
     ad = m->R * id - x * iq, aq = m->R * iq + x * id + m->Km * w;
     vd = ad + sh->gain * (td - id), vq = aq + sh->gain * (tq - iq);
-    n = fs_sqrt(vd * vd + vq * vq);
-    scale = n <= sh->v ? 1 : sh->v / (n > 0 ? n : 1);
-    *did = (vd * scale - ad) / m->L, *diq = (vq * scale - aq) / m->L;
+    n2 = vd * vd + vq * vq;
+    scale = n2 > sh->v * sh->v ? sh->v / fs_sqrt(n2 > 0 ? n2 : 1) : 1;
+    *did = (vd * scale - ad) * inv_l, *diq = (vq * scale - aq) * inv_l;
 }
 
 // Returns nothing; appends a sample.

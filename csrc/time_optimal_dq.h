@@ -14,7 +14,7 @@
 enum {
     TOD_PROBE = 48,                       // bisection halvings for the speed where no torque is left
     TOD_STEPS = 10,                       // integration steps per current rise time L i_max / V
-    TOD_MAX_STEPS = 1024,                 // steps of one phase, at most (more double the step)
+    TOD_MAX_STEPS = 512,                  // steps of one phase, at most (more double the step)
     TOD_DOUBLINGS = 8,                    // doublings of the step, at most
     TOD_ROOT = 48,                        // braking phases tried by the root finder on the switch time, at most
     TOD_SWITCH = 3,                       // steps over which the target passes from speeding up to braking

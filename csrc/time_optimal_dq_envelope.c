@@ -11,7 +11,7 @@ bool tod_best_currents(const struct motor_params *m, fs_real w, fs_real v, fs_re
     if (!(z2 > 0))  // R underflows when squared
         return false;
     cd = -e * x / z2, cq = -e * m->R / z2, r = v / fs_sqrt(z2);
-    dist = fs_hypot(cd, cq);
+    dist = fs_sqrt(cd * cd + cq * cq);
     if (!(dist <= i_max + r))
         return false;
     if (dist <= fs_fabs(i_max - r)) {  // one disc inside the other: the smaller one's top and bottom

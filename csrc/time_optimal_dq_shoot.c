@@ -7,7 +7,7 @@
 struct model {
     const struct motor_params *m;
     fs_real R, L, Km, J, B, Nr;
-    fs_real v, i_max, h, lk, tc, rate, end_rate, cap, hold, band;
+    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rate, end_rate, cap, hold, band;
 };
 
 // A state: theta, omega, i_d, i_q.
@@ -21,7 +21,7 @@ static bool model_init(struct model *md, const struct motor_params *m, fs_real v
 {
     fs_real top, k, den = TOD_LAG * i_max;
     md->m = m, md->R = m->R, md->L = m->L, md->Km = m->Km, md->J = m->J, md->B = m->B, md->Nr = (fs_real)m->Nr;
-    md->v = v, md->i_max = i_max, md->h = h;
+    md->v = v, md->i_max = i_max, md->h = h, md->inv_l = 1 / m->L, md->inv_j = 1 / m->J;
     if (!(den > 0 && fs_isfinite(h) && h > 0))
         return false;
     md->lk = v / den;
@@ -46,15 +46,19 @@ static bool model_init(struct model *md, const struct motor_params *m, fs_real v
 // Returns nothing; writes (di_d, di_q, dw) of the model under the policy towards the target (td, tq).
 static void deriv(const struct model *md, fs_real id, fs_real iq, fs_real w, fs_real td, fs_real tq, fs_real out[3])
 {
-    fs_real x = md->Nr * w * md->L, vd, vq, n;
-    vd = md->R * id - x * iq + md->lk * (td - id);
-    vq = md->R * iq + x * id + md->Km * w + md->lk * (tq - iq);
-    n = fs_sqrt(vd * vd + vq * vq);
-    if (!(n <= md->v))
-        vd = vd * (md->v / n), vq = vq * (md->v / n);
-    out[0] = (vd - md->R * id + x * iq) / md->L;
-    out[1] = (vq - md->R * iq - x * id - md->Km * w) / md->L;
-    out[2] = (md->Km * iq - md->B * w) / md->J;
+    fs_real x = md->Nr * w * md->L, ad, aq, vd, vq, n2, scale;
+    ad = md->R * id - x * iq;
+    aq = md->R * iq + x * id + md->Km * w;
+    vd = ad + md->lk * (td - id);
+    vq = aq + md->lk * (tq - iq);
+    n2 = vd * vd + vq * vq;
+    if (n2 > md->v * md->v) {
+        scale = md->v / fs_sqrt(n2);
+        vd = vd * scale, vq = vq * scale;
+    }
+    out[0] = (vd - ad) * md->inv_l;
+    out[1] = (vq - aq) * md->inv_l;
+    out[2] = (md->Km * iq - md->B * w) * md->inv_j;
 }
 
 // Returns nothing; writes the target at speed w (braking: the envelope's bottom; else its top, held to the cap's

@@ -68,9 +68,10 @@ def _rates(m: MotorParams, v: float, gain: float, s: Array, tg: Array) -> tuple[
     x = m.Nr * w * m.L
     a_d, a_q = m.R * i_d - x * i_q, m.R * i_q + x * i_d + m.Km * w
     v_d, v_q = a_d + gain * (tg[0] - i_d), a_q + gain * (tg[1] - i_q)
-    n = np.sqrt(v_d * v_d + v_q * v_q)
-    scale = np.where(n <= v, 1.0, v / np.where(n > 0, n, 1.0))
-    return (v_d * scale - a_d) / m.L, (v_q * scale - a_q) / m.L
+    n2 = v_d * v_d + v_q * v_q
+    scale = np.where(n2 > v * v, v / np.sqrt(np.where(n2 > 0, n2, 1.0)), 1.0)
+    inv_l = 1.0 / m.L
+    return (v_d * scale - a_d) * inv_l, (v_q * scale - a_q) * inv_l
 
 
 def samples(shot: Shot, d: float, m: MotorParams) -> Samples:

@@ -51,7 +51,7 @@ State = tuple[float, float, float, float]  # theta, omega, i_d, i_q
 #: Integration steps per current rise time L i_max / V (csrc/time_optimal_dq.h ``TOD_STEPS``).
 STEPS = 10
 #: Steps of one phase, at most (``TOD_MAX_STEPS``); more double the step.
-MAX_STEPS = 1024
+MAX_STEPS = 512
 #: The current's time constant under the policy, in current rise times (the fit follows it between knots).
 LAG = 0.5
 #: Steps over which the target passes from the speeding-up one to the braking one at the switch.
@@ -146,6 +146,7 @@ class _Model:
     def __init__(self, m: MotorParams, v: float, i_max: float, cap: float, h: float) -> None:
         self.R, self.L, self.Km, self.J, self.B, self.Nr = m.R, m.L, m.Km, m.J, m.B, float(m.Nr)
         self.m, self.v, self.i_max, self.h = m, v, i_max, h
+        self.inv_l, self.inv_j = 1.0 / m.L, 1.0 / m.J
         self.lk = self.tc = self.rate = self.end_rate = self.cap = self.hold = self.band = math.nan
         self.valid = self._constants(cap)
 
@@ -173,22 +174,23 @@ class _Model:
         self.band = 2.0 * self.rate / (k * k)
         return math.isfinite(self.band) and self.band > 0
 
-    def policy(self, i_d: float, i_q: float, w: float, t_d: float, t_q: float) -> tuple[float, float]:
-        """The voltage towards the target (module docstring)."""
+    def policy(self, i_d: float, i_q: float, w: float, t_d: float, t_q: float) -> tuple[float, float, float, float]:
+        """The voltage towards the target and the steady voltage of the state: (v_d, v_q, a_d, a_q) (module doc)."""
         x = self.Nr * w * self.L
-        v_d = self.R * i_d - x * i_q + self.lk * (t_d - i_d)
-        v_q = self.R * i_q + x * i_d + self.Km * w + self.lk * (t_q - i_q)
-        n = math.sqrt(v_d * v_d + v_q * v_q)
-        if n <= self.v:
-            return v_d, v_q
-        return v_d * (self.v / n), v_q * (self.v / n)
+        a_d = self.R * i_d - x * i_q
+        a_q = self.R * i_q + x * i_d + self.Km * w
+        v_d = a_d + self.lk * (t_d - i_d)
+        v_q = a_q + self.lk * (t_q - i_q)
+        n2 = v_d * v_d + v_q * v_q
+        if n2 > self.v * self.v:
+            scale = self.v / math.sqrt(n2)
+            v_d, v_q = v_d * scale, v_q * scale
+        return v_d, v_q, a_d, a_q
 
     def deriv(self, i_d: float, i_q: float, w: float, t_d: float, t_q: float) -> tuple[float, float, float]:
         """(di_d, di_q, dw) of the model under the policy towards (t_d, t_q)."""
-        v_d, v_q = self.policy(i_d, i_q, w, t_d, t_q)
-        x = self.Nr * w * self.L
-        return ((v_d - self.R * i_d + x * i_q) / self.L, (v_q - self.R * i_q - x * i_d - self.Km * w) / self.L,
-                (self.Km * i_q - self.B * w) / self.J)
+        v_d, v_q, a_d, a_q = self.policy(i_d, i_q, w, t_d, t_q)
+        return (v_d - a_d) * self.inv_l, (v_q - a_q) * self.inv_l, (self.Km * i_q - self.B * w) * self.inv_j
 
     def target(self, w: float, braking: bool, lead: float = 0.0) -> tuple[float, float]:
         """The target current at speed ``w`` (module docstring); ``lead``: the speed the current's lag adds [rad/s]."""
