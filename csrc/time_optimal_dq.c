@@ -265,7 +265,7 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     struct tod_margins g;
     fs_real sign = distance < 0 ? -1 : 1, d = fs_fabs(distance), cap, v_bus, share = TOD_SHARE,
             current = TOD_CURRENT_PLAN;
-    fs_real speed = TOD_CAP_PLAN, ramp = 1, v, i_max, c[4], *p = work;
+    fs_real speed = TOD_CAP_PLAN, ramp = 1, v, i_max, c[4], end, *p = work;
     fs_real **arrays[12] = {&sh.acc.theta, &sh.acc.omega, &sh.acc.i_d, &sh.acc.i_q, &sh.acc.t_d, &sh.acc.t_q,
                             &sh.brk.theta, &sh.brk.omega, &sh.brk.i_d, &sh.brk.i_q, &sh.brk.t_d, &sh.brk.t_q};
     fs_real **sarrays[9] = {&s.t, &s.th, &s.w, &s.id, &s.iq, &s.did, &s.diq, &s.keep, &s.meas};
@@ -300,6 +300,10 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
             break;
         fit(m, &s, knots, nk, out);
         out->tables++;
+        for (end = 0, k = 0; k < TRAJ_NCOEF; k++)  // the last row at tau = 1: the fit must end on the distance
+            end += out->theta[(out->n - 1) * TRAJ_NCOEF + k];
+        if (!(fs_fabs(end - d) <= TOD_LAND_TOL * (1 + d)))  // (segments so long that the fit loses the angle)
+            break;
         g = margins(m, lim, cap, out);
         if (!fs_isfinite(g.worst))
             break;

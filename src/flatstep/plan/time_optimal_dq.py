@@ -40,7 +40,7 @@ from .piecewise import PiecewisePlan, horner_rows
 from .segments import hermite_rows
 from .time_optimal_dq_envelope import best_currents
 from .time_optimal_dq_profile import V_MARGIN, DQTable, dq_fit, dq_margins
-from .time_optimal_dq_shoot import shoot
+from .time_optimal_dq_shoot import LAND_TOL, shoot
 
 __all__ = ["CAP_PLAN", "CURRENT_PLAN", "ELECTRICAL_SHARE", "SHARE", "SHRINKS", "DQCandidate", "DQPlan",
            "plan_dq_move", "speed_cap", "time_optimal_dq"]
@@ -121,6 +121,8 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
             break
         ramp = shot.ramp
         table = dq_fit(shot, d, motor, v, i_max)
+        if not abs(float(np.sum(table.theta[-1])) - d) <= LAND_TOL * (1.0 + d):  # segments so long that the fit
+            break  # loses the angle
         mg = dq_margins(table, motor, v_bus, limits.i_max, cap)
         if not math.isfinite(mg["worst"]):
             break
