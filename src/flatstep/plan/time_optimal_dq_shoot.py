@@ -55,7 +55,7 @@ MAX_STEPS = 512
 #: The current's time constant under the policy, in current rise times (the fit follows it between knots).
 LAG = 0.5
 #: Steps over which the target passes from the speeding-up one to the braking one at the switch.
-SWITCH = 3
+SWITCH = 5
 #: Doublings of the step, at most (``TOD_DOUBLINGS``).
 DOUBLINGS = 8
 #: Braking phases tried by the root finder on the switch time, at most (``TOD_ROOT``).
