@@ -3,7 +3,7 @@
 For each motor, bus and move: the planned duration of :func:`flatstep.plan.time_optimal_dq.time_optimal_dq`, the
 minimum time of the same problem by direct collocation (:func:`flatstep.bench.collocation.minimum_time`, the
 ``--voltage`` bus, i_d free, the planner's speed cap, rest at i_d = i_hold = 0.01 i_max, the planner's rest being
-i_d = 0), their ratio, the C planner's CPU time (median of 5 calls) and the tables it built, and the plan run by
+i_d = 0), their ratio, the C planner's CPU time (median of 5 calls) and the shots it fitted, and the plan run by
 the d-q law (designed gains, observer, encoder, 12-bit current ADC) on the nominal plant on the C engine at 20 kHz:
 its status and the largest angle error during the move.
 
@@ -63,7 +63,7 @@ def track(m: MotorParams, fw: object, v_bus: float, counts: int = 4000) -> tuple
 
 
 def plan_time(dist: float, m: MotorParams, limits: MotorLimits) -> tuple[float, int]:
-    """The median CPU time [us] of 5 calls of the C planner (time_optimal_dq_plan, through cffi) and its tables.
+    """The median CPU time [us] of 5 calls of the C planner (time_optimal_dq_plan, through cffi) and its shots.
 
     The thread's CPU time, not the wall clock: on a shared machine the wall clock counts the other processes' turns.
     """
@@ -87,7 +87,7 @@ def main() -> None:
     ap.add_argument("--counts", type=int, default=4000, help="encoder counts per revolution (default 4000)")
     a = ap.parse_args()
     print(f"{'motor':22s} {'bus':>4s} {'rad':>5s} {'plan ms':>9s} {'opt ms':>9s} {'ratio':>6s} {'cap':>5s} "
-          f"{'w_pk':>5s} {'id_min':>6s} {'plan us':>8s} {'tables':>6s} {'status':>7s} {'err mrad':>8s}")
+          f"{'w_pk':>5s} {'id_min':>6s} {'plan us':>8s} {'shots':>6s} {'status':>7s} {'err mrad':>8s}")
     for name in a.motors:
         m, i_max = motor(name)
         for v_bus in a.bus:

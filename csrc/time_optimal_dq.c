@@ -1,36 +1,30 @@
-// The field-weakening planner: the search on the bus share over the smoothing widths, each candidate's theta from
-// to_smoothed_table and its d current boxed and spread here (flatstep.plan.time_optimal_dq and
+// The field-weakening planner: the move shot on the nominal d-q model (time_optimal_dq_shoot.c), its samples,
+// knots and fit (theta degree-7 Hermite, i_d cubic Hermite), the margins of the fitted table, and the shots again
+// at a smaller share where the fit crosses a limit (flatstep.plan.time_optimal_dq and
 // flatstep.plan.time_optimal_dq_profile are the reference, operation for operation).
 #include "time_optimal_dq_stages.h"
 #include <string.h>
 
 #define TOD_ELECTRICAL_SHARE FS_C(0.035)  // the largest electrical frequency over the control rate
-#define TOD_CAP_PLAN FS_C(0.995)          // of the speed cap, the share the envelope is planned at
-#define TOD_CURRENT_PLAN FS_C(0.97)       // of i_max, the share the envelope is planned at
+#define TOD_CAP_PLAN FS_C(0.995)          // of the speed cap, the share the move is shot at
+#define TOD_CURRENT_PLAN FS_C(0.995)      // of i_max, the share the move is first shot at
 #define TOD_V_MARGIN FS_C(0.995)          // of the bus, the voltage a table may reach at its samples
-#define TOD_S_TOL FS_C(0.003)             // a feasible table within 0.3 % of the limit ends a width's search
+#define TOD_EXTRA FS_C(0.002)             // of the excess, the extra a share shrinks by
+#define TOD_POWER FS_C(1.5)               // the power of the excess a share shrinks by
+#define TOD_SHARE FS_C(0.98)              // of v_use v_bus, the bus the move is first shot at
+#define TOD_TIME_WEIGHT FS_C(1.0)         // the measure's share of one rise time against a full change of a rate
+#define TOD_CLOSE FS_C(0.25)              // of a step, samples closer than this to the one before are dropped
 #define TOD_PI FS_C(3.14159265358979323846)
 
-// The scratch arrays and the search's state.
-struct tod_search {
-    const struct motor_params *m;
-    const struct tod_limits *lim;
-    struct to_limits any;  // valid limits for to_smoothed_table's rho rows, which this planner does not read
-    fs_real d, cap;
-    struct to_work w;
-    fs_real *idp, *idm;  // TO_GRID each: the envelope's d currents
-    fs_real *x, *y;      // TO_FINE_LEN + 1 each: the d current's samples
-    fs_real *s;          // TO_SUM_LEN: running sums
-    struct tod_result *out;
-    bool found;
-    fs_real start, width_tf, width_kappa;  // the next search's first kappa; the last width's best
-    fs_real env_kappa;                     // the bus share of the envelope in w (NAN: none)
-    int passes;                            // box filters of the candidates: 1 or 2
+// The samples of a shot (time_optimal_dq_profile.Samples), TOD_SAMPLES each.
+struct samples {
+    fs_real *t, *th, *w, *id, *iq, *did, *diq, *keep, *meas;
+    size_t n;
 };
 
 size_t time_optimal_dq_work_len(void)
 {
-    return time_optimal_work_len() + 2 * (size_t)TO_GRID + 2 * ((size_t)TO_FINE_LEN + 1) + (size_t)TO_SUM_LEN;
+    return 12 * ((size_t)TOD_MAX_STEPS + 1) + 9 * (size_t)TOD_SAMPLES;
 }
 
 fs_real time_optimal_dq_speed_cap(const struct motor_params *m, const struct tod_limits *lim)
@@ -39,68 +33,182 @@ fs_real time_optimal_dq_speed_cap(const struct motor_params *m, const struct tod
     return lim->speed_max > 0 ? fs_min(cap, lim->speed_max) : cap;
 }
 
-// Returns true and writes the d current's knots of the table in s->w.tr (time_optimal_dq_profile.dq_table).
-static bool d_current(struct tod_search *s, fs_real width, fs_real *knot_id, fs_real *knot_did)
+// Returns nothing; writes (di_d, di_q) of the model at the state under the shot's policy towards (td, tq)
+// (time_optimal_dq_profile._rates).
+static void rates(const struct motor_params *m, const struct tod_shot *sh, fs_real w, fs_real id, fs_real iq,
+                  fs_real td, fs_real tq, fs_real *did, fs_real *diq)
 {
-    struct to_move mv;
-    struct to_work *w = &s->w;
-    fs_real t, total, cruise, *x = s->x, *y = s->y;
-    size_t i, len, half, at, r, k, nk = w->tr.n + 1, j_acc = 0, j_dec = TO_GRID - 2;
-    to_bang_bang(s->d, width, w, &mv);
-    total = mv.t1 + mv.cruise + mv.t2;
-    cruise = to_interp(mv.w_peak, w->omega, s->idp, TO_GRID);
-    // the d current of the side at the speed of the bang-bang move, read against time: the envelope's speed and d
-    // current are both linear between the same grid points (the top while speeding up and cruising, the bottom
-    // while braking)
-    for (i = 0; i < mv.n - mv.k; i++) {  // sample i >= r at (i + k) dt
-        t = (fs_real)(i < mv.r ? i : i + mv.k) * mv.dt;
-        if (t <= mv.t1)
-            x[i] = to_interp_walk(t, w->tacc, s->idp, TO_GRID, &j_acc);
-        else if (t < mv.t1 + mv.cruise)
-            x[i] = cruise;
+    fs_real x = (fs_real)m->Nr * w * m->L, ad, aq, vd, vq, n2, scale, inv_l = 1 / m->L;
+    ad = m->R * id - x * iq, aq = m->R * iq + x * id + m->Km * w;
+    vd = ad + sh->gain * (td - id), vq = aq + sh->gain * (tq - iq);
+    n2 = vd * vd + vq * vq;
+    scale = n2 > sh->v * sh->v ? sh->v / fs_sqrt(n2 > 0 ? n2 : 1) : 1;
+    *did = (vd * scale - ad) * inv_l, *diq = (vq * scale - aq) * inv_l;
+}
+
+// Returns nothing; appends a sample.
+static void push(struct samples *s, fs_real t, fs_real th, fs_real w, fs_real id, fs_real iq, fs_real did, fs_real diq,
+                 bool keep)
+{
+    size_t i = s->n++;
+    s->t[i] = t, s->th[i] = th, s->w[i] = w, s->id[i] = id, s->iq[i] = iq, s->did[i] = did, s->diq[i] = diq;
+    s->keep[i] = keep ? 1 : 0;
+}
+
+// Returns nothing; writes the shot's samples in time order, a sample closer than TOD_CLOSE h to the one before
+// dropped (a kept one replaces one not kept, the end any; time_optimal_dq_profile.samples).
+static void samples(const struct motor_params *m, const struct tod_shot *sh, fs_real d, struct samples *s)
+{
+    const struct tod_phase *a = &sh->acc, *b = &sh->brk;
+    const struct tod_end *e = &sh->end;
+    size_t i, na = sh->n_acc, nb = sh->n_brake, last;
+    fs_real did, diq, alpha1, jerk, ramp_d, t;
+    s->n = 0;
+    for (i = 0; i < na; i++) {
+        rates(m, sh, a->omega[i], a->i_d[i], a->i_q[i], a->t_d[i], a->t_q[i], &did, &diq);
+        push(s, (fs_real)i * sh->h, a->theta[i], a->omega[i], a->i_d[i], a->i_q[i], did, diq,
+             i == 0 || (sh->cruise && i == na - 1));
+    }
+    for (i = 0; i < nb; i++) {
+        rates(m, sh, b->omega[i], b->i_d[i], b->i_q[i], b->t_d[i], b->t_q[i], &did, &diq);
+        push(s, sh->t_s + (fs_real)i * sh->h, b->theta[i], b->omega[i], b->i_d[i], b->i_q[i], did, diq, i == 0);
+    }
+    rates(m, sh, e->omega, e->i_d, e->i_q, e->t_d, e->t_q, &did, &diq);
+    push(s, e->t, e->theta, e->omega, e->i_d, e->i_q, did, diq, true);
+    alpha1 = (m->Km * e->i_q1 - m->B * e->omega1) / m->J;
+    jerk = e->tau > 0 ? -alpha1 / e->tau : 0;
+    ramp_d = e->tau > 0 ? -e->i_d1 / e->tau : 0;
+    push(s, e->t + e->bridge, e->theta1, e->omega1, e->i_d1, e->i_q1, ramp_d, (m->J * jerk + m->B * alpha1) / m->Km,
+         true);
+    push(s, e->t + e->bridge + e->tau, d, 0, 0, 0, ramp_d, m->J * jerk / m->Km, true);
+    // drop the close ones in place
+    for (last = 0, i = 1; i < s->n; i++) {
+        t = s->t[last];
+        if (s->t[i] - t >= TOD_CLOSE * sh->h
+            || (s->keep[i] != 0 && s->keep[last] != 0 && s->t[i] > t * (1 + FS_C(1e-12))))
+            last++;
+        else if (!(s->keep[i] != 0 && (s->keep[last] == 0 || i == s->n - 1) && last > 0))
+            continue;  // (the end at rest is never dropped: it replaces the one before it)
+        s->t[last] = s->t[i], s->th[last] = s->th[i], s->w[last] = s->w[i], s->id[last] = s->id[i];
+        s->iq[last] = s->iq[i], s->did[last] = s->did[i], s->diq[last] = s->diq[i], s->keep[last] = s->keep[i];
+    }
+    s->n = last + 1;
+}
+
+// Returns the first sample index at or above level q of TOD_KNOTS + 1 of the measure (numpy.searchsorted), n
+// beyond the last level; *j walks up from the last call's.
+static size_t chosen(const struct samples *s, size_t q, size_t *j)
+{
+    fs_real level;
+    if (q > TOD_KNOTS)
+        return s->n;
+    level = s->meas[s->n - 1] * (fs_real)q / (TOD_KNOTS + 1);
+    while (*j < s->n - 1 && s->meas[*j] < level)
+        ++*j;
+    return *j;
+}
+
+// Returns the number of knots; writes their sample indices: the kept samples and TOD_KNOTS more at equal steps of
+// the measure (time_optimal_dq_profile.pick_knots).
+static size_t pick_knots(const struct samples *s, fs_real rise, fs_real rate, size_t *k)
+{
+    size_t n = s->n, i, j = 0, q = 1, c, nk = 0;
+    fs_real dt, change;
+    bool sel;
+    if (n <= TOD_KNOTS + 6) {
+        for (i = 0; i < n; i++)
+            k[i] = i;
+        return n;
+    }
+    s->meas[0] = 0;
+    for (i = 0; i + 1 < n; i++) {
+        dt = s->t[i + 1] - s->t[i];
+        change = (fs_fabs(s->diq[i + 1] - s->diq[i]) + fs_fabs(s->did[i + 1] - s->did[i])) / rate;
+        if (s->w[i + 1] - s->w[i] == 0 && s->iq[i + 1] - s->iq[i] == 0 && s->id[i + 1] - s->id[i] == 0)
+            s->meas[i + 1] = s->meas[i] + 0;  // settled: only theta moves
         else
-            x[i] = to_interp_walk(total - t, w->tdec, s->idm, TO_GRID, &j_dec);
+            s->meas[i + 1] = s->meas[i] + (TOD_TIME_WEIGHT * dt / rise + change);
     }
-    x[mv.n - mv.k - 1] = 0;
-    len = to_box(x, mv.n - mv.k, mv.n_box, s->s, y);
-    if (s->passes == 2)
-        len = to_box(y, len, mv.n_box, s->s, x);
-    else
-        memcpy(x, y, len * sizeof *x);
-    s->s[0] = 0;  // the running mean of TOD_ID_SPREAD widths either side, narrowed at the ends
-    for (i = 0; i < len; i++)
-        s->s[i + 1] = s->s[i] + x[i];
-    for (i = 0; i < len; i++) {
-        half = i < len - 1 - i ? i : len - 1 - i;
-        half = half < TOD_ID_SPREAD * mv.n_box ? half : TOD_ID_SPREAD * mv.n_box;
-        y[i] = (s->s[i + half + 1] - s->s[i - half]) / (fs_real)(2 * half + 1);
+    c = chosen(s, q, &j);
+    for (i = 0; i < n; i++) {
+        sel = s->keep[i] != 0;
+        while (c == i) {
+            sel = true;
+            c = chosen(s, ++q, &j);
+        }
+        if (sel)
+            k[nk++] = i;
     }
-    r = mv.r < len - 1 ? mv.r : len - 1;
+    return nk;
+}
+
+// The inverse of the degree-7 Hermite system of segments.hermite_rows: coefficients (tau^7 .. tau^0) from the
+// ends' (theta, theta' h, theta'' h^2, theta''' h^3) (time_optimal_table.c's, which the paper's planner keeps).
+static const fs_real HERMITE[8][8] = {
+    {20, 10, 2, FS_C(1.0) / 6, -20, 10, -2, FS_C(1.0) / 6},
+    {-70, -36, FS_C(-7.5), FS_C(-2.0) / 3, 70, -34, FS_C(6.5), FS_C(-0.5)},
+    {84, 45, 10, 1, -84, 39, -7, FS_C(0.5)},
+    {-35, -20, -5, FS_C(-2.0) / 3, 35, -15, FS_C(2.5), FS_C(-1.0) / 6},
+    {0, 0, 0, FS_C(1.0) / 6, 0, 0, 0, 0},
+    {0, 0, FS_C(0.5), 0, 0, 0, 0, 0},
+    {0, 1, 0, 0, 0, 0, 0, 0},
+    {1, 0, 0, 0, 0, 0, 0, 0},
+};
+
+// Returns nothing; writes the row (TRAJ_NCOEF, three leading zeros) of the segment from s0 to s1 over h.
+static void hermite_row(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_real *row)
+{
+    fs_real rhs[8], p = 1, sum;
+    int i, j;
+    for (j = 0; j < 4; j++, p *= h)
+        rhs[j] = s0[j] * p, rhs[4 + j] = s1[j] * p;
+    for (i = 0; i < TRAJ_NCOEF - 8; i++)
+        row[i] = 0;
+    for (i = 0; i < 4; i++) {
+        for (sum = 0, j = 0; j < 8; j++)
+            sum += HERMITE[i][j] * rhs[j];
+        row[TRAJ_NCOEF - 8 + i] = sum;
+    }
+    for (i = 4; i < 8; i++)
+        row[TRAJ_NCOEF - 8 + i] = HERMITE[i][7 - i] * rhs[7 - i];
+}
+
+// Returns nothing; writes the table of the knots k[0..nk) of the samples into out (time_optimal_dq_profile.dq_fit).
+static void fit(const struct motor_params *m, const struct samples *s, const size_t *k, size_t nk,
+                struct tod_result *out)
+{
+    fs_real prev[4] = {0, 0, 0, 0}, cur[4], alpha;
+    size_t i;
+    out->n = nk - 1;
     for (i = 0; i < nk; i++) {
-        k = (size_t)w->knot[i];
-        at = k < r ? k : k >= r + mv.k ? k - mv.k : r;
-        knot_id[i] = y[at];
-        knot_did[i] = i == 0 || i == nk - 1 ? 0 : to_gradient(y, len, at, mv.dt);
+        alpha = (m->Km * s->iq[k[i]] - m->B * s->w[k[i]]) / m->J;
+        cur[0] = s->th[k[i]], cur[1] = s->w[k[i]], cur[2] = alpha,
+        cur[3] = (m->Km * s->diq[k[i]] - m->B * alpha) / m->J;
+        out->breaks[i] = s->t[k[i]] - s->t[k[0]];
+        out->knot_id[i] = i == nk - 1 ? 0 : s->id[k[i]];
+        out->knot_did[i] = i == 0 ? 0 : s->did[k[i]];
+        if (i > 0)
+            hermite_row(prev, cur, s->t[k[i]] - s->t[k[i - 1]], out->theta + (i - 1) * TRAJ_NCOEF);
+        memcpy(prev, cur, sizeof prev);
     }
-    return true;
 }
 
 // Returns the margins of the table (time_optimal_dq_profile.dq_margins): TO_CHECK samples per segment and the end.
 // Per segment, theta's rate, acceleration and jerk rows are formed once in time (not tau) and the d current's
 // cubic Hermite piece is the segment's own; the norms are compared squared and rooted once.
-static struct tod_margins margins(const struct tod_search *s, const fs_real *kid, const fs_real *kdid)
+static struct tod_margins margins(const struct motor_params *m, const struct tod_limits *lim, fs_real cap,
+                                  const struct tod_result *tr)
 {
-    const struct motor_params *m = s->m;
-    const struct traj *tr = &s->w.tr;
     struct tod_margins g = {0, 0, 0, 0, (fs_real)INFINITY, 0};
-    fs_real v_limit = s->lim->v_use * s->lim->v_bus, h, tau, w, acc, jerk, id, did, iq, diq, x, vd, vq, v2 = 0, i2 = 0;
+    fs_real v_limit = lim->v_use * lim->v_bus, h, tau, w, acc, jerk, id, did, iq, diq, x, vd, vq, v2 = 0, i2 = 0;
     fs_real r1[TRAJ_NCOEF - 1], r2[TRAJ_NCOEF - 2], r3[TRAJ_NCOEF - 3], p0, p1, m0, m1, h1, h2, h3, u;
+    const fs_real *kid = tr->knot_id, *kdid = tr->knot_did;
     size_t i, j, n = tr->n, last;
     int k;
     for (i = 0; i < n; i++) {
         const fs_real *row = tr->theta + i * TRAJ_NCOEF;
         h = tr->breaks[i + 1] - tr->breaks[i];
-        for (k = 0; k < TRAJ_NCOEF - 1; k++) {  // highest power first: row[k] multiplies tau^(7 - k)
+        for (k = 0; k < TRAJ_NCOEF - 1; k++) {  // highest power first: row[k] multiplies tau^(10 - k)
             fs_real p = (fs_real)(TRAJ_NCOEF - 1 - k);
             r1[k] = row[k] * p;
             if (k < TRAJ_NCOEF - 2)
@@ -108,7 +216,12 @@ static struct tod_margins margins(const struct tod_search *s, const fs_real *kid
             if (k < TRAJ_NCOEF - 3)
                 r3[k] = row[k] * (p * (p - 1) * (p - 2));
         }
-        h1 = fs_pow(h, 1), h2 = fs_pow(h, 2), h3 = fs_pow(h, 3);
+        h1 = h, h2 = h * h, h3 = h * h * h;
+        u = 1 / h;
+        if (!fs_isfinite(u * u * u * u)) {  // a segment too short for a table (traj_valid): none
+            g.worst = (fs_real)INFINITY;
+            return g;
+        }
         p0 = kid[i], p1 = kid[i + 1], m0 = kdid[i] * h, m1 = kdid[i + 1] * h;
         last = i == n - 1 ? (size_t)TO_CHECK : (size_t)TO_CHECK - 1;
         for (j = 0; j <= last; j++) {
@@ -137,143 +250,27 @@ static struct tod_margins margins(const struct tod_search *s, const fs_real *kid
             g.i_d_min = fs_min(g.i_d_min, id);
         }
     }
-    g.voltage = fs_sqrt(v2) / v_limit, g.current = fs_sqrt(i2) / s->lim->i_max, g.speed = g.speed_peak / s->cap;
+    g.voltage = fs_sqrt(v2) / v_limit, g.current = fs_sqrt(i2) / lim->i_max, g.speed = g.speed_peak / cap;
     g.worst = fs_max(fs_max(g.voltage / TOD_V_MARGIN, g.current), g.speed) - 1;
     if (!fs_isfinite(g.worst))
         g.worst = (fs_real)INFINITY;
     return g;
 }
 
-// Returns true and builds the envelope at kappa in s->w (kept while kappa does not change).
-static bool envelope_at(struct tod_search *s, fs_real kappa)
-{
-    const struct tod_limits *l = s->lim;
-    if (kappa == s->env_kappa)
-        return true;
-    s->env_kappa = (fs_real)NAN;
-    if (!tod_envelope(s->m, kappa * l->v_use * l->v_bus, TOD_CURRENT_PLAN * l->i_max, TOD_CAP_PLAN * s->cap, &s->w,
-                      s->idp, s->idm))
-        return false;
-    s->env_kappa = kappa;
-    return true;
-}
-
-// Returns the duration [s] of the table at kappa and width without building it (inf when none is built;
-// time_optimal_dq._duration).
-static fs_real duration(struct tod_search *s, fs_real kappa, fs_real width)
-{
-    struct to_move mv;
-    if (!envelope_at(s, kappa))
-        return (fs_real)INFINITY;
-    to_bang_bang(s->d, width, &s->w, &mv);
-    return ((fs_real)(mv.n + (size_t)s->passes * (mv.n_box - 1)) - 1) * mv.dt;
-}
-
-// Returns the measure s of the table at kappa and width (inf when none is built) and writes its duration into
-// tf_out (inf when none); a feasible table shorter than the best becomes the best (time_optimal_dq._try).
-static fs_real try_table(struct tod_search *s, fs_real kappa, fs_real width, fs_real *tf_out)
-{
-    struct tod_result *out = s->out;
-    struct tod_margins g;
-    fs_real kid[TO_MAX_SEGMENTS + 1], kdid[TO_MAX_SEGMENTS + 1], tf;
-    *tf_out = (fs_real)INFINITY;
-    if (!envelope_at(s, kappa))
-        return (fs_real)INFINITY;
-    if (!to_smoothed_table(s->m, &s->any, s->d, width, s->passes, &s->w) || !d_current(s, width, kid, kdid))
-        return (fs_real)INFINITY;
-    out->tables++;
-    g = margins(s, kid, kdid);
-    tf = s->w.breaks[s->w.tr.n];
-    *tf_out = tf;
-    if (g.worst <= 0 && tf < s->width_tf)
-        s->width_tf = tf, s->width_kappa = kappa;
-    if (g.worst <= 0 && (!s->found || tf < out->breaks[out->n])) {
-        s->found = true;
-        out->n = s->w.tr.n;
-        memcpy(out->breaks, s->w.breaks, (out->n + 1) * sizeof *out->breaks);
-        memcpy(out->theta, s->w.theta, out->n * TRAJ_NCOEF * sizeof *out->theta);
-        memcpy(out->knot_id, kid, (out->n + 1) * sizeof *kid);
-        memcpy(out->knot_did, kdid, (out->n + 1) * sizeof *kdid);
-        out->kappa = kappa, out->width = width, out->margins = g;
-    }
-    return g.worst;
-}
-
-// Returns the width's least duration (at kappa = 1); none of its tables is built when that is not shorter than the
-// best; else the secant on kappa from s->start, then regula falsi once bracketed (time_optimal_dq.search_kappa);
-// s->width_tf and
-// s->width_kappa are the width's shortest feasible table's duration and bus share (inf and 0: none).
-static fs_real search_kappa(struct tod_search *s, fs_real width)
-{
-    const fs_real nan = (fs_real)NAN, inf = (fs_real)INFINITY;
-    fs_real lo = 0, hi = 1, s_lo = nan, s_hi = nan, k = s->start, k_prev = nan, s_prev = nan, x, aim, next, least, tf;
-    int it;
-    s->width_tf = inf, s->width_kappa = 0;
-    least = duration(s, 1, width);
-    if (!(least < (s->found ? s->out->breaks[s->out->n] : inf)))  // no table of this width could be shorter
-        return least;
-    for (it = 0; it < TOD_SEARCH; it++) {
-        x = try_table(s, k, width, &tf);
-        aim = x + FS_C(0.5) * TOD_S_TOL;
-        if (x <= 0) {
-            lo = k, s_lo = aim;
-            if (k >= 1 || x > -TOD_S_TOL)
-                break;
-        } else {
-            hi = k, s_hi = aim;
-            if (s->found && tf >= s->out->breaks[s->out->n])  // every table below this bus share is longer
-                break;
-        }
-        if (!isnan(s_lo) && fs_isfinite(s_hi)) {
-            next = lo + (hi - lo) * s_lo / (s_lo - s_hi);
-            next = fs_min(fs_max(next, lo + FS_C(0.02) * (hi - lo)), hi - FS_C(0.02) * (hi - lo));
-        } else if (fs_isfinite(aim) && fs_isfinite(s_prev) && aim != s_prev) {
-            next = k - aim * (k - k_prev) / (aim - s_prev);
-            next = fs_min(fs_max(next, FS_C(0.5) * k), FS_C(1.5) * k);
-        } else if (fs_isfinite(aim))
-            next = k / (1 + aim);
-        else
-            next = FS_C(0.5) * (lo + hi);
-        k_prev = k, s_prev = aim, k = fs_min(next, 1);
-        if (k < FS_C(0.05) || hi - lo < FS_C(1e-4))
-            break;
-    }
-    return least;
-}
-
-// Returns the duration of width i's shortest feasible table (inf when none); the next width's search starts at its
-// kappa (time_optimal_dq.plan_dq_move's run).
-static fs_real run_width(struct tod_search *s, const fs_real *widths, long i)
-{
-    search_kappa(s, widths[i]);
-    if (s->width_tf < (fs_real)INFINITY)
-        s->start = s->width_kappa;
-    return s->width_tf;
-}
-
-// Returns true when a width beyond the one before i was shorter; walks by step while the duration falls.
-static bool walk(struct tod_search *s, const fs_real *widths, long i, long step, fs_real f)
-{
-    bool better = false;
-    fs_real fi;
-    for (; i >= 0 && i < TOD_WIDTHS; i += step) {
-        fi = run_width(s, widths, i);
-        if (fi < f)
-            better = true, f = fi;
-        else if (f < (fs_real)INFINITY)
-            break;
-    }
-    return better;
-}
-
 int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *lim, fs_real distance, fs_real *work,
                          size_t work_len, struct tod_result *out)
 {
-    static const fs_real WIDTHS[TOD_WIDTHS] = {FS_C(0.75), 1, FS_C(1.5), 2, 3};
-    struct tod_search s;
-    struct to_limits any = {24, 1, FS_C(0.3), FS_C(0.3), 10, FS_C(1.2), FS_C(0.9), 0, 0, 0};
-    fs_real sign = distance < 0 ? -1 : 1, rise, widths[TOD_WIDTHS], f0;
-    size_t i, k;
+    struct tod_shot sh;
+    struct samples s;
+    struct tod_margins g;
+    fs_real sign = distance < 0 ? -1 : 1, d = fs_fabs(distance), cap, v_bus, share = TOD_SHARE,
+            current = TOD_CURRENT_PLAN;
+    fs_real speed = TOD_CAP_PLAN, ramp = 1, v, i_max, c[4], end, *p = work;
+    fs_real **arrays[12] = {&sh.acc.theta, &sh.acc.omega, &sh.acc.i_d, &sh.acc.i_q, &sh.acc.t_d, &sh.acc.t_q,
+                            &sh.brk.theta, &sh.brk.omega, &sh.brk.i_d, &sh.brk.i_q, &sh.brk.t_d, &sh.brk.t_q};
+    fs_real **sarrays[9] = {&s.t, &s.th, &s.w, &s.id, &s.iq, &s.did, &s.diq, &s.keep, &s.meas};
+    size_t knots[TO_MAX_SEGMENTS + 1], nk, i, k;
+    int attempt;
     out->n = 0, out->tables = 0;
     if (!motor_params_valid(m) || !fs_isfinite(distance) || distance == 0
         || !(fs_isfinite(lim->v_bus) && lim->v_bus > 0 && fs_isfinite(lim->v_use) && lim->v_use > 0 && lim->v_use <= 1
@@ -282,37 +279,50 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
         return TOD_EARGS;
     if (!work || work_len < time_optimal_dq_work_len())
         return TOD_EWORK;
-    s.m = m, s.lim = lim, s.any = any, s.d = fs_fabs(distance), s.out = out, s.found = false;
-    s.env_kappa = (fs_real)NAN;
-    s.cap = time_optimal_dq_speed_cap(m, lim);
-    s.w.omega = work, s.w.ap = work + TO_GRID, s.w.am = work + 2 * TO_GRID, s.w.tacc = work + 3 * TO_GRID;
-    s.w.tdec = work + 4 * TO_GRID, s.w.dboth = work + 5 * TO_GRID;
-    s.w.a = work + 6 * TO_GRID, s.w.b = s.w.a + TO_FINE_LEN + 1, s.w.c = s.w.b + TO_FINE_LEN + 1;
-    s.w.knot = s.w.c + TO_SUM_LEN;
-    s.w.breaks = s.w.knot + TO_MAX_SEGMENTS + 1;
-    s.w.theta = s.w.breaks + TO_MAX_SEGMENTS + 1;
-    s.w.rho = s.w.theta + TO_MAX_SEGMENTS * TRAJ_NCOEF;
-    s.w.tr.breaks = s.w.breaks, s.w.tr.theta = s.w.theta, s.w.tr.rho = s.w.rho;
-    s.idp = work + time_optimal_work_len(), s.idm = s.idp + TO_GRID;
-    s.x = s.idm + TO_GRID, s.y = s.x + TO_FINE_LEN + 1, s.s = s.y + TO_FINE_LEN + 1;
-    if (!envelope_at(&s, 1))
+    for (i = 0; i < 12; i++, p += TOD_MAX_STEPS + 1)
+        *arrays[i] = p;
+    for (i = 0; i < 9; i++, p += TOD_SAMPLES)
+        *sarrays[i] = p;
+    cap = time_optimal_dq_speed_cap(m, lim);
+    v_bus = lim->v_use * lim->v_bus;
+    if (!tod_best_currents(m, 0, share * v_bus, current * lim->i_max, c) || !(c[1] > 0))
         return TOD_ESTART;
-    rise = m->L * lim->i_max / (lim->v_use * lim->v_bus);
-    for (i = 0; i < TOD_WIDTHS; i++)
-        widths[i] = WIDTHS[i] * rise;
-    // from the middle width down while the duration falls, then up unless down found a shorter table
-    for (s.passes = 1; s.passes <= 2; s.passes++) {  // the box once (the jerk jumps, the law takes it), twice
-        s.start = 1;
-        f0 = run_width(&s, widths, TOD_WIDTHS / 2);
-        if (!walk(&s, widths, TOD_WIDTHS / 2 - 1, -1, f0) || !(f0 < (fs_real)INFINITY))
-            walk(&s, widths, TOD_WIDTHS / 2 + 1, 1, f0);
+    for (attempt = 0; attempt <= TOD_SHRINKS; attempt++) {
+        v = share * v_bus, i_max = current * lim->i_max;
+        if (!(v > 0 && i_max > 0 && cap > 0 && m->L * i_max / v > 0))
+            break;
+        if (!tod_shoot(m, d, v, i_max, speed * cap, ramp, &sh))
+            break;
+        ramp = sh.ramp;
+        samples(m, &sh, d, &s);
+        nk = pick_knots(&s, m->L * i_max / v, v / m->L, knots);
+        if (nk < 2 || nk > TO_MAX_SEGMENTS + 1)
+            break;
+        fit(m, &s, knots, nk, out);
+        out->tables++;
+        for (end = 0, k = 0; k < TRAJ_NCOEF; k++)  // the last row at tau = 1: the fit must end on the distance
+            end += out->theta[(out->n - 1) * TRAJ_NCOEF + k];
+        if (!(fs_fabs(end - d) <= TOD_LAND_TOL * (1 + d)))  // (segments so long that the fit loses the angle)
+            break;
+        g = margins(m, lim, cap, out);
+        if (!fs_isfinite(g.worst))
+            break;
+        if (g.worst <= 0) {
+            out->kappa = share, out->width = sh.h, out->margins = g;
+            for (i = 0; i < out->n; i++)  // a negative move mirrors the positive one
+                for (k = 0; k < TRAJ_NCOEF; k++)
+                    out->theta[i * TRAJ_NCOEF + k] *= sign;
+            return TOD_OK;
+        }
+        if (g.voltage / TOD_V_MARGIN - 1 > 0)
+            share /= fs_pow(g.voltage / TOD_V_MARGIN + TOD_EXTRA, TOD_POWER);
+        if (g.current > 1)
+            current /= fs_pow(g.current + TOD_EXTRA, TOD_POWER);
+        if (g.speed > 1)
+            speed /= fs_pow(g.speed + TOD_EXTRA, TOD_POWER);
+        if (!fs_isfinite(share) || !fs_isfinite(current) || !fs_isfinite(speed))
+            break;
     }
-    if (!s.found) {
-        out->n = 0;
-        return TOD_ENOPLAN;
-    }
-    for (i = 0; i < out->n; i++)  // a negative move mirrors the positive one
-        for (k = 0; k < TRAJ_NCOEF; k++)
-            out->theta[i * TRAJ_NCOEF + k] *= sign;
-    return TOD_OK;
+    out->n = 0;
+    return TOD_ENOPLAN;
 }

@@ -12,10 +12,16 @@
 
 // Sizes of the algorithm (the constants of flatstep.plan.time_optimal_dq*, which must match).
 enum {
-    TOD_PROBE = 48,     // bisection halvings for the speed where no torque is left
-    TOD_SEARCH = 7,     // tables tried per smoothing width on the bus share kappa
-    TOD_WIDTHS = 5,     // smoothing widths tried (DEFAULT_WIDTHS)
-    TOD_ID_SPREAD = 4,  // the d current's running mean, in smoothing widths either side
+    TOD_PROBE = 48,                       // bisection halvings for the speed where no torque is left
+    TOD_STEPS = 10,                       // integration steps per current rise time L i_max / V
+    TOD_MAX_STEPS = 512,                  // steps of one phase, at most (more double the step)
+    TOD_DOUBLINGS = 8,                    // doublings of the step, at most
+    TOD_ROOT = 48,                        // braking phases tried by the root finder on the switch time, at most
+    TOD_SWITCH = 5,                       // steps over which the target passes from speeding up to braking
+    TOD_RAMP_TRIES = 4,                   // times the terminal ramp's rate may fall
+    TOD_SHRINKS = 6,                      // shots after the first, at most
+    TOD_KNOTS = 62,                       // knots picked by the measure (besides the kept ones)
+    TOD_SAMPLES = 2 * TOD_MAX_STEPS + 6,  // samples of a shot, at most
 };
 
 // Return codes of time_optimal_dq_plan.
@@ -23,7 +29,7 @@ enum {
     TOD_OK = 0,
     TOD_EARGS = -1,    // a motor parameter, a limit or the distance is out of range or not finite
     TOD_ESTART = -2,   // at rest the bus and i_max leave no torque
-    TOD_ENOPLAN = -3,  // no smoothing width and bus share give a table within the limits
+    TOD_ENOPLAN = -3,  // no shot's table keeps the limits (or a phase needs too many steps)
     TOD_EWORK = -4,    // the workspace is shorter than time_optimal_dq_work_len()
 };
 
@@ -49,10 +55,10 @@ struct tod_result {
     fs_real theta[TO_MAX_SEGMENTS * TRAJ_NCOEF];  // theta rows [rad], highest power first
     fs_real knot_id[TO_MAX_SEGMENTS + 1];         // the d current at the breaks [A]
     fs_real knot_did[TO_MAX_SEGMENTS + 1];        // its rate there [A/s]
-    fs_real kappa;                                // the bus share of the envelope
-    fs_real width;                                // smoothing width [s]
+    fs_real kappa;                                // the bus share the move was shot at (of v_use v_bus)
+    fs_real width;                                // the integration step [s]
     struct tod_margins margins;                   // on the table at TO_CHECK samples per segment
-    int tables;                                   // tables built and checked
+    int tables;                                   // shots fitted and checked
 };
 
 // Returns the number of fs_real the workspace of time_optimal_dq_plan needs.
@@ -62,8 +68,10 @@ size_t time_optimal_dq_work_len(void);
 // electrical turn), and the user's cap.
 fs_real time_optimal_dq_speed_cap(const struct motor_params *m, const struct tod_limits *lim);
 
-// Returns TOD_OK and writes the shortest feasible field-weakening table over distance [rad] (!= 0, either sign)
-// into out, or a TOD_E* code with out->n = 0. work: time_optimal_dq_work_len() fs_real of caller-owned scratch.
+// Returns TOD_OK and writes the field-weakening table over distance [rad] (!= 0, either sign) into out, or a TOD_E*
+// code with out->n = 0: the move shot on the nominal d-q model at the bus's full rate, fitted, checked, shot again
+// at a smaller share where the fit crosses a limit. work: time_optimal_dq_work_len() fs_real of caller-owned
+// scratch.
 int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *lim, fs_real distance, fs_real *work,
                          size_t work_len, struct tod_result *out);
 

@@ -1,10 +1,9 @@
-// The field-weakening planner's envelope: at each speed the largest and the smallest torque current over the
-// d current, where the current disc meets the bus disc (flatstep.plan.time_optimal_dq_envelope, operation for
+// The field-weakening planner's envelope: at a speed, the largest and the smallest torque current over the d
+// current, where the current disc meets the bus disc (flatstep.plan.time_optimal_dq_envelope, operation for
 // operation).
 #include "time_optimal_dq_stages.h"
 
-// Returns true when the discs meet at speed w and writes (i_d+, i_q+, i_d-, i_q-) into c.
-static bool best_currents(const struct motor_params *m, fs_real w, fs_real v, fs_real i_max, fs_real c[4])
+bool tod_best_currents(const struct motor_params *m, fs_real w, fs_real v, fs_real i_max, fs_real c[4])
 {
     fs_real x = (fs_real)m->Nr * w * m->L, e = m->Km * w, z2, cd, cq, r, dist, a, h, ux, uy, p1[2], p2[2];
     const fs_real *hi, *lo;
@@ -12,7 +11,7 @@ static bool best_currents(const struct motor_params *m, fs_real w, fs_real v, fs
     if (!(z2 > 0))  // R^2 + (Nr w L)^2 underflows: no impedance to divide by, no envelope
         return false;
     cd = -e * x / z2, cq = -e * m->R / z2, r = v / fs_sqrt(z2);
-    dist = fs_hypot(cd, cq);
+    dist = fs_sqrt(cd * cd + cq * cq);
     if (!(dist <= i_max + r))
         return false;
     if (dist <= fs_fabs(i_max - r) || !(dist > 0)) {  // one disc inside the other (or the same disc)
@@ -46,42 +45,23 @@ static bool best_currents(const struct motor_params *m, fs_real w, fs_real v, fs
 static fs_real accel(const struct motor_params *m, fs_real w, fs_real v, fs_real i_max)
 {
     fs_real c[4];
-    if (!best_currents(m, w, v, i_max, c))
+    if (!tod_best_currents(m, w, v, i_max, c))
         return -(fs_real)INFINITY;
     return (m->Km * c[1] - m->B * w) / m->J;
 }
 
-bool tod_envelope(const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap, struct to_work *w, fs_real *idp,
-                  fs_real *idm)
+fs_real tod_top_speed(const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap)
 {
-    fs_real top = cap, lo = 0, hi = cap, mid, c[4];
-    size_t i;
+    fs_real lo = 0, hi = cap, mid;
     int k;
-    if (!(accel(m, 0, v, i_max) > 0))
-        return false;
-    if (!(accel(m, cap, v, i_max) > 0)) {  // the speed where no torque is left, by bisection
-        for (k = 0; k < TOD_PROBE; k++) {
-            mid = FS_C(0.5) * (lo + hi);
-            if (accel(m, mid, v, i_max) > 0)
-                lo = mid;
-            else
-                hi = mid;
-        }
-        top = lo;
+    if (accel(m, cap, v, i_max) > 0)
+        return cap;
+    for (k = 0; k < TOD_PROBE; k++) {
+        mid = FS_C(0.5) * (lo + hi);
+        if (accel(m, mid, v, i_max) > 0)
+            lo = mid;
+        else
+            hi = mid;
     }
-    for (i = 0; i < TO_GRID; i++) {
-        w->omega[i] = top * (fs_real)i / (fs_real)(TO_GRID - 1);
-        if (!best_currents(m, w->omega[i], v, i_max, c))
-            return false;
-        idp[i] = c[0], idm[i] = c[2];
-        w->ap[i] = (m->Km * c[1] - m->B * w->omega[i]) / m->J;
-        w->am[i] = (m->Km * c[3] - m->B * w->omega[i]) / m->J;
-    }
-    w->ap[TO_GRID - 1] = fs_max(w->ap[TO_GRID - 1], FS_C(1e-12) * w->ap[0]);  // the top speed is reached
-    w->am[TO_GRID - 1] = fs_min(w->am[TO_GRID - 1], FS_C(1e-12) * w->am[0]);  // and left in finite time
-    for (i = 0; i < TO_GRID; i++)
-        if (!(fs_isfinite(w->ap[i]) && fs_isfinite(w->am[i]) && w->ap[i] != 0 && w->am[i] != 0))
-            return false;
-    w->integrals = false;
-    return w->omega[TO_GRID - 1] > 0;
+    return lo;
 }

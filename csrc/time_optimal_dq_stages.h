@@ -1,17 +1,54 @@
-// The stages of the field-weakening planner (csrc/time_optimal_dq.c): the d-q envelope
-// (time_optimal_dq_envelope.c, flatstep.plan.time_optimal_dq_envelope). Internal: not bound by Python.
+// The stages of the field-weakening planner (csrc/time_optimal_dq.c): the envelope's best currents
+// (time_optimal_dq_envelope.c, flatstep.plan.time_optimal_dq_envelope) and the shot move
+// (time_optimal_dq_shoot.c, flatstep.plan.time_optimal_dq_shoot). Internal: not bound by Python.
 #ifndef FS_TIME_OPTIMAL_DQ_STAGES_H
 #define FS_TIME_OPTIMAL_DQ_STAGES_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include "time_optimal_dq.h"
-#include "time_optimal_stages.h"
+
+#define TOD_LAG FS_C(0.5)          // the current's time constant under the policy, in current rise times
+#define TOD_Q_RATE FS_C(0.9)       // of V / L, the current's rate of the approach to the cap and the ramp
+#define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
+#define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
+#define TOD_TOP_SHARE FS_C(0.999)  // of the top speed, the cruise speed where that speed is below the cap
+#define TOD_SETTLE FS_C(1e-7)      // a cruise has settled this close to its speed and currents, relatively
+#define TOD_ROOT_TOL FS_C(1e-10)   // the root finder stops this close to the distance, relatively
+#define TOD_LAND_TOL (FS_C(1e-6) > 64 * FS_REAL_EPSILON ? FS_C(1e-6) : 64 * FS_REAL_EPSILON)  // a shot lands this close
+#define TOD_BRIDGE FS_C(0.05)  // of a step, the bridge from the braking rates to the ramp's
 
 // time_optimal_dq_envelope.c
-// Returns true and writes the envelope at bus voltage v, current i_max and speed cap into w->omega, w->ap, w->am
-// (TO_GRID speeds) and its d currents into idp, idm; false when the motor cannot start or the envelope is no
-// number.
-bool tod_envelope(const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap, struct to_work *w, fs_real *idp,
-                  fs_real *idm);
+// Returns true when the discs meet at speed w and writes (i_d+, i_q+, i_d-, i_q-) into c.
+bool tod_best_currents(const struct motor_params *m, fs_real w, fs_real v, fs_real i_max, fs_real c[4]);
+// Returns the least of cap and the speed where the largest acceleration falls to 0 (bisection).
+fs_real tod_top_speed(const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap);
+
+// time_optimal_dq_shoot.c
+// Samples of a phase at steps h: theta, omega, i_d, i_q and the target currents, TOD_MAX_STEPS + 1 each.
+struct tod_phase {
+    fs_real *theta, *omega, *i_d, *i_q, *t_d, *t_q;
+};
+
+// The end of the braking phase: the bridge's start (time, state, braking target), its length, the ramp's start
+// and its duration.
+struct tod_end {
+    fs_real t, theta, omega, i_d, i_q, t_d, t_q, bridge, theta1, omega1, i_d1, i_q1, tau;
+};
+
+// The shot move (time_optimal_dq_shoot.Shot).
+struct tod_shot {
+    struct tod_phase acc, brk;
+    size_t n_acc, n_brake;
+    bool cruise;
+    fs_real t_s, v, gain, h, ramp;  // ramp: the terminal ramp's rate, of TOD_Q_RATE V / L
+    struct tod_end end;
+};
+
+// Returns true and writes the move over d > 0 at bus v, current i_max and speed cap into shot (its phases' arrays
+// set by the caller), the terminal ramp's rate starting at ramp_rate of TOD_Q_RATE V / L; false when a phase needs
+// too many steps at every step size.
+bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, fs_real ramp_rate,
+               struct tod_shot *shot);
 
 #endif

@@ -4,10 +4,10 @@
 #   sampled     sampled_init/sampled_run, every law    (fuzz/fuzz_sampled.c)
 #   continuous  continuous_run, every law              (fuzz/fuzz_continuous.c)
 #   time_optimal time_optimal_plan/time_optimal_margins (fuzz/fuzz_time_optimal.c)
-#   time_optimal_dq time_optimal_dq_plan, field weakening (fuzz/fuzz_time_optimal_dq.c)
 #   traj        traj_* and plan_flag on a table        (fuzz/fuzz_traj.c)
 #   flat        plan_*, the flat maps, motor_*, arrays_* (fuzz/fuzz_flat.c)
 #   dq_smc      dq_smc_init/dq_smc_step, arrays_controller_step (fuzz/fuzz_dq_smc.c)
+#   time_optimal_dq time_optimal_dq_plan                  (fuzz/fuzz_time_optimal_dq.c)
 # libFuzzer with ASan+UBSan when clang can link -fsanitize=fuzzer (installing clang with apt-get if it is
 # missing and we may), else gcc with the random-input driver (fuzz/driver.c). Each target's corpus lives in
 # build/fuzz/<target>/corpus, started from fuzz/seeds/<target> and fuzz/regressions/<target>; crashes land
@@ -34,9 +34,9 @@ sources() {
     smc) echo "fuzz/fuzz_smc.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     sampled) echo "fuzz/fuzz_sampled.c fuzz/laws.c fuzz/sampled_check.c $(ls csrc/*.c | tr '\n' ' ')" ;;
     continuous) echo "fuzz/fuzz_continuous.c fuzz/laws.c $(ls csrc/*.c | tr '\n' ' ')" ;;
-    time_optimal | time_optimal_dq | traj) echo "fuzz/fuzz_$1.c $(ls csrc/*.c | tr '\n' ' ')" ;;
-    flat | dq_smc) echo "fuzz/fuzz_$1.c fuzz/laws.c $(ls csrc/*.c | tr '\n' ' ')" ;;
-    *) echo "fuzz: unknown target $1 (smc, sampled, continuous, time_optimal, time_optimal_dq, traj, flat, dq_smc)" >&2; exit 2 ;;
+    time_optimal | traj) echo "fuzz/fuzz_$1.c $(ls csrc/*.c | tr '\n' ' ')" ;;
+    flat | dq_smc | time_optimal_dq) echo "fuzz/fuzz_$1.c fuzz/laws.c $(ls csrc/*.c | tr '\n' ' ')" ;;
+    *) echo "fuzz: unknown target $1 (smc, sampled, continuous, time_optimal, traj, flat, dq_smc, time_optimal_dq)" >&2; exit 2 ;;
     esac
 }
 

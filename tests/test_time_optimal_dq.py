@@ -1,4 +1,4 @@
-"""The field-weakening planner in the d-q flat outputs: C and reference parity, feasibility, the d current's table."""
+"""The field-weakening planner in the d-q flat outputs: C and reference parity, the shot, feasibility, the d current."""
 from __future__ import annotations
 
 import math
@@ -16,6 +16,8 @@ from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal_dq import plan_dq_move, speed_cap, time_optimal_dq
 from flatstep.plan.time_optimal_dq_c import plan_raw
 from flatstep.plan.time_optimal_dq_envelope import best_currents, dq_envelope
+from flatstep.plan.time_optimal_dq_profile import dq_fit
+from flatstep.plan.time_optimal_dq_shoot import _Model, ramp_voltage, shoot
 from flatstep.studies.verify import drive_loop
 
 NEMA17 = MotorParams.preset("nema17")
@@ -25,25 +27,51 @@ def limits(v_bus: float = 24.0, **kw: float) -> MotorLimits:
     return MotorLimits(v_bus=v_bus, i_max=1.0, v_use=0.84, **kw)
 
 
-@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.1), (24.0, 5.0), (12.0, 0.1)])
+@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.1), (24.0, 0.3), (24.0, 5.0), (12.0, 0.1), (12.0, 1.0),
+                                             (12.0, 20.0)])
 def test_c_and_reference_plan_the_same_move(v_bus: float, distance: float) -> None:
     py = plan_dq_move(distance, NEMA17, limits(v_bus), engine="python")
     c = plan_dq_move(distance, NEMA17, limits(v_bus), engine="c")
     assert c.tf == pytest.approx(py.tf, rel=1e-9)
     assert c.kappa == pytest.approx(py.kappa, rel=1e-9)
-    np.testing.assert_allclose(c.table.i_d, py.table.i_d, atol=1e-9)
-    np.testing.assert_allclose(c.table.theta, py.table.theta, rtol=1e-7, atol=1e-9)
+    assert c.width == pytest.approx(py.width, rel=1e-12)
+    np.testing.assert_allclose(c.table.breaks, py.table.breaks, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(c.table.i_d, py.table.i_d, atol=1e-8)
+    np.testing.assert_allclose(c.table.theta, py.table.theta, rtol=1e-6, atol=1e-8)
 
 
-@pytest.mark.parametrize("v_bus,distance", [(24.0, 0.3), (12.0, 1.0), (12.0, 0.3)])
-def test_c_and_reference_agree_where_a_near_tie_may_flip(v_bus: float, distance: float) -> None:
-    # a one-box candidate's margin at a jump of the jerk, or two widths of nearly equal duration: a rounding may
-    # send the search another way (at 12 V 0.3 rad the regula falsi's last steps lie 1e-7 apart in kappa, and the
-    # durations 3e-8 apart); the durations still agree to 0.1 %
-    py = plan_dq_move(distance, NEMA17, limits(v_bus), engine="python")
-    c = plan_dq_move(distance, NEMA17, limits(v_bus), engine="c")
-    assert c.tf == pytest.approx(py.tf, rel=1e-3)
-    assert c.margins["worst"] <= 0 and py.margins["worst"] <= 0
+def test_shot_lands_on_the_distance_at_rest_and_the_table_follows_it() -> None:
+    lim = limits(24.0)
+    v = 0.98 * lim.v_use * lim.v_bus
+    shot = shoot(0.3, NEMA17, v, 0.995, 0.995 * speed_cap(NEMA17, lim, 20000.0))
+    assert shot is not None and shot.end.angle == pytest.approx(0.3, rel=1e-9)
+    table = dq_fit(shot, 0.3, NEMA17, v, 0.995)
+    plan = time_optimal_dq(0.3, NEMA17, lim).plan
+    f = plan.flag(np.array([plan.t0, plan.tf]))
+    assert f.theta.tolist() == pytest.approx([0.0, 0.3], abs=1e-12)
+    assert f.dtheta.tolist() == pytest.approx([0.0, 0.0], abs=1e-9)
+    assert f.ddtheta.tolist() == pytest.approx([0.0, 0.0], abs=1e-6)
+    # the knots are the shot's samples: theta and the speed of the model, integrated
+    k = np.searchsorted(np.arange(shot.n_acc) * shot.h, table.breaks[1:5])
+    np.testing.assert_allclose(table.theta[1:5, -1], shot.accel.theta[k], rtol=1e-12)
+    # the currents change at the bus's full rate: the planned voltage meets the bus, where the old planner kept a
+    # share for the inductance
+    fw = time_optimal_dq(0.3, NEMA17, lim)
+    v_mag, _, _ = _voltages(fw.plan, fw.d_current, NEMA17)
+    assert np.max(v_mag) >= 0.95 * lim.v_use * lim.v_bus
+
+
+def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
+    lim = limits(12.0)  # R i_max is 41 % of the bus: the ramp's start would leave it at the full rate
+    v = 0.98 * lim.v_use * lim.v_bus
+    cap = 0.995 * speed_cap(NEMA17, lim, 20000.0)
+    shot = shoot(0.3, NEMA17, v, 0.995, cap)
+    assert shot is not None and shot.ramp < 1.0
+    md = _Model(NEMA17, v, 0.995, cap, shot.h)
+    md.end_rate = shot.ramp * md.rate
+    assert ramp_voltage(md, shot.end) <= 1.0
+    again = shoot(0.3, NEMA17, v, 0.995, cap, shot.ramp)  # from the found rate: no further fall
+    assert again is not None and again.ramp == shot.ramp and again.end.t_end == shot.end.t_end
 
 
 def _voltages(plan: object, d_current: DCurrentPlan, m: MotorParams, n: int = 20000) -> tuple[np.ndarray, ...]:

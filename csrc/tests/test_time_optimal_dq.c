@@ -20,7 +20,8 @@ static double theta_at(const struct tod_result *r, size_t i, double tau)
     return a;
 }
 
-// Returns 0; each move is feasible, ends at the distance, weakens the field at speed and keeps under the cap.
+// Returns 0; each move is feasible, uses the bus, ends at the distance, weakens the field at speed and keeps under
+// the cap.
 static int feasible_checks(void)
 {
     const double distances[] = {0.3, 1.0, 5.0};
@@ -39,6 +40,9 @@ static int feasible_checks(void)
             CHECK(out.margins.worst <= 0 && out.margins.voltage <= 1 && out.margins.current <= 1, "margins %g %g %g",
                   out.margins.worst, out.margins.voltage, out.margins.current);
             CHECK(out.margins.speed_peak <= cap, "peak %g over the cap %g", out.margins.speed_peak, cap);
+            // the currents change at the bus's full rate (no share kept for the inductance), in one or two shots
+            CHECK(out.margins.voltage >= 0.95 && out.tables >= 1 && out.tables <= 2, "voltage %g in %d shots",
+                  out.margins.voltage, out.tables);
             CHECK(fabs(theta_at(&out, out.n - 1, 1.0) - distances[i]) < 1e-9, "ends at %g",
                   theta_at(&out, out.n - 1, 1.0));
             CHECK(out.knot_id[0] == 0 && fabs(out.knot_id[out.n]) < 1e-12, "rest d current %g %g", out.knot_id[0],

@@ -57,7 +57,7 @@ def best_currents(omega: float, motor: MotorParams, v: float, i_max: float) -> t
     if not z2 > 0.0:  # R^2 + (Nr w L)^2 underflows: no impedance to divide by, no envelope
         return math.nan, math.nan, math.nan, math.nan
     cd, cq, r = -e * x / z2, -e * m.R / z2, v / math.sqrt(z2)
-    dist = math.hypot(cd, cq)
+    dist = math.sqrt(cd * cd + cq * cq)
     if dist > i_max + r:
         return math.nan, math.nan, math.nan, math.nan
     if dist <= abs(i_max - r) or not dist > 0.0:  # one disc inside the other (or the same disc)

@@ -1,0 +1,350 @@
+// The field-weakening move by shooting: the nominal d-q model under the bus-saturated current-steering policy,
+// the switch time found by the Illinois variant of regula falsi (flatstep.plan.time_optimal_dq_shoot, operation
+// for operation).
+#include "time_optimal_dq_stages.h"
+
+// One shooting run's constants (time_optimal_dq_shoot._Model).
+struct model {
+    const struct motor_params *m;
+    fs_real R, L, Km, J, B, Nr;
+    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rate, end_rate, cap, hold, band;
+};
+
+// A state: theta, omega, i_d, i_q.
+struct state {
+    fs_real th, w, id, iq;
+};
+
+// Returns true when the run's constants are finite and positive and writes them (hostile limits can underflow or
+// overflow them: every divisor is checked before it divides).
+static bool model_init(struct model *md, const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap, fs_real h)
+{
+    fs_real top, k, den = TOD_LAG * i_max;
+    md->m = m, md->R = m->R, md->L = m->L, md->Km = m->Km, md->J = m->J, md->B = m->B, md->Nr = (fs_real)m->Nr;
+    md->v = v, md->i_max = i_max, md->h = h, md->inv_l = 1 / m->L, md->inv_j = 1 / m->J;
+    if (!(den > 0 && fs_isfinite(h) && h > 0))
+        return false;
+    md->lk = v / den;
+    if (!(fs_isfinite(md->lk) && md->lk > 0))
+        return false;
+    md->tc = m->L / md->lk;
+    md->rate = TOD_Q_RATE * v / m->L * (m->J / m->Km);
+    md->end_rate = md->rate;
+    top = tod_top_speed(m, v, i_max, cap);
+    md->cap = top >= cap ? cap : TOD_TOP_SHARE * top;
+    md->hold = m->B * md->cap / m->Km;
+    den = 4 * h * m->Km;
+    if (!(fs_isfinite(md->rate) && md->rate > 0 && fs_isfinite(md->cap) && md->cap > 0 && den > 0))
+        return false;
+    k = m->J / den;
+    if (!(k * k > 0 && fs_isfinite(k * k)))
+        return false;
+    md->band = 2 * md->rate / (k * k);
+    return fs_isfinite(md->band) && md->band > 0;
+}
+
+// Returns nothing; writes (di_d, di_q, dw) of the model under the policy towards the target (td, tq).
+static void deriv(const struct model *md, fs_real id, fs_real iq, fs_real w, fs_real td, fs_real tq, fs_real out[3])
+{
+    fs_real x = md->Nr * w * md->L, ad, aq, vd, vq, n2, scale;
+    ad = md->R * id - x * iq;
+    aq = md->R * iq + x * id + md->Km * w;
+    vd = ad + md->lk * (td - id);
+    vq = aq + md->lk * (tq - iq);
+    n2 = vd * vd + vq * vq;
+    if (n2 > md->v * md->v) {
+        scale = md->v / fs_sqrt(n2);
+        vd = vd * scale, vq = vq * scale;
+    }
+    out[0] = (vd - ad) * md->inv_l;
+    out[1] = (vq - aq) * md->inv_l;
+    out[2] = (md->Km * iq - md->B * w) * md->inv_j;
+}
+
+// Returns nothing; writes the target at speed w (braking: the envelope's bottom; else its top, held to the cap's
+// approach, which counts lead [rad/s] more for the current's lag).
+static void target(const struct model *md, fs_real w, bool braking, fs_real lead, fs_real t[2])
+{
+    fs_real c[4], e, g;
+    if (!tod_best_currents(md->m, fs_min(fs_max(w, 0), md->cap), md->v, md->i_max, c))
+        c[0] = c[1] = c[2] = c[3] = 0;
+    if (braking) {
+        t[0] = c[2], t[1] = c[3];
+        return;
+    }
+    e = md->cap - w - lead;
+    g = e >= md->band ? fs_sqrt(2 * md->rate * e) : e * fs_sqrt(2 * md->rate / md->band);
+    t[0] = c[0], t[1] = fs_min(c[1], md->hold + g);
+}
+
+static void next_target(const struct model *md, const struct state *s, bool braking, fs_real t[2])
+{
+    fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J;
+    target(md, s->w + md->h * alpha, braking, md->tc * alpha, t);
+}
+
+// Returns the state RK4 takes s to over f h, the target moving from t0 towards t1 (reached at a full step).
+static struct state step(const struct model *md, const struct state *s, const fs_real t0[2], const fs_real t1[2],
+                         fs_real f)
+{
+    fs_real h = f * md->h, dd = t1[0] - t0[0], dq = t1[1] - t0[1], k1[3], k2[3], k3[3], k4[3];
+    struct state o;
+    deriv(md, s->id, s->iq, s->w, t0[0], t0[1], k1);
+    deriv(md, s->id + FS_C(0.5) * h * k1[0], s->iq + FS_C(0.5) * h * k1[1], s->w + FS_C(0.5) * h * k1[2],
+          t0[0] + FS_C(0.5) * f * dd, t0[1] + FS_C(0.5) * f * dq, k2);
+    deriv(md, s->id + FS_C(0.5) * h * k2[0], s->iq + FS_C(0.5) * h * k2[1], s->w + FS_C(0.5) * h * k2[2],
+          t0[0] + FS_C(0.5) * f * dd, t0[1] + FS_C(0.5) * f * dq, k3);
+    deriv(md, s->id + h * k3[0], s->iq + h * k3[1], s->w + h * k3[2], t0[0] + f * dd, t0[1] + f * dq, k4);
+    o.th =
+        s->th
+        + h / 6 * (s->w + 2 * (s->w + FS_C(0.5) * h * k1[2]) + 2 * (s->w + FS_C(0.5) * h * k2[2]) + (s->w + h * k3[2]));
+    o.w = s->w + h / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2]);
+    o.id = s->id + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]);
+    o.iq = s->iq + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]);
+    return o;
+}
+
+// Returns the braking current beyond the terminal ramp's switching curve [A] (>= 0: ramp now).
+static fs_real curve(const struct model *md, const struct state *s)
+{
+    return -s->iq - fs_sqrt(2 * md->end_rate * fs_max(s->w, 0));
+}
+
+// Returns true when the speeding-up phase fits TOD_MAX_STEPS steps; writes its samples and whether it settled.
+static bool speed_up(const struct model *md, fs_real d, const struct tod_phase *a, size_t *n, bool *cruise)
+{
+    struct state s = {0, 0, 0, 0};
+    fs_real tg[2], nxt[2];
+    size_t k;
+    target(md, 0, false, 0, tg);
+    for (k = 0; k <= TOD_MAX_STEPS; k++) {
+        a->theta[k] = s.th, a->omega[k] = s.w, a->i_d[k] = s.id, a->i_q[k] = s.iq, a->t_d[k] = tg[0], a->t_q[k] = tg[1];
+        if (s.th >= d) {
+            *n = k + 1, *cruise = false;
+            return true;
+        }
+        if (fs_fabs(md->cap - s.w) <= TOD_SETTLE * md->cap && fs_fabs(tg[0] - s.id) <= TOD_SETTLE * md->i_max
+            && fs_fabs(tg[1] - s.iq) <= TOD_SETTLE * md->i_max) {
+            a->omega[k] = md->cap, a->i_d[k] = tg[0], a->i_q[k] = tg[1];  // settled: the cruise's steady state
+            *n = k + 1, *cruise = true;
+            return true;
+        }
+        if (k < TOD_MAX_STEPS) {
+            next_target(md, &s, false, nxt);
+            s = step(md, &s, tg, nxt, 1);
+            tg[0] = nxt[0], tg[1] = nxt[1];
+        }
+    }
+    return false;
+}
+
+// Returns the bridge from s at t and the terminal ramp after it (time_optimal_dq_shoot._ramp).
+static struct tod_end ramp(const struct model *md, fs_real t, const struct state *s, const fs_real tg[2])
+{
+    struct tod_end e = {t, s->th, fs_max(s->w, 0), s->id, s->iq, tg[0], tg[1],
+                        0, s->th, fs_max(s->w, 0), s->id, s->iq, 0};
+    fs_real a0 = (md->Km * s->iq - md->B * s->w) / md->J, tau0, dt, r[3], j_l, j_r, a1, w1;
+    if (!(a0 < 0 && s->w > 0))
+        return e;
+    tau0 = -2 * s->w / a0;
+    if (!(tau0 > 0))
+        return e;
+    dt = fs_min(TOD_BRIDGE * md->h, FS_C(0.5) * tau0);
+    deriv(md, s->id, s->iq, s->w, tg[0], tg[1], r);
+    j_l = (md->Km * r[1] - md->B * a0) / md->J;
+    j_r = -a0 / tau0;
+    a1 = a0 + FS_C(0.5) * (j_l + j_r) * dt;
+    w1 = s->w + a0 * dt + (j_l / 3 + j_r / 6) * dt * dt;
+    e.omega = s->w;
+    e.bridge = dt;
+    e.theta1 = s->th + s->w * dt + a0 * dt * dt / 2 + (j_l / 8 + j_r / 24) * (dt * dt * dt);
+    e.omega1 = fs_max(w1, 0);
+    e.i_d1 = s->id + FS_C(0.5) * (r[0] - s->id / tau0) * dt;
+    e.i_q1 = (md->J * a1 + md->B * w1) / md->Km;
+    e.tau = a1 < 0 && w1 > 0 ? -2 * w1 / a1 : 0;
+    return e;
+}
+
+// Returns the speeding-up step that time t >= 0 lies in, at most n_acc - 1 (int(t / h) clipped, as the reference).
+static size_t step_index(fs_real t, fs_real h, size_t n_acc)
+{
+    fs_real k = t / h;
+    if (!(k > 0))
+        return 0;
+    return k < (fs_real)(n_acc - 1) ? (size_t)k : n_acc - 1;
+}
+
+// Returns the state at the switch t_s and writes the speeding-up target there (time_optimal_dq_shoot.switch_state).
+static struct state switch_state(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise,
+                                 fs_real t_s, fs_real tg[2])
+{
+    fs_real h = md->h, t0[2], t1[2], f;
+    size_t k;
+    struct state s;
+    if (cruise && t_s >= (fs_real)(n_acc - 1) * h) {
+        k = n_acc - 1;
+        s.th = a->theta[k] + a->omega[k] * (t_s - (fs_real)k * h), s.w = a->omega[k], s.id = a->i_d[k],
+        s.iq = a->i_q[k];
+        tg[0] = a->t_d[k], tg[1] = a->t_q[k];
+        return s;
+    }
+    k = step_index(t_s, h, n_acc);
+    s.th = a->theta[k], s.w = a->omega[k], s.id = a->i_d[k], s.iq = a->i_q[k];
+    t0[0] = a->t_d[k], t0[1] = a->t_q[k];
+    if (!(t_s > (fs_real)k * h)) {
+        tg[0] = t0[0], tg[1] = t0[1];
+        return s;
+    }
+    if (k + 1 < n_acc)
+        t1[0] = a->t_d[k + 1], t1[1] = a->t_q[k + 1];
+    else
+        next_target(md, &s, false, t1);
+    f = (t_s - (fs_real)k * h) / h;
+    tg[0] = t0[0] + f * (t1[0] - t0[0]), tg[1] = t0[1] + f * (t1[1] - t0[1]);
+    return step(md, &s, t0, t1, f);
+}
+
+// Returns true and writes the braking phase's end from the switch t_s (and its samples into out unless NULL);
+// false when TOD_MAX_STEPS steps are too few (time_optimal_dq_shoot._brake).
+static bool brake(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real t_s,
+                  const struct tod_phase *out, struct tod_end *end, size_t *n_b)
+{
+    fs_real tg[2], into[2], t1[2], at[2], g, g_next, f, lam;
+    struct state s = switch_state(md, a, n_acc, cruise, t_s, tg), nxt;
+    size_t j;
+    into[0] = tg[0], into[1] = tg[1];
+    g = curve(md, &s);
+    *n_b = 0;
+    if (g >= 0 || !(s.w > 0)) {
+        *end = ramp(md, t_s, &s, tg);
+        return true;
+    }
+    for (j = 0; j < TOD_MAX_STEPS; j++) {
+        if (out) {
+            out->theta[j] = s.th, out->omega[j] = s.w, out->i_d[j] = s.id, out->i_q[j] = s.iq;
+            out->t_d[j] = tg[0], out->t_q[j] = tg[1];
+        }
+        next_target(md, &s, true, t1);
+        if (j + 1 < TOD_SWITCH) {
+            lam = ((fs_real)j + 1) / TOD_SWITCH;
+            t1[0] = into[0] + lam * (t1[0] - into[0]), t1[1] = into[1] + lam * (t1[1] - into[1]);
+        }
+        nxt = step(md, &s, tg, t1, 1);
+        g_next = curve(md, &nxt);
+        if (g_next >= 0 || !(nxt.w > 0)) {
+            f = g_next >= 0 ? g / (g - g_next) : s.w / (s.w - nxt.w);
+            at[0] = tg[0] + f * (t1[0] - tg[0]), at[1] = tg[1] + f * (t1[1] - tg[1]);
+            nxt = step(md, &s, tg, t1, f);
+            *end = ramp(md, t_s + ((fs_real)j + f) * md->h, &nxt, at);
+            *n_b = j + 1;
+            return true;
+        }
+        s = nxt, g = g_next, tg[0] = t1[0], tg[1] = t1[1];
+    }
+    return false;
+}
+
+// Returns the largest voltage of the terminal ramp over the bus: at its start and at its end.
+static fs_real ramp_voltage(const struct model *md, const struct tod_end *e)
+{
+    fs_real a1, did, jerk, diq, x, vd, vq, start, end, q;
+    if (!(e->tau > 0))
+        return 0;
+    a1 = (md->Km * e->i_q1 - md->B * e->omega1) / md->J;
+    did = -e->i_d1 / e->tau, jerk = -a1 / e->tau;
+    diq = (md->J * jerk + md->B * a1) / md->Km;
+    x = md->Nr * e->omega1 * md->L;
+    vd = md->R * e->i_d1 - x * e->i_q1 + md->L * did;
+    vq = md->R * e->i_q1 + x * e->i_d1 + md->Km * e->omega1 + md->L * diq;
+    start = fs_sqrt(vd * vd + vq * vq);
+    q = md->J * jerk / md->Km;
+    end = md->L * fs_sqrt(did * did + q * q);
+    return fs_max(start, end) / md->v;
+}
+
+// Returns true and writes the switch time that lands the move on d and its end (time_optimal_dq_shoot._land).
+static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
+                 fs_real *t_s_out, struct tod_end *end)
+{
+    fs_real last = (fs_real)(n_acc - 1) * md->h, t_s, hi, lo = 0, f_lo = -d, f_hi, f;
+    size_t n_b;
+    int it, side = 0;
+    if (cruise && !(a->omega[n_acc - 1] > 0))  // a cruise at no speed: the cap is 0 in fs_real
+        return false;
+    t_s = hi = cruise ? last + (d - a->theta[n_acc - 1]) / a->omega[n_acc - 1] : last;
+    if (!brake(md, a, n_acc, cruise, hi, NULL, end, &n_b))
+        return false;
+    f_hi = f = end->theta1 + end->omega1 * end->tau / 3 - d;
+    if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
+        return false;
+    for (it = 0; it < TOD_ROOT; it++) {
+        if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > FS_C(1e-15) * hi))
+            break;
+        if (!(f_hi - f_lo > 0))
+            break;
+        t_s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        if (!brake(md, a, n_acc, cruise, t_s, NULL, end, &n_b))
+            return false;
+        f = end->theta1 + end->omega1 * end->tau / 3 - d;
+        if (!fs_isfinite(f))
+            return false;
+        if (f < 0) {
+            lo = t_s, f_lo = f;
+            if (side == -1)
+                f_hi *= FS_C(0.5);
+            side = -1;
+        } else {
+            hi = t_s, f_hi = f;
+            if (side == 1)
+                f_lo *= FS_C(0.5);
+            side = 1;
+        }
+    }
+    *t_s_out = t_s;
+    return true;
+}
+
+bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, fs_real ramp_rate,
+               struct tod_shot *shot)
+{
+    struct model md;
+    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt;
+    size_t n_acc = 0, n_b, k;
+    bool cruise = false, landed;
+    int dbl, tries;
+    for (dbl = 0; dbl <= TOD_DOUBLINGS; dbl++, h *= 2) {
+        if (!model_init(&md, m, v, i_max, cap, h))
+            return false;
+        md.end_rate = ramp_rate * md.rate;
+        landed = false;
+        prev = e_prev = (fs_real)NAN;
+        if (speed_up(&md, d, &shot->acc, &n_acc, &cruise))
+            for (tries = 0; tries <= TOD_RAMP_TRIES; tries++) {
+                landed = land(&md, &shot->acc, n_acc, cruise, d, &t_s, &shot->end);
+                if (!landed)
+                    break;
+                excess = ramp_voltage(&md, &shot->end);
+                if (excess <= 1)
+                    break;
+                rate = md.end_rate;
+                if (fs_isfinite(e_prev) && excess != e_prev) {
+                    nxt = rate + (TOD_RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev);
+                    nxt = fs_min(fs_max(nxt, FS_C(0.25) * rate), rate);
+                } else
+                    nxt = rate * ((TOD_RAMP_SHARE / excess) * (TOD_RAMP_SHARE / excess));
+                prev = rate, e_prev = excess, md.end_rate = TOD_RAMP_AIM * nxt;
+            }
+        if (!landed || !brake(&md, &shot->acc, n_acc, cruise, t_s, &shot->brk, &shot->end, &n_b))
+            continue;
+        excess = shot->end.theta1 + shot->end.omega1 * shot->end.tau / 3 - d;
+        if (!(fs_fabs(excess) <= TOD_LAND_TOL * d))  // the root finder stopped short of the distance
+            return false;
+        shot->cruise = cruise && t_s >= (fs_real)(n_acc - 1) * h;
+        k = step_index(t_s, h, n_acc);
+        shot->n_acc = shot->cruise ? n_acc : k + 1;
+        shot->n_brake = n_b, shot->t_s = t_s, shot->v = v, shot->gain = md.lk, shot->h = h;
+        shot->ramp = md.end_rate / md.rate;
+        return true;
+    }
+    return false;
+}

@@ -1,0 +1,439 @@
+r"""The field-weakening move by shooting: the nominal d-q model driven at the bus's full rate, the switch found.
+
+The first stage of :mod:`flatstep.plan.time_optimal_dq`. The d-q model
+
+.. math::
+    L\dot i_d = v_d - Ri_d + N_r\omega Li_q,\quad L\dot i_q = v_q - Ri_q - N_r\omega Li_d - K_m\omega,\quad
+    J\dot\omega = K_m i_q - B\omega,\quad \dot\theta = \omega
+
+is integrated by RK4 on steps :math:`h` of :data:`STEPS` per current rise time :math:`L i_{max}/V`, under the
+voltage that brings the current to its target with the time constant :math:`T_c` (:data:`LAG` rise times),
+:math:`v = (R + jN_r\omega L)i + jK_m\omega + L(i^* - i)/T_c`, scaled onto :math:`|v| = V` where it is beyond
+the bus (as a drive's current loop saturates); the target moves linearly within each step (the currents' rates
+stay continuous, so that a cubic and a degree-7 fit follow them). The target is the envelope's best current
+(:func:`~flatstep.plan.time_optimal_dq_envelope.best_currents`) at the speed each step ends at: the top of the two
+discs while speeding up, the bottom while braking. Speeding up, the torque current is held to
+:math:`i_q^* \le B W/K_m + g(W - \omega)` so that the speed meets the cap :math:`W` at the current's rate
+:data:`Q_RATE` :math:`V/L` (:math:`g` the square root of the time-optimal approach, linear within a small band so
+that the cruise settles).
+
+At the switch the target passes linearly from the speeding-up one to the braking one over :data:`SWITCH` steps
+(the currents' rates stay continuous, and slow enough for the fit). Braking ends in a terminal ramp: once the
+braking current meets the switching curve :math:`-i_q = \sqrt{2 Q_{RATE}(V/L)(J/K_m)\omega}` (within the step: the
+fraction where the interpolated distance to the curve is 0, integrated from the step's start), a short bridge
+takes the jerk and the d current's rate linearly to the ramp's (so that the voltage passes between the two sides',
+within the bus), then the acceleration falls linearly to 0 over :math:`\tau = -2\omega/\dot\omega` and the speed
+with it, to rest, and :math:`i_d` linearly to 0. Where the ramp would leave the bus (at its start or its end), its
+rate falls (:func:`shoot`).
+
+The speeding-up phase is integrated once, until it settles at the cap (a cruise: the state then constant but the
+angle) or passes the distance. The braking phase starts from it at the switch time :math:`t_s`; its end angle rises
+with :math:`t_s`, and the Illinois variant of regula falsi finds the :math:`t_s` that lands on the distance in at
+most :data:`ROOT` braking phases. A phase that needs more than :data:`MAX_STEPS` steps doubles the step (at most
+:data:`DOUBLINGS` times).
+
+This module is the reference of csrc/time_optimal_dq_shoot.c, operation for operation; its loops run over time
+steps in Python (the default engine is the C one).
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple, Optional
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..model.motor import MotorParams
+from .time_optimal_dq_envelope import best_currents, top_speed
+
+Array = NDArray[np.float64]
+State = tuple[float, float, float, float]  # theta, omega, i_d, i_q
+#: Integration steps per current rise time L i_max / V (csrc/time_optimal_dq.h ``TOD_STEPS``).
+STEPS = 10
+#: Steps of one phase, at most (``TOD_MAX_STEPS``); more double the step.
+MAX_STEPS = 512
+#: The current's time constant under the policy, in current rise times (the fit follows it between knots).
+LAG = 0.5
+#: Steps over which the target passes from the speeding-up one to the braking one at the switch.
+SWITCH = 5
+#: Doublings of the step, at most (``TOD_DOUBLINGS``).
+DOUBLINGS = 8
+#: Braking phases tried by the root finder on the switch time, at most (``TOD_ROOT``).
+ROOT = 48
+#: The root finder stops when the end angle is this close to the distance, relatively; a shot that does not land
+#: within LAND_TOL of it is refused.
+ROOT_TOL = 1e-10
+LAND_TOL = 1e-6
+#: Of a step, the bridge from the braking rates to the terminal ramp's.
+BRIDGE = 0.05
+#: Of V / L, the torque current's rate the approach to the speed cap and the terminal ramp count on (the ramp's
+#: falls where it would leave the bus).
+Q_RATE = 0.9
+#: Of the bus, the voltage the terminal ramp's rate aims at where the ramp would leave the bus; and the ramp's rate
+#: changes at most this many times.
+RAMP_SHARE = 0.99
+RAMP_TRIES = 4
+#: Of the secant's rate, the one tried (a little below, so that the next try lands within the bus).
+RAMP_AIM = 0.995
+#: Of the top speed where no torque is left, the cruise speed when that speed is below the cap.
+TOP_SHARE = 0.999
+#: A cruise has settled when its speed and currents are this close to their targets, relatively.
+SETTLE = 1e-7
+
+
+class Phase(NamedTuple):
+    """Samples of a phase at steps h from its start: theta, omega, i_d, i_q and the target currents there."""
+
+    theta: Array
+    omega: Array
+    i_d: Array
+    i_q: Array
+    t_d: Array
+    t_q: Array
+
+
+class End(NamedTuple):
+    """The end of the braking phase, at rest.
+
+    The bridge's start (time, state, the braking target there), its length, the ramp's start (theta, omega, i_d,
+    i_q) and the ramp's duration.
+    """
+
+    t: float
+    theta: float
+    omega: float
+    i_d: float
+    i_q: float
+    t_d: float
+    t_q: float
+    bridge: float
+    theta1: float
+    omega1: float
+    i_d1: float
+    i_q1: float
+    tau: float
+
+    @property
+    def angle(self) -> float:
+        """The end angle: the speed falls as a parabola over the ramp, a third of its start times tau."""
+        return self.theta1 + self.omega1 * self.tau / 3.0
+
+    @property
+    def t_end(self) -> float:
+        """The end time [s]."""
+        return self.t + self.bridge + self.tau
+
+
+class Shot(NamedTuple):
+    """The move: the speeding-up phase up to the switch, the cruise if any, the braking phase and its ramp."""
+
+    accel: Phase  # samples 0..n_acc - 1 at k h
+    n_acc: int
+    cruise: bool  # the speeding-up phase settled at sample n_acc - 1 and cruises until t_s
+    t_s: float
+    brake: Phase  # samples 0..n_brake - 1 at t_s + j h
+    n_brake: int
+    end: End
+    v: float  # the bus [V], the policy's gain L / T_c [ohm] and the step [s] of the shot
+    gain: float
+    h: float
+    ramp: float  # the terminal ramp's rate, of Q_RATE V / L
+
+
+class _Model:
+    """The motor's constants, the bus, the current and the speed cap of one shooting run."""
+
+    def __init__(self, m: MotorParams, v: float, i_max: float, cap: float, h: float) -> None:
+        self.R, self.L, self.Km, self.J, self.B, self.Nr = m.R, m.L, m.Km, m.J, m.B, float(m.Nr)
+        self.m, self.v, self.i_max, self.h = m, v, i_max, h
+        self.inv_l, self.inv_j = 1.0 / m.L, 1.0 / m.J
+        self.lk = self.tc = self.rate = self.end_rate = self.cap = self.hold = self.band = math.nan
+        self.valid = self._constants(cap)
+
+    def _constants(self, cap: float) -> bool:
+        """Whether the run's constants are finite and positive (every divisor checked before it divides)."""
+        m, v, i_max, h = self.m, self.v, self.i_max, self.h
+        den = LAG * i_max
+        if not (den > 0 and math.isfinite(h) and h > 0):
+            return False
+        self.lk = v / den  # the current loop's gain L / T_c
+        if not (math.isfinite(self.lk) and self.lk > 0):
+            return False
+        self.tc = m.L / self.lk
+        self.rate = Q_RATE * v / m.L * (m.J / m.Km)  # the cap's approach law's current rate times J / Km
+        self.end_rate = self.rate  # the terminal ramp's (lowered where the ramp would leave the bus)
+        top = top_speed(m, v, i_max, cap)
+        self.cap = cap if top >= cap else TOP_SHARE * top
+        self.hold = m.B * self.cap / m.Km
+        den = 4.0 * h * m.Km
+        if not (math.isfinite(self.rate) and self.rate > 0 and math.isfinite(self.cap) and self.cap > 0 and den > 0):
+            return False
+        k = m.J / den  # the linear band's slope: the speed error falls by a quarter per step
+        if not (k * k > 0 and math.isfinite(k * k)):
+            return False
+        self.band = 2.0 * self.rate / (k * k)
+        return math.isfinite(self.band) and self.band > 0
+
+    def policy(self, i_d: float, i_q: float, w: float, t_d: float, t_q: float) -> tuple[float, float, float, float]:
+        """The voltage towards the target and the steady voltage of the state: (v_d, v_q, a_d, a_q) (module doc)."""
+        x = self.Nr * w * self.L
+        a_d = self.R * i_d - x * i_q
+        a_q = self.R * i_q + x * i_d + self.Km * w
+        v_d = a_d + self.lk * (t_d - i_d)
+        v_q = a_q + self.lk * (t_q - i_q)
+        n2 = v_d * v_d + v_q * v_q
+        if n2 > self.v * self.v:
+            scale = self.v / math.sqrt(n2)
+            v_d, v_q = v_d * scale, v_q * scale
+        return v_d, v_q, a_d, a_q
+
+    def deriv(self, i_d: float, i_q: float, w: float, t_d: float, t_q: float) -> tuple[float, float, float]:
+        """(di_d, di_q, dw) of the model under the policy towards (t_d, t_q)."""
+        v_d, v_q, a_d, a_q = self.policy(i_d, i_q, w, t_d, t_q)
+        return (v_d - a_d) * self.inv_l, (v_q - a_q) * self.inv_l, (self.Km * i_q - self.B * w) * self.inv_j
+
+    def target(self, w: float, braking: bool, lead: float = 0.0) -> tuple[float, float]:
+        """The target current at speed ``w`` (module docstring); ``lead``: the speed the current's lag adds [rad/s]."""
+        c = best_currents(min(max(w, 0.0), self.cap), self.m, self.v, self.i_max)
+        if math.isnan(c[1]):  # the discs do not meet (not below the top speed): no current
+            c = (0.0, 0.0, 0.0, 0.0)
+        if braking:
+            return c[2], c[3]
+        e = self.cap - w - lead
+        g = math.sqrt(2.0 * self.rate * e) if e >= self.band else e * math.sqrt(2.0 * self.rate / self.band)
+        return c[0], min(c[1], self.hold + g)
+
+    def next_target(self, s: State, braking: bool) -> tuple[float, float]:
+        """The target at the end of the step from ``s``: at the speed predicted there.
+
+        The approach to the cap counts the speed the current's lag behind its target adds (T_c times the acceleration).
+        """
+        alpha = (self.Km * s[3] - self.B * s[1]) / self.J
+        return self.target(s[1] + self.h * alpha, braking, self.tc * alpha)
+
+    def step(self, s: State, t0: tuple[float, float], t1: tuple[float, float], f: float = 1.0) -> State:
+        """RK4 over ``f h`` from ``s``, the target moving from ``t0`` towards ``t1`` (reached at a full step)."""
+        h = f * self.h
+        th, w, i_d, i_q = s
+        dd, dq = t1[0] - t0[0], t1[1] - t0[1]
+        d1, q1, w1 = self.deriv(i_d, i_q, w, t0[0], t0[1])
+        d2, q2, w2 = self.deriv(i_d + 0.5 * h * d1, i_q + 0.5 * h * q1, w + 0.5 * h * w1, t0[0] + 0.5 * f * dd,
+                                t0[1] + 0.5 * f * dq)
+        d3, q3, w3 = self.deriv(i_d + 0.5 * h * d2, i_q + 0.5 * h * q2, w + 0.5 * h * w2, t0[0] + 0.5 * f * dd,
+                                t0[1] + 0.5 * f * dq)
+        d4, q4, w4 = self.deriv(i_d + h * d3, i_q + h * q3, w + h * w3, t0[0] + f * dd, t0[1] + f * dq)
+        return (th + h / 6.0 * (w + 2.0 * (w + 0.5 * h * w1) + 2.0 * (w + 0.5 * h * w2) + (w + h * w3)),
+                w + h / 6.0 * (w1 + 2.0 * w2 + 2.0 * w3 + w4),
+                i_d + h / 6.0 * (d1 + 2.0 * d2 + 2.0 * d3 + d4),
+                i_q + h / 6.0 * (q1 + 2.0 * q2 + 2.0 * q3 + q4))
+
+    def curve(self, s: State) -> float:
+        """The braking current beyond the terminal ramp's switching curve [A] (>= 0: ramp now)."""
+        return -s[3] - math.sqrt(2.0 * self.end_rate * max(s[1], 0.0))
+
+
+def _empty(n: int) -> list[Array]:
+    return [np.zeros(n) for _ in range(6)]
+
+
+def _speed_up(md: _Model, d: float) -> Optional[tuple[list[Array], int, bool]]:
+    """The speeding-up phase: arrays, samples, whether it settled in a cruise (None: MAX_STEPS too few)."""
+    th, w, i_d, i_q, t_d, t_q = a = _empty(MAX_STEPS + 1)
+    s: State = (0.0, 0.0, 0.0, 0.0)
+    tg = md.target(0.0, False)
+    for k in range(MAX_STEPS + 1):
+        th[k], w[k], i_d[k], i_q[k] = s
+        t_d[k], t_q[k] = tg
+        if s[0] >= d:
+            return a, k + 1, False
+        if (abs(md.cap - s[1]) <= SETTLE * md.cap and abs(tg[0] - s[2]) <= SETTLE * md.i_max
+                and abs(tg[1] - s[3]) <= SETTLE * md.i_max):
+            w[k], i_d[k], i_q[k] = md.cap, tg[0], tg[1]  # settled: the cruise's steady state
+            return a, k + 1, True
+        if k < MAX_STEPS:
+            nxt = md.next_target(s, False)
+            s, tg = md.step(s, tg, nxt), nxt
+    return None
+
+
+def _ramp(md: _Model, t: float, s: State, tg: tuple[float, float]) -> End:
+    r"""The bridge from ``s`` at ``t`` and the terminal ramp after it (module docstring).
+
+    Over the bridge (:data:`BRIDGE` steps, at most half the ramp) the jerk and the d current's rate pass linearly
+    from the braking policy's to the ramp's; the ramp then takes the acceleration linearly to 0 as the speed falls
+    to 0 over :math:`\tau = -2\omega/\dot\omega`, and the d current linearly to 0.
+    """
+    th, w, i_d, i_q = s
+    a0 = (md.Km * i_q - md.B * w) / md.J
+    if not (a0 < 0 and w > 0):
+        return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
+    tau0 = -2.0 * w / a0
+    if not tau0 > 0:
+        return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
+    dt = min(BRIDGE * md.h, 0.5 * tau0)
+    did, diq, _ = md.deriv(i_d, i_q, w, tg[0], tg[1])
+    j_l = (md.Km * diq - md.B * a0) / md.J
+    j_r = -a0 / tau0
+    a1 = a0 + 0.5 * (j_l + j_r) * dt
+    w1 = w + a0 * dt + (j_l / 3.0 + j_r / 6.0) * dt * dt
+    th1 = th + w * dt + a0 * dt * dt / 2.0 + (j_l / 8.0 + j_r / 24.0) * (dt * dt * dt)
+    i_d1 = i_d + 0.5 * (did - i_d / tau0) * dt
+    tau = -2.0 * w1 / a1 if a1 < 0 and w1 > 0 else 0.0
+    return End(t, th, w, i_d, i_q, tg[0], tg[1], dt, th1, max(w1, 0.0), i_d1, (md.J * a1 + md.B * w1) / md.Km, tau)
+
+
+def _step_index(t: float, h: float, n_acc: int) -> int:
+    """The speeding-up step that time ``t`` >= 0 lies in, at most ``n_acc`` - 1."""
+    k = t / h
+    if not k > 0:
+        return 0
+    return int(k) if k < n_acc - 1 else n_acc - 1
+
+
+def switch_state(md: _Model, acc: list[Array], n_acc: int, cruise: bool,
+                 t_s: float) -> tuple[State, tuple[float, float]]:
+    """The state at the switch ``t_s`` and the speeding-up target there."""
+    h = md.h
+    th, w, i_d, i_q, t_d, t_q = acc
+    if cruise and t_s >= (n_acc - 1) * h:
+        k = n_acc - 1
+        return (th[k] + w[k] * (t_s - k * h), w[k], i_d[k], i_q[k]), (t_d[k], t_q[k])
+    k = _step_index(t_s, h, n_acc)
+    s: State = (th[k], w[k], i_d[k], i_q[k])
+    t0 = (float(t_d[k]), float(t_q[k]))
+    if not t_s > k * h:
+        return s, t0
+    t1 = (float(t_d[k + 1]), float(t_q[k + 1])) if k + 1 < n_acc else md.next_target(s, False)
+    f = (t_s - k * h) / h
+    return md.step(s, t0, t1, f), (t0[0] + f * (t1[0] - t0[0]), t0[1] + f * (t1[1] - t0[1]))
+
+
+def _brake(md: _Model, acc: list[Array], n_acc: int, cruise: bool, t_s: float,
+           out: Optional[list[Array]]) -> tuple[Optional[End], int]:
+    """The braking phase from the switch ``t_s``: its terminal ramp and samples (None: MAX_STEPS too few)."""
+    h = md.h
+    s, tg = switch_state(md, acc, n_acc, cruise, t_s)  # the target passes to braking over SWITCH steps
+    into = tg
+    g = md.curve(s)
+    if g >= 0 or not s[1] > 0:
+        return _ramp(md, t_s, s, tg), 0
+    for j in range(MAX_STEPS):
+        if out is not None:
+            for arr, x in zip(out, (*s, *tg), strict=True):
+                arr[j] = x
+        t1 = md.next_target(s, True)
+        if j + 1 < SWITCH:
+            lam = (j + 1.0) / SWITCH
+            t1 = (into[0] + lam * (t1[0] - into[0]), into[1] + lam * (t1[1] - into[1]))
+        nxt = md.step(s, tg, t1)
+        g_next = md.curve(nxt)
+        if g_next >= 0 or not nxt[1] > 0:
+            f = g / (g - g_next) if g_next >= 0 else s[1] / (s[1] - nxt[1])
+            at = (tg[0] + f * (t1[0] - tg[0]), tg[1] + f * (t1[1] - tg[1]))
+            return _ramp(md, t_s + (j + f) * h, md.step(s, tg, t1, f), at), j + 1
+        s, g, tg = nxt, g_next, t1
+    return None, 0
+
+
+def ramp_voltage(md: _Model, e: End) -> float:
+    """The largest voltage of the terminal ramp over the bus: at its start and at its end."""
+    if not e.tau > 0:
+        return 0.0
+    a1 = (md.Km * e.i_q1 - md.B * e.omega1) / md.J
+    did, jerk = -e.i_d1 / e.tau, -a1 / e.tau
+    diq = (md.J * jerk + md.B * a1) / md.Km
+    x = md.Nr * e.omega1 * md.L
+    v_d = md.R * e.i_d1 - x * e.i_q1 + md.L * did
+    v_q = md.R * e.i_q1 + x * e.i_d1 + md.Km * e.omega1 + md.L * diq
+    start = math.sqrt(v_d * v_d + v_q * v_q)
+    end = md.L * math.sqrt(did * did + (md.J * jerk / md.Km) ** 2)
+    return max(start, end) / md.v
+
+
+def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float) -> Optional[tuple[float, End]]:
+    """The switch time that lands the move on ``d`` and its end (None: a braking phase too long)."""
+    last = (n_acc - 1) * md.h
+    if cruise and not acc[1][n_acc - 1] > 0:  # a cruise at no speed: the cap is 0 in floating point
+        return None
+    t_s = hi = last + (d - acc[0][n_acc - 1]) / acc[1][n_acc - 1] if cruise else last
+    end, _ = _brake(md, acc, n_acc, cruise, hi, None)
+    if end is None:
+        return None
+    lo, f_lo = 0.0, -d
+    f_hi = f = end.angle - d
+    if not (math.isfinite(f) and t_s >= 0) or f < 0:  # the bracket's top must not fall short
+        return None
+    side = 0
+    for _ in range(ROOT):
+        if abs(f) <= ROOT_TOL * d or not hi - lo > 1e-15 * hi:
+            break
+        if not f_hi - f_lo > 0:
+            break
+        t_s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        end, _ = _brake(md, acc, n_acc, cruise, t_s, None)
+        if end is None:
+            return None
+        f = end.angle - d
+        if not math.isfinite(f):
+            return None
+        if f < 0:
+            lo, f_lo = t_s, f
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+        else:
+            hi, f_hi = t_s, f
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+    return t_s, end
+
+
+def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp: float = 1.0) -> Optional[Shot]:
+    """The move over ``d`` > 0 at bus ``v`` [V], current ``i_max`` [A] and speed cap [rad/s] (None: not found).
+
+    ``ramp``: the terminal ramp's rate to start from, of :data:`Q_RATE` ``v / L``. Where the ramp would leave the
+    bus (at its start or its end), its rate is set by the secant on the ramp's voltage towards :data:`RAMP_SHARE`
+    of the bus (the first step scales it by the square of the excess) and the switch is found again, at most
+    :data:`RAMP_TRIES` times; the shot keeps the rate (the planner starts its next shot from it).
+    """
+    h = motor.L * i_max / v / STEPS
+    for _ in range(DOUBLINGS + 1):
+        md = _Model(motor, v, i_max, cap, h)
+        if not md.valid:
+            return None
+        md.end_rate = ramp * md.rate
+        up = _speed_up(md, d)
+        landed = None
+        if up is not None:
+            acc, n_acc, cruise = up
+            prev, e_prev = math.nan, math.nan
+            for _ in range(RAMP_TRIES + 1):
+                landed = _land(md, acc, n_acc, cruise, d)
+                if landed is None:
+                    break
+                excess = ramp_voltage(md, landed[1])
+                if excess <= 1.0:
+                    break
+                rate = md.end_rate
+                if math.isfinite(e_prev) and excess != e_prev:
+                    nxt = rate + (RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev)
+                    nxt = min(max(nxt, 0.25 * rate), rate)
+                else:
+                    nxt = rate * (RAMP_SHARE / excess) ** 2
+                prev, e_prev, md.end_rate = rate, excess, RAMP_AIM * nxt
+        if landed is None:
+            h *= 2.0
+            continue
+        t_s = landed[0]
+        out = _empty(MAX_STEPS)
+        end, n_b = _brake(md, acc, n_acc, cruise, t_s, out)
+        if end is None:
+            h *= 2.0
+            continue
+        if not abs(end.angle - d) <= LAND_TOL * d:  # the root finder stopped short of the distance
+            return None
+        cruising = cruise and t_s >= (n_acc - 1) * h
+        k_s = n_acc if cruising else _step_index(t_s, h, n_acc) + 1
+        return Shot(Phase(*acc), k_s, cruising, t_s, Phase(*out), n_b, end, v, md.lk, h, md.end_rate / md.rate)
+    return None
