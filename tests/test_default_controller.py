@@ -12,10 +12,10 @@ TORQUES = "[feedforward]\ndetent_torque = 1e-3\n"
 
 
 def test_the_default_types():
-    assert default_type(sampled=True, torques=False) == DEFAULT_TYPE == "cascade+voltage_feedforward"
+    assert default_type(sampled=True, torques=False) == DEFAULT_TYPE == "cascade+voltage_feedforward+plan_frame"
     assert default_type(sampled=True, torques=True) == DEFAULT_TYPE_TORQUES
     assert ControllerSpec.parse(DEFAULT_TYPE_TORQUES) == ControllerSpec(
-        "cascade", feedforward=True, observer_torques=True, voltage_feedforward=True)
+        "cascade", feedforward=True, observer_torques=True, voltage_feedforward=True, plan_frame=True)
     assert default_type(sampled=False, torques=True) == DEFAULT_TYPE_CONTINUOUS == "smc"
 
 
@@ -55,3 +55,23 @@ def test_compare_clean_runs_a_file_whose_default_knows_the_torques(cli):
                "--population", "5", "--frontier", "1", "--quiet"])
     assert run.returncode == 0, run.stderr
     assert "compare-paper-20khz (clean)" in run.stdout and "cascade" in run.stdout
+
+
+def test_the_default_follows_the_plan_frame_rule(tmp_path):
+    """The default's gains: the rule of flatstep.control.cascade.plan_frame_rule, from Ts, the plan and the model."""
+    import math
+
+    from flatstep.control.cascade import PLAN_FRAME_RULE
+
+    path = tmp_path / "s.toml"
+    path.write_text('[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\n' + DRIVE)
+    sc = load_scenario(path)[0]
+    g, m, r = sc.controller().gains, sc.motor, PLAN_FRAME_RULE
+    assert g.plan_frame and g.voltage_feedforward and g.d_hold == r["d_hold"]
+    Ts = 1 / 20000.0
+    w = min(r["w_ts"] / Ts, math.sqrt(m.Km * r["d_hold"] * 1.0 * m.Nr / m.J))
+    assert g.current_bandwidth == pytest.approx(r["lambda_ts"] / Ts)
+    assert (g.k_omega, g.k_theta, g.ki_omega) == pytest.approx((r["k_omega"] * w, r["k_theta"] * w,
+                                                                 r["ki_omega"] * w * w))
+    slow = load_scenario(path.write_text(path.read_text().replace("20000.0", "5000.0")) and path)[0]
+    assert slow.controller().gains.k_omega == pytest.approx(r["k_omega"] * r["w_ts"] * 5000.0)  # capped by Ts

@@ -59,6 +59,11 @@ if TYPE_CHECKING:
     from .build import BuildContext
     from .spec import ControllerSpec
 
+#: The rule of the cascade in the plan's frame (:func:`plan_frame_rule`): the current loops' speed
+#: :math:`\lambda T_s`, the outer bandwidth's cap :math:`w T_s`, the P-PI gains over that bandwidth
+#: (:math:`k_\omega/w`, :math:`k_\theta/w`, :math:`k_{i\omega}/w^2`) and the share of :math:`\rho^*` held on d.
+PLAN_FRAME_RULE = dict(lambda_ts=0.895, w_ts=0.0871, k_omega=3.20, k_theta=1.28, ki_omega=1.60, d_hold=0.535)
+
 
 @dataclass(frozen=True)
 class CascadeGains:
@@ -231,6 +236,31 @@ class CascadeFOC(BaselineController[CascadeGains]):
                     Ts=self.control_period, v_limit=self.v_limit)
 
 
+def plan_frame_rule(context: BuildContext) -> dict[str, float]:
+    r"""The rule gains of the cascade in the plan's frame, from the control period, the plan and the model.
+
+    The current loops at :math:`\lambda = 0.895/T_s` (``lambda_ts`` replaces 0.895; a computation delay doubles
+    :math:`T_s` here), a share :math:`h = 0.535` of the plan's largest :math:`\rho^*` held on d, and the P-PI loop
+    over the bandwidth
+
+    .. math:: w = \min\left(\frac{0.0871}{T_s},\ \omega_s\right),\qquad
+              \omega_s = \sqrt{\frac{K_m h \rho^*_{max} N_r}{J}},
+
+    the held current's spring frequency (its stiffness over the inertia) capped by what the sampling allows:
+    :math:`k_\omega = 3.20w`, :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60w^2`. Every figure is
+    :data:`PLAN_FRAME_RULE`; docs/comparison.md ("The default controller") says where they come from and what they
+    give on scenarios they were and were not chosen on. ``bandwidth_scale`` multiplies both bandwidths.
+    """
+    r, m, Ts = PLAN_FRAME_RULE, context.motor, context.period * (2.0 if context.compute_delay else 1.0)
+    scale = context.bandwidth_scale
+    lam = (context.lambda_ts if context.lambda_ts is not None else r["lambda_ts"]) / Ts
+    rho = float(np.max(np.abs(context.plan.flag(np.array([context.plan.t0, context.plan.tf])).rho)))
+    spring = math.sqrt(m.Km * r["d_hold"] * max(rho, 1e-12) * m.Nr / m.J)
+    w = scale * min(r["w_ts"] / Ts, spring)
+    return dict(current_bandwidth=scale * lam, position_bandwidth=w, k_omega=r["k_omega"] * w,
+                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * w * w, d_hold=r["d_hold"])
+
+
 def from_spec(spec: ControllerSpec, context: BuildContext) -> CascadeFOC:
     """The cascade as ``spec`` asks (flatstep.control.spec), tuned by rule (:mod:`flatstep.control.build`).
 
@@ -238,10 +268,14 @@ def from_spec(spec: ControllerSpec, context: BuildContext) -> CascadeFOC:
     given in ``context.law_gains`` over them; ``feedforward`` is the anti-cogging (the known torques in the q-current
     command), ``observer_torques`` gives them to the observer too, ``voltage_feedforward`` adds the voltage of the
     planned q current (with those torques along the plan), ``plan_frame`` runs the current loops in the plan's frame
-    with a share ``d_hold`` of rho* held on d.
+    with a share ``d_hold`` of rho* held on d, and then its gains follow :func:`plan_frame_rule`.
     """
-    lam, wn = context.bandwidths()
-    gains = context.gains(CascadeGains, dict(current_bandwidth=lam, position_bandwidth=wn),
+    if spec.plan_frame:
+        rule = plan_frame_rule(context)
+    else:
+        lam, wn = context.bandwidths()
+        rule = dict(current_bandwidth=lam, position_bandwidth=wn)
+    gains = context.gains(CascadeGains, rule,
                           dict(voltage_feedforward=spec.voltage_feedforward, plan_frame=spec.plan_frame))
     return CascadeFOC(context.motor, context.plan, gains, control_period=context.period,
                       measurement=context.measurement, v_limit=context.v_limit, torques=context.torques,

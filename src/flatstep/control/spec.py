@@ -388,11 +388,12 @@ FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
 
 
 #: The controller a scenario file with a drive (``[drive] control_rate``) runs when its ``[controller]`` table names
-#: none: the law that comes closest to the best tuned law on every scenario of docs/comparison.md, the cascade with
-#: the flat feedforward of its planned q current (``R iq* + L diq*/dt``).
-DEFAULT_TYPE = "cascade+voltage_feedforward"
+#: none: the cascade with the flat feedforward of its planned currents (``R i* + L di*/dt``), its current loops in
+#: the plan's frame with a share of the plan's current held on d, at the rule gains of
+#: :func:`flatstep.control.cascade.plan_frame_rule` (docs/comparison.md, "The default controller").
+DEFAULT_TYPE = "cascade+voltage_feedforward+plan_frame"
 #: The same with the file's ``[feedforward]`` torques in its q-current command and its observer.
-DEFAULT_TYPE_TORQUES = "cascade+feedforward+observer_torques+voltage_feedforward"
+DEFAULT_TYPE_TORQUES = "cascade+feedforward+observer_torques+voltage_feedforward+plan_frame"
 #: The controller of a file without a drive: the paper's law, in continuous time as in the paper.
 DEFAULT_TYPE_CONTINUOUS = "smc"
 
