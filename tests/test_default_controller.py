@@ -64,10 +64,11 @@ def test_the_default_follows_the_plan_frame_rule(tmp_path):
     from flatstep.control.cascade import PLAN_FRAME_RULE
 
     path = tmp_path / "s.toml"
-    path.write_text('[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\n' + DRIVE)
+    path.write_text('t_end = 0.1\n[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\n'
+                    't0 = 0.01\ntf = 0.07\n' + DRIVE)
     sc = load_scenario(path)[0]
     g, m, r = sc.controller().gains, sc.motor, PLAN_FRAME_RULE
-    assert g.plan_frame and g.voltage_feedforward and g.d_hold == r["d_hold"]
+    assert g.plan_frame and g.voltage_feedforward and g.d_hold == pytest.approx(r["d_hold"])  # the bus has room
     Ts = 1 / 20000.0
     w = min(r["w_ts"] / Ts, math.sqrt(m.Km * r["d_hold"] * 1.0 * m.Nr / m.J))
     assert g.current_bandwidth == pytest.approx(r["lambda_ts"] / Ts)
@@ -75,3 +76,20 @@ def test_the_default_follows_the_plan_frame_rule(tmp_path):
                                                                  r["ki_omega"] * w * w))
     slow = load_scenario(path.write_text(path.read_text().replace("20000.0", "5000.0")) and path)[0]
     assert slow.controller().gains.k_omega == pytest.approx(r["k_omega"] * r["w_ts"] * 5000.0)  # capped by Ts
+
+
+def test_the_default_holds_less_where_the_bus_is_short(tmp_path):
+    """The held share falls until the move's feedforward with it fits in 3/4 of the bus; the loop keeps its speed."""
+    from flatstep.control.cascade import HOLD_VOLTAGE_SHARE, PLAN_FRAME_RULE
+
+    text = 't_end = 0.1\n[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\nt0 = 0.01\ntf = 0.07\n'
+    holds, k_omega = [], []
+    for bus in (24.0, 12.0, 8.0):
+        path = tmp_path / f"s{bus:g}.toml"
+        path.write_text(text + DRIVE.replace("24.0", str(bus)))
+        g = load_scenario(path)[0].controller().gains
+        holds.append(g.d_hold)
+        k_omega.append(g.k_omega)
+    assert holds[0] == pytest.approx(PLAN_FRAME_RULE["d_hold"]) and holds[0] > holds[1] > holds[2] >= 0.0
+    assert k_omega[0] == k_omega[1] == k_omega[2]
+    assert 0.0 < HOLD_VOLTAGE_SHARE < 1.0

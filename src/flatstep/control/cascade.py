@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.d_current import DCurrentPlan
 from ..plan.protocol import Plan
 from ..validate import InputError, check_finite, check_positive
 from .feedforward import reference
@@ -63,6 +64,8 @@ if TYPE_CHECKING:
 #: :math:`\lambda T_s`, the outer bandwidth's cap :math:`w T_s`, the P-PI gains over that bandwidth
 #: (:math:`k_\omega/w`, :math:`k_\theta/w`, :math:`k_{i\omega}/w^2`) and the share of :math:`\rho^*` held on d.
 PLAN_FRAME_RULE = dict(lambda_ts=0.895, w_ts=0.0871, k_omega=3.20, k_theta=1.28, ki_omega=1.60, d_hold=0.535)
+#: The share of the bus the plan-frame rule's feedforward may take with its held current (:func:`plan_frame_rule`).
+HOLD_VOLTAGE_SHARE = 0.75
 
 
 @dataclass(frozen=True)
@@ -240,8 +243,8 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
     r"""The rule gains of the cascade in the plan's frame, from the control period, the plan and the model.
 
     The current loops at :math:`\lambda = 0.895/T_s` (``lambda_ts`` replaces 0.895; a computation delay doubles
-    :math:`T_s` here), a share :math:`h = 0.535` of the plan's largest :math:`\rho^*` held on d, and the P-PI loop
-    over the bandwidth
+    :math:`T_s` here), a share :math:`h = 0.535` of the plan's largest :math:`\rho^*` held on d (less where the bus
+    is short: :func:`held_share`), and the P-PI loop over the bandwidth
 
     .. math:: w = \min\left(\frac{0.0871}{T_s},\ \omega_s\right),\qquad
               \omega_s = \sqrt{\frac{K_m h \rho^*_{max} N_r}{J}},
@@ -255,10 +258,32 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
     scale = context.bandwidth_scale
     lam = (context.lambda_ts if context.lambda_ts is not None else r["lambda_ts"]) / Ts
     rho = float(np.max(np.abs(context.plan.flag(np.array([context.plan.t0, context.plan.tf])).rho)))
+    hold = held_share(context, rho)
     spring = math.sqrt(m.Km * r["d_hold"] * max(rho, 1e-12) * m.Nr / m.J)
     w = scale * min(r["w_ts"] / Ts, spring)
     return dict(current_bandwidth=scale * lam, position_bandwidth=w, k_omega=r["k_omega"] * w,
-                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * w * w, d_hold=r["d_hold"])
+                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * w * w, d_hold=hold)
+
+
+def held_share(context: BuildContext, rho: float) -> float:
+    r"""The share of ``rho`` [A] the plan-frame rule holds on d: the rule's, less where the bus is short.
+
+    The largest of :math:`h_0, 0.9h_0, \ldots, 0` (:math:`h_0` the rule's ``d_hold``) whose feedforward phase
+    voltages along the move (:func:`~flatstep.control.feedforward.reference` with :math:`i_d^* = h\rho`, the known
+    torques) stay within :data:`HOLD_VOLTAGE_SHARE` of the bus: the held current may not take the voltage the
+    move needs. Without a bus limit, :math:`h_0`.
+    """
+    h0, limit = PLAN_FRAME_RULE["d_hold"], HOLD_VOLTAGE_SHARE * context.v_limit
+    if not math.isfinite(limit):
+        return h0
+    plan = context.plan
+    t = np.linspace(plan.t0, plan.tf, 401)
+    for h in h0 * np.linspace(1.0, 0.0, 11):
+        d = DCurrentPlan(h * rho, h * rho, plan.t0, plan.tf)
+        ref = reference(plan, context.motor, t, torques=context.torques, frame="ab", d_current=d)
+        if float(np.max(np.abs(ref.voltages))) <= limit:
+            return float(h)
+    return 0.0
 
 
 def from_spec(spec: ControllerSpec, context: BuildContext) -> CascadeFOC:
