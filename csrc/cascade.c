@@ -18,7 +18,7 @@ int cascade_init(struct cascade *s, const struct cascade_params *p)
     if (!plan_valid(&p->plan))
         return CASCADE_EPLAN;
     if (!positive(wc) || !positive(g->k_theta) || !positive(g->k_omega)
-        || !(fs_isfinite(g->ki_omega) && g->ki_omega >= 0))
+        || !(fs_isfinite(g->ki_omega) && g->ki_omega >= 0) || !(fs_isfinite(g->d_hold) && g->d_hold >= 0))
         return CASCADE_EGAINS;
     s->p = *p;
     s->kp = m->L * wc;
@@ -63,11 +63,14 @@ uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v
 {
     // e_w = theta*' + k_theta (theta* - theta) - omega; iq* = (J theta*'' + B theta*' + J (k_omega e_w + I0) + E) / Km;
     // v_dq = kp (i_dq* - i_dq) + I12 [+ decoupling] [+ (0, R iq_ff + L iq_ff')]; v = inverse Park;
-    // I += ki Ts e unless max|v| > v_limit.
+    // I += ki Ts e unless max|v| > v_limit. With plan_frame: the frame at Nr theta* (not Nr theta), id* = d_hold rho*,
+    // the decoupling at Nr theta*' and the back EMF Km omega (-sin Nr(theta - theta*), cos Nr(theta - theta*)),
+    // the voltage feedforward (R id* + L id*', R iq_ff + L iq_ff').
     const struct motor_params *m = &s->p.motor;
     const fs_real *I = s->integral;
     const struct cascade_gains *g = &s->p.gains;
-    fs_real ref[PLAN_FLAG_LEN], e_w, accel, iq_ref, sn, cs, id, iq, e_d, e_q, vd, vq, out[2], next[3], z;
+    fs_real ref[PLAN_FLAG_LEN], e_w, accel, iq_ref, id_ref = 0, sn, cs, id, iq, e_d, e_q, vd, vq, out[2], next[3], z;
+    fs_real w_frame = y[2], sd = 0, cd = 1;
     bool hold;
     v[0] = v[1] = 0;
     // x - x is 0 for a finite x and NaN otherwise: one test covers every input used and the state.
@@ -81,20 +84,28 @@ uint32_t cascade_step(struct cascade *s, fs_real t, const fs_real *y, fs_real *v
     iq_ref = (m->J * ref[PLAN_DDTHETA] + m->B * ref[PLAN_DTHETA] + m->J * accel
               + torque_model_torque(&s->p.torques, m->Nr, t, y[3], y[2]))
              / m->Km;
-    // Park transform by Nr theta: id = ia c + ib s, iq = -ia s + ib c.
-    fs_sincos(m->Nr * y[3], &sn, &cs);
+    // Park transform by Nr theta (Nr theta* in the plan's frame): id = ia c + ib s, iq = -ia s + ib c.
+    fs_sincos(m->Nr * (g->plan_frame ? ref[PLAN_THETA] : y[3]), &sn, &cs);
+    if (g->plan_frame) {
+        id_ref = g->d_hold * ref[PLAN_RHO];
+        w_frame = ref[PLAN_DTHETA];
+        fs_sincos(m->Nr * (y[3] - ref[PLAN_THETA]), &sd, &cd);
+    }
     id = y[0] * cs + y[1] * sn;
     iq = -y[0] * sn + y[1] * cs;
-    e_d = 0 - id;
+    e_d = id_ref - id;
     e_q = iq_ref - iq;
     vd = s->kp * e_d + I[1];
     vq = s->kp * e_q + I[2];
     if (g->decoupling) {
-        vd = vd + -s->L_Nr * y[2] * iq;
-        vq = vq + (s->L_Nr * y[2] * id + m->Km * y[2]);
+        vd = vd + (-s->L_Nr * w_frame * iq - m->Km * y[2] * sd);
+        vq = vq + (s->L_Nr * w_frame * id + m->Km * y[2] * cd);
     }
-    if (g->voltage_feedforward)
+    if (g->voltage_feedforward) {
         vq = vq + cascade_reference_voltage(s, t, ref);
+        if (g->plan_frame)
+            vd = vd + g->d_hold * (m->R * ref[PLAN_RHO] + m->L * ref[PLAN_DRHO]);
+    }
     out[0] = vd * cs - vq * sn;
     out[1] = vd * sn + vq * cs;
     hold = fs_fabs(out[0]) > s->p.v_limit || fs_fabs(out[1]) > s->p.v_limit;

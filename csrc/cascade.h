@@ -16,7 +16,7 @@ enum cascade_param_error {
     CASCADE_PARAMS_OK = 0,
     CASCADE_EMOTOR,    // motor_params_valid fails
     CASCADE_EPLAN,     // plan_valid fails
-    CASCADE_EGAINS,    // wc, k_theta, k_omega not finite and > 0, ki_omega not finite and >= 0, or L wc overflows
+    CASCADE_EGAINS,    // wc, k_theta, k_omega not finite and > 0, ki_omega or d_hold finite >= 0, or L wc overflows
     CASCADE_EPERIOD,   // Ts not finite and > 0, or ki Ts overflows
     CASCADE_ELIMITS,   // v_limit not > 0 (INFINITY is allowed: no limit)
     CASCADE_ETORQUES,  // torque_model_valid fails
@@ -31,6 +31,9 @@ struct cascade_gains {
     fs_real ki_omega;           // velocity integral gain [1/s^2], >= 0
     bool decoupling;            // add -L Nr omega iq to vd and L Nr omega id + Km omega to vq
     bool voltage_feedforward;   // add R iq_ff + L iq_ff' to vq, iq_ff = (J theta*'' + B theta*' + E*) / Km on the plan
+                                // (and R id* + L id*' to vd with plan_frame)
+    bool plan_frame;            // the current loops in the plan's frame (Park by Nr theta*) with id* = d_hold rho*(t)
+    fs_real d_hold;             // with plan_frame: the share of the plan's rho* held on d, finite and >= 0
 };
 
 struct cascade_params {
@@ -60,8 +63,9 @@ void cascade_reset(struct cascade *s);
 
 // Returns ctrl_status bits; writes the cascade's command v = (va, vb) for time t and y = (ia, ib, omega, theta,
 // theta'') (y[4] is not read; iq* carries E(t, theta, omega) / Km of the torque model; with voltage_feedforward vq
-// carries R iq_ff + L iq_ff' with E and E' along the plan) and advances the integrals by one period Ts, as
-// CascadeFOC.step. v is not limited:
+// carries R iq_ff + L iq_ff' with E and E' along the plan; with plan_frame the currents are regulated in the plan's
+// frame, id* = d_hold rho*, the decoupling at the plan's speed and the back EMF at the measured angle) and advances
+// the integrals by one period Ts, as CascadeFOC.step. v is not limited:
 // CTRL_SATURATED says max(|va|, |vb|) > v_limit, and the integrals then hold (anti-windup). On a fault
 // (CTRL_NONFINITE: t, y[0..3] or an integral not finite; CTRL_OVERFLOW: v or an integral would not be finite)
 // v = (0, 0) and the state is left unchanged.

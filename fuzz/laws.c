@@ -238,7 +238,7 @@ static int init_microstep(struct fz_law *c, struct fz_reader *r, bool hostile, u
     return rc;
 }
 
-// Returns cascade_init's status; decodes the cascade (options: 1 no decoupling, 2 the voltage feedforward). Aborts when a documented
+// Returns cascade_init's status; decodes the cascade (options: 1 no decoupling, 2 the voltage feedforward, 4 the plan's frame). Aborts when a documented
 // requirement is broken yet accepted.
 static int init_cascade(struct fz_law *c, struct fz_reader *r, bool hostile, uint8_t options, const struct setup *u)
 {
@@ -248,7 +248,7 @@ static int init_cascade(struct fz_law *c, struct fz_reader *r, bool hostile, uin
     p.motor = *u->model, p.plan = *u->plan, p.Ts = u->Ts, p.v_limit = u->v_limit;
     p.gains.current_bandwidth = 0.3 / u->Ts, p.gains.decoupling = !(options & 1);
     p.gains.k_theta = 200.0 / 3, p.gains.k_omega = 450, p.gains.ki_omega = 30000;
-    p.gains.voltage_feedforward = (options & 2) != 0;
+    p.gains.voltage_feedforward = (options & 2) != 0, p.gains.plan_frame = (options & 4) != 0, p.gains.d_hold = 1;
     p.torques = (struct torque_model){0};
     if (hostile) {
         p.gains.current_bandwidth = fz_value(r, p.gains.current_bandwidth);

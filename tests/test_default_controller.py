@@ -12,10 +12,10 @@ TORQUES = "[feedforward]\ndetent_torque = 1e-3\n"
 
 
 def test_the_default_types():
-    assert default_type(sampled=True, torques=False) == DEFAULT_TYPE == "cascade+voltage_feedforward"
+    assert default_type(sampled=True, torques=False) == DEFAULT_TYPE == "cascade+voltage_feedforward+plan_frame"
     assert default_type(sampled=True, torques=True) == DEFAULT_TYPE_TORQUES
     assert ControllerSpec.parse(DEFAULT_TYPE_TORQUES) == ControllerSpec(
-        "cascade", feedforward=True, observer_torques=True, voltage_feedforward=True)
+        "cascade", feedforward=True, observer_torques=True, voltage_feedforward=True, plan_frame=True)
     assert default_type(sampled=False, torques=True) == DEFAULT_TYPE_CONTINUOUS == "smc"
 
 
@@ -60,8 +60,8 @@ def test_compare_clean_runs_a_file_whose_default_knows_the_torques(cli):
 @pytest.mark.parametrize("text, kind", [
     # options without a law are set over the default's law and options, not over the paper's law
     (DRIVE + TORQUES + "[controller]\nfeedforward = true\n", DEFAULT_TYPE_TORQUES),
-    (DRIVE + TORQUES + "[controller]\nobserver_torques = false\n", "cascade+feedforward+voltage_feedforward"),
-    (DRIVE + "[controller]\nvoltage_feedforward = false\n", "cascade"),
+    (DRIVE + TORQUES + "[controller]\nobserver_torques = false\n", "cascade+feedforward+voltage_feedforward+plan_frame"),
+    (DRIVE + "[controller]\nvoltage_feedforward = false\n", "cascade+plan_frame"),
     (TORQUES + "[controller]\nfeedforward = true\n", "smc_ff"),  # no drive: the default is the paper's law
 ])
 def test_options_without_a_law_follow_the_default(tmp_path, text, kind):
@@ -75,6 +75,44 @@ def test_an_option_the_default_law_does_not_take_needs_a_law(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(DRIVE + "[controller]\nintegral = true\n")
     with pytest.raises(ValueError, match=r"s.toml:controller.integral: the table names no law, so the controller is "
-                                         r"the default 'cascade\+voltage_feedforward' \(law 'cascade'.*law = one of "
+                                         r"the default 'cascade\+voltage_feedforward\+plan_frame' \(law 'cascade'.*law = one of "
                                          r"\['dq_smc'\]"):
         load_scenario(path)
+
+
+def test_the_default_follows_the_plan_frame_rule(tmp_path):
+    """The default's gains: the rule of flatstep.control.cascade.plan_frame_rule, from Ts, the plan and the model."""
+    import math
+
+    from flatstep.control.cascade import PLAN_FRAME_RULE
+
+    path = tmp_path / "s.toml"
+    path.write_text('t_end = 0.1\n[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\n'
+                    't0 = 0.01\ntf = 0.07\n' + DRIVE)
+    sc = load_scenario(path)[0]
+    g, m, r = sc.controller().gains, sc.motor, PLAN_FRAME_RULE
+    assert g.plan_frame and g.voltage_feedforward and g.d_hold == pytest.approx(r["d_hold"])  # the bus has room
+    Ts = 1 / 20000.0
+    w = min(r["w_ts"] / Ts, math.sqrt(m.Km * r["d_hold"] * 1.0 * m.Nr / m.J))
+    assert g.current_bandwidth == pytest.approx(r["lambda_ts"] / Ts)
+    assert (g.k_omega, g.k_theta, g.ki_omega) == pytest.approx((r["k_omega"] * w, r["k_theta"] * w,
+                                                                 r["ki_omega"] * w * w))
+    slow = load_scenario(path.write_text(path.read_text().replace("20000.0", "5000.0")) and path)[0]
+    assert slow.controller().gains.k_omega == pytest.approx(r["k_omega"] * r["w_ts"] * 5000.0)  # capped by Ts
+
+
+def test_the_default_holds_less_where_the_bus_is_short(tmp_path):
+    """The held share falls until the move's feedforward with it fits in 3/4 of the bus; the loop keeps its speed."""
+    from flatstep.control.cascade import HOLD_VOLTAGE_SHARE, PLAN_FRAME_RULE
+
+    text = 't_end = 0.1\n[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\nt0 = 0.01\ntf = 0.07\n'
+    holds, k_omega = [], []
+    for bus in (24.0, 12.0, 8.0):
+        path = tmp_path / f"s{bus:g}.toml"
+        path.write_text(text + DRIVE.replace("24.0", str(bus)))
+        g = load_scenario(path)[0].controller().gains
+        holds.append(g.d_hold)
+        k_omega.append(g.k_omega)
+    assert holds[0] == pytest.approx(PLAN_FRAME_RULE["d_hold"]) and holds[0] > holds[1] > holds[2] >= 0.0
+    assert k_omega[0] == k_omega[1] == k_omega[2]
+    assert 0.0 < HOLD_VOLTAGE_SHARE < 1.0

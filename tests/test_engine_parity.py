@@ -77,3 +77,19 @@ def test_laws_with_state_refuse_continuous_time(kind, motor, plan):
     for engine in ("c", "scipy"):
         with pytest.raises(ValueError, match="once per control period"):
             fs.simulate(motor, plan, ctrl, engine=engine)
+
+
+@pytest.mark.parametrize("hold", [1.0, 0.4])
+def test_the_cascade_in_the_plan_frame_matches_the_reference(hold):
+    """The cascade's plan_frame option (its currents in the plan's frame, a share of rho* held on d), C and Python."""
+    scenario, _ = load_scenario(EXAMPLES / "compare-paper-20khz.toml")
+    sc = replace(scenario, controller_type="cascade+feedforward+observer_torques+voltage_feedforward+plan_frame",
+                 law_gains={"cascade": {"d_hold": hold}})
+    ctrl = sc.controller()
+    assert ctrl.gains.plan_frame and ctrl.gains.d_hold == hold
+    c, py = sc.run("c"), sc.run("python")
+    np.testing.assert_allclose(c.theta, py.theta, rtol=0, atol=1e-9)
+    np.testing.assert_allclose([c.ia, c.ib], [py.ia, py.ib], rtol=0, atol=1e-9)
+    np.testing.assert_allclose([c.va, c.vb], [py.va, py.vb], rtol=0, atol=1e-8)
+    t = c.t >= sc.plan.t0
+    assert np.max(np.hypot(c.ia, c.ib)[t]) > 0.9 * hold * sc.plan.rho1  # the share of rho* is held

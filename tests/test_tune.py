@@ -63,6 +63,24 @@ def test_seeded_tuning_is_reproducible(tiny, tuned_smc):
     assert [e.gains for e in other.evaluations][1:] != [e.gains for e in tuned_smc.evaluations][1:]
 
 
+def test_the_early_stop_and_the_threads_change_nothing_but_the_time(tiny):
+    """The search with every plant of every trial run, on one thread, takes the same path and gives the same answer."""
+    study = dataclasses.replace(tiny.robustness, parameters=["R", "Km", "J"])  # 8 plants: rounds of 1, 4, 8
+    fast = tune(tiny.scenario, "cascade", seed=2, study=study, budget=25, population=5, workers=2)
+    full = tune(tiny.scenario, "cascade", seed=2, study=study, budget=25, population=5, workers=1, early_stop=False)
+    assert [e.gains for e in fast.evaluations] == [e.gains for e in full.evaluations]
+    assert fast.best == full.best and fast.gains == full.gains
+    stopped = [e for e in fast.evaluations if not e.complete]
+    assert stopped, "no trial was stopped early: the test no longer checks the early stop"
+    assert all(e.evaluated < e.plants == 8 for e in stopped)
+    assert all(e.complete for e in full.evaluations)
+    by_gains = {tuple(e.gains.values()): e for e in full.evaluations}
+    for e in stopped:  # a stopped trial lost to its member, and would not have been the answer
+        whole = by_gains[tuple(e.gains.values())]
+        assert e.move_max <= whole.move_max
+        assert whole.move_max > full.best.move_max or full.caps.excess(whole) > 0
+
+
 def test_budget_is_the_same_for_every_law(tiny, tuned_smc):
     cascade = tune(tiny.scenario, "cascade", seed=3, study=tiny.robustness, **FAST)
     assert len(tuned_smc.evaluations) == len(cascade.evaluations) == 10

@@ -36,6 +36,8 @@ static void cascade_defaults(struct cascade_params *p)
     p->gains.ki_omega = 0.75 * (0.3 / TS / 4) * (0.3 / TS / 4);
     p->gains.decoupling = true;
     p->gains.voltage_feedforward = false;
+    p->gains.plan_frame = false;
+    p->gains.d_hold = 1;
     p->Ts = TS;
     p->v_limit = INFINITY;
     p->torques = (struct torque_model){0, 4, 0, 0, 0.01, 0, 0, 0, 1};

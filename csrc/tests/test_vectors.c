@@ -101,7 +101,8 @@ static double check_cascade(int line, const double *a)
     uint32_t st;
     motor_from(a, &p.motor);
     p.plan = (struct plan){a[6], a[7], a[8], a[9], a[10], a[11], NULL};
-    p.gains = (struct cascade_gains){a[12], a[13] / 3, 2.25 * a[13], 0.75 * (a[13] * a[13]), a[14] != 0, false};
+    p.gains =
+        (struct cascade_gains){a[12], a[13] / 3, 2.25 * a[13], 0.75 * (a[13] * a[13]), a[14] != 0, false, false, 0};
     p.Ts = a[15], p.v_limit = a[16];
     CHECK(cascade_init(&s, &p) == CASCADE_PARAMS_OK, "line %d: init", line);
     memcpy(s.integral, a + 18, 3 * sizeof *a);

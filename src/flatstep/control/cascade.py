@@ -24,6 +24,16 @@ of the bandwidth, the usual rule): :math:`k_\omega = 2.25w`, :math:`k_\theta = w
 :math:`k_{i\omega} = 0.75w^2`, with :math:`w = \omega_n = \lambda/4`, the sliding controller's error
 bandwidth. Anti-windup: every integrator holds while the bus limits.
 
+**In the plan's frame** (``plan_frame``): the current loops regulate :math:`i_d, i_q` in the frame of the plan's
+angle, Park by :math:`N_r\theta^*` rather than :math:`N_r\hat\theta`, with :math:`i_d^* = h\rho^*(t)`, a share
+:math:`h` (``d_hold``, default 1) of the plan's current held on the d axis, as the paper's law holds it. The torque
+is then :math:`K_m(i_q\cos N_r\delta + i_d\sin N_r\delta)` with :math:`\delta = \theta^* - \theta`: the held
+current answers an angle error at once, a spring of stiffness :math:`K_m h\rho^* N_r` that needs neither the
+measurement nor the loops (no sampling or computation delay in it), while the P-PI loop and the q current do what
+they do without it. The decoupling uses the frame's speed :math:`N_r\dot\theta^*`, the back EMF
+:math:`K_m\hat\omega(-\sin N_r(\hat\theta - \theta^*), \cos N_r(\hat\theta - \theta^*))` in that frame, and the
+voltage feedforward adds :math:`R i_d^* + L\,di_d^*/dt` on d. The price is the held current's copper.
+
 **Anti-cogging** (``torques``, a :class:`~flatstep.model.torque_model.TorqueModel`, as servo firmwares calibrate
 it): the known torques :math:`E(t, \hat\theta, \hat\omega)` (detent, friction, load) join the q-current command,
 :math:`i_q^* \mathrel{+}= E/K_m`, tracked through the current loop; none by default. As in firmware the drive's
@@ -40,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model.motor import MotorParams
 from ..model.torque_model import NO_TORQUES, TorqueModel
+from ..plan.d_current import DCurrentPlan
 from ..plan.protocol import Plan
 from ..validate import InputError, check_finite, check_positive
 from .feedforward import reference
@@ -48,6 +59,13 @@ from .loops import BaselineController, PIGains, bus_scale, inverse_park, park, p
 if TYPE_CHECKING:
     from .build import BuildContext
     from .spec import ControllerSpec
+
+#: The rule of the cascade in the plan's frame (:func:`plan_frame_rule`): the current loops' speed
+#: :math:`\lambda T_s`, the outer bandwidth's cap :math:`w T_s`, the P-PI gains over that bandwidth
+#: (:math:`k_\omega/w`, :math:`k_\theta/w`, :math:`k_{i\omega}/w^2`) and the share of :math:`\rho^*` held on d.
+PLAN_FRAME_RULE = dict(lambda_ts=0.895, w_ts=0.0871, k_omega=3.20, k_theta=1.28, ki_omega=1.60, d_hold=0.535)
+#: The share of the bus the plan-frame rule's feedforward may take with its held current (:func:`plan_frame_rule`).
+HOLD_VOLTAGE_SHARE = 0.75
 
 
 @dataclass(frozen=True)
@@ -72,6 +90,10 @@ class CascadeGains:
     voltage_feedforward : bool
         Add the voltage of the q current the plan needs, :math:`R i_q^{ff} + L\,di_q^{ff}/dt` (module docstring;
         default off).
+    plan_frame : bool
+        Regulate the currents in the plan's frame with :math:`i_d^* = h\rho^*` (module docstring; default off).
+    d_hold : float
+        :math:`h`, the share of the plan's :math:`\rho^*` held on d with ``plan_frame`` (>= 0, default 1).
     """
 
     current_bandwidth: float
@@ -81,6 +103,8 @@ class CascadeGains:
     k_omega: Optional[float] = None
     ki_omega: Optional[float] = None
     voltage_feedforward: bool = False
+    plan_frame: bool = False
+    d_hold: float = 1.0
 
     def __post_init__(self) -> None:
         for name in ("current_bandwidth", "position_bandwidth"):
@@ -93,7 +117,11 @@ class CascadeGains:
         if ki < 0:
             raise InputError("ki_omega", ki, f"ki_omega={ki!r} 1/s^2 must be >= 0 (0: no velocity integral)")
         object.__setattr__(self, "ki_omega", ki)
-        for name in ("decoupling", "voltage_feedforward"):
+        hold = check_finite("d_hold", self.d_hold)
+        if hold < 0:
+            raise InputError("d_hold", hold, f"d_hold={hold!r} must be >= 0 (the share of the plan's rho* held on d)")
+        object.__setattr__(self, "d_hold", hold)
+        for name in ("decoupling", "voltage_feedforward", "plan_frame"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(name, getattr(self, name), f"{name}={getattr(self, name)!r} is not true or false")
 
@@ -170,14 +198,20 @@ class CascadeFOC(BaselineController[CascadeGains]):
         accel = pi_output(self.pi_omega, e_omega, integral[0])
         known = float(self.torques.torque(t, theta, omega, m.Nr))  # the anti-cogging (and friction, load) torque
         iq_ref = (m.J * ref.ddtheta + m.B * ref.dtheta + m.J * accel + known) / m.Km
-        p = m.Nr * theta
+        id_ref, w_frame, sd, cd = 0.0, omega, 0.0, 1.0
+        p = m.Nr * (ref.theta if g.plan_frame else theta)
+        if g.plan_frame:  # the plan's frame: d holds a share of rho*, the back EMF at the angle error
+            id_ref, w_frame = g.d_hold * float(ref.rho), float(ref.dtheta)
+            sd, cd = math.sin(m.Nr * (theta - ref.theta)), math.cos(m.Nr * (theta - ref.theta))
         i_d, i_q = park(ia, ib, p)
-        e_i = np.array([0.0 - i_d, iq_ref - i_q], dtype=float)
+        e_i = np.array([id_ref - i_d, iq_ref - i_q], dtype=float)
         v_dq = pi_output(self.pi, e_i, integral[1:])
         if g.decoupling:
-            v_dq = v_dq + np.array([-m.L * m.Nr * omega * i_q, m.L * m.Nr * omega * i_d + m.Km * omega])
+            v_dq = v_dq + np.array([-m.L * m.Nr * w_frame * i_q - m.Km * omega * sd,
+                                    m.L * m.Nr * w_frame * i_d + m.Km * omega * cd])
         if g.voltage_feedforward:
-            v_dq = v_dq + np.array([0.0, self.reference_voltage(t)])
+            v_dq = v_dq + np.array([g.d_hold * (m.R * float(ref.rho) + m.L * float(ref.drho)) if g.plan_frame
+                                    else 0.0, self.reference_voltage(t)])
         v = np.array(inverse_park(v_dq[0], v_dq[1], p))
         hold = bus_scale(v, self.v_limit) < 1.0
         new = np.concatenate([[pi_integrate(self.pi_omega, e_omega, integral[0], Ts, hold)],
@@ -200,8 +234,56 @@ class CascadeFOC(BaselineController[CascadeGains]):
         return dict(motor=self.motor.as_dict(), plan=self.plan.c_plan(),
                     gains=dict(current_bandwidth=g.current_bandwidth, k_theta=k_theta, k_omega=k_omega,
                                ki_omega=ki_omega, decoupling=g.decoupling,
-                               voltage_feedforward=g.voltage_feedforward), torques=self.torques.as_dict(),
+                               voltage_feedforward=g.voltage_feedforward, plan_frame=g.plan_frame,
+                               d_hold=g.d_hold), torques=self.torques.as_dict(),
                     Ts=self.control_period, v_limit=self.v_limit)
+
+
+def plan_frame_rule(context: BuildContext) -> dict[str, float]:
+    r"""The rule gains of the cascade in the plan's frame, from the control period, the plan and the model.
+
+    The current loops at :math:`\lambda = 0.895/T_s` (``lambda_ts`` replaces 0.895; a computation delay doubles
+    :math:`T_s` here), a share :math:`h = 0.535` of the plan's largest :math:`\rho^*` held on d (less where the bus
+    is short: :func:`held_share`), and the P-PI loop over the bandwidth
+
+    .. math:: w = \min\left(\frac{0.0871}{T_s},\ \omega_s\right),\qquad
+              \omega_s = \sqrt{\frac{K_m h \rho^*_{max} N_r}{J}},
+
+    the held current's spring frequency (its stiffness over the inertia) capped by what the sampling allows:
+    :math:`k_\omega = 3.20w`, :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60w^2`. Every figure is
+    :data:`PLAN_FRAME_RULE`; docs/comparison.md ("The default controller") says where they come from and what they
+    give on scenarios they were and were not chosen on. ``bandwidth_scale`` multiplies both bandwidths.
+    """
+    r, m, Ts = PLAN_FRAME_RULE, context.motor, context.period * (2.0 if context.compute_delay else 1.0)
+    scale = context.bandwidth_scale
+    lam = (context.lambda_ts if context.lambda_ts is not None else r["lambda_ts"]) / Ts
+    rho = float(np.max(np.abs(context.plan.flag(np.array([context.plan.t0, context.plan.tf])).rho)))
+    hold = held_share(context, rho)
+    spring = math.sqrt(m.Km * r["d_hold"] * max(rho, 1e-12) * m.Nr / m.J)
+    w = scale * min(r["w_ts"] / Ts, spring)
+    return dict(current_bandwidth=scale * lam, position_bandwidth=w, k_omega=r["k_omega"] * w,
+                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * w * w, d_hold=hold)
+
+
+def held_share(context: BuildContext, rho: float) -> float:
+    r"""The share of ``rho`` [A] the plan-frame rule holds on d: the rule's, less where the bus is short.
+
+    The largest of :math:`h_0, 0.9h_0, \ldots, 0` (:math:`h_0` the rule's ``d_hold``) whose feedforward phase
+    voltages along the move (:func:`~flatstep.control.feedforward.reference` with :math:`i_d^* = h\rho`, the known
+    torques) stay within :data:`HOLD_VOLTAGE_SHARE` of the bus: the held current may not take the voltage the
+    move needs. Without a bus limit, :math:`h_0`.
+    """
+    h0, limit = PLAN_FRAME_RULE["d_hold"], HOLD_VOLTAGE_SHARE * context.v_limit
+    if not math.isfinite(limit):
+        return h0
+    plan = context.plan
+    t = np.linspace(plan.t0, plan.tf, 401)
+    for h in h0 * np.linspace(1.0, 0.0, 11):
+        d = DCurrentPlan(h * rho, h * rho, plan.t0, plan.tf)
+        ref = reference(plan, context.motor, t, torques=context.torques, frame="ab", d_current=d)
+        if float(np.max(np.abs(ref.voltages))) <= limit:
+            return float(h)
+    return 0.0
 
 
 def from_spec(spec: ControllerSpec, context: BuildContext) -> CascadeFOC:
@@ -210,11 +292,16 @@ def from_spec(spec: ControllerSpec, context: BuildContext) -> CascadeFOC:
     Current loops at ``lambda``, the P-PI loop by the rule at ``w = omega_n``, any of :class:`CascadeGains`'s fields
     given in ``context.law_gains`` over them; ``feedforward`` is the anti-cogging (the known torques in the q-current
     command), ``observer_torques`` gives them to the observer too, ``voltage_feedforward`` adds the voltage of the
-    planned q current (with those torques along the plan).
+    planned q current (with those torques along the plan), ``plan_frame`` runs the current loops in the plan's frame
+    with a share ``d_hold`` of rho* held on d, and then its gains follow :func:`plan_frame_rule`.
     """
-    lam, wn = context.bandwidths()
-    gains = context.gains(CascadeGains, dict(current_bandwidth=lam, position_bandwidth=wn),
-                          dict(voltage_feedforward=spec.voltage_feedforward))
+    if spec.plan_frame:
+        rule = plan_frame_rule(context)
+    else:
+        lam, wn = context.bandwidths()
+        rule = dict(current_bandwidth=lam, position_bandwidth=wn)
+    gains = context.gains(CascadeGains, rule,
+                          dict(voltage_feedforward=spec.voltage_feedforward, plan_frame=spec.plan_frame))
     return CascadeFOC(context.motor, context.plan, gains, control_period=context.period,
                       measurement=context.measurement, v_limit=context.v_limit, torques=context.torques,
                       model_observer=spec.observer_torques)

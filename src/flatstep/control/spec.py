@@ -17,6 +17,9 @@ option                 what it adds                                             
                        from the torque the move needs)
 ``voltage_feedforward`` the voltage of the planned q current, ``R iq* + L diq*/dt``   cascade
                        (with the known torques along the plan when ``feedforward``)
+``plan_frame``         the current loops in the plan's frame, a share ``d_hold`` of   cascade
+                       the plan's ``rho*`` held on its d axis (its torque answers an
+                       angle error at once)
 ``back_emf``           the back EMF at the plan's angle and speed                     microstep
 ``load_angle``         lead the current vector by the plan's load angle               microstep
 =====================  =============================================================  ==============================
@@ -135,6 +138,8 @@ OPTIONS: dict[str, Option] = {
                        values=("plan", "loss_aware")),
     "voltage_feedforward": Option(("cascade",), "the voltage of the planned q current, R iq* + L diq*/dt (with the "
                                   "known torques along the plan when feedforward)", "v ff", 6),
+    "plan_frame": Option(("cascade",), "the current loops in the plan's frame (Park by Nr theta*), a share d_hold of "
+                         "the plan's rho* held on its d axis", "plan frame", 9),
     "back_emf": Option(("microstep",), "the back EMF at the plan's angle and speed in the driver's voltages", "emf", 7),
     "load_angle": Option(("microstep",), "lead the current vector by the load angle of the torque the plan needs",
                          "load angle", 8),
@@ -175,6 +180,8 @@ class ControllerSpec:
         The cascade's current-reference voltage (module docstring; default off).
     back_emf, load_angle : bool
         The microstepping driver's back-EMF feedforward and load-angle lead (default off).
+    plan_frame : bool
+        The cascade's current loops in the plan's frame with a held d current (module docstring; default off).
     """
 
     law: str = "smc"
@@ -187,6 +194,7 @@ class ControllerSpec:
     voltage_feedforward: bool = False
     back_emf: bool = False
     load_angle: bool = False
+    plan_frame: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.law, str) or self.law not in LAWS:
@@ -380,11 +388,12 @@ FEEDFORWARD_TYPES = tuple(k for k, s in ALIASES.items() if s.needs_torques)
 
 
 #: The controller a scenario file with a drive (``[drive] control_rate``) runs when its ``[controller]`` table names
-#: none: the law that comes closest to the best tuned law on every scenario of docs/comparison.md, the cascade with
-#: the flat feedforward of its planned q current (``R iq* + L diq*/dt``).
-DEFAULT_TYPE = "cascade+voltage_feedforward"
+#: none: the cascade with the flat feedforward of its planned currents (``R i* + L di*/dt``), its current loops in
+#: the plan's frame with a share of the plan's current held on d, at the rule gains of
+#: :func:`flatstep.control.cascade.plan_frame_rule` (docs/comparison.md, "The default controller").
+DEFAULT_TYPE = "cascade+voltage_feedforward+plan_frame"
 #: The same with the file's ``[feedforward]`` torques in its q-current command and its observer.
-DEFAULT_TYPE_TORQUES = "cascade+feedforward+observer_torques+voltage_feedforward"
+DEFAULT_TYPE_TORQUES = "cascade+feedforward+observer_torques+voltage_feedforward+plan_frame"
 #: The controller of a file without a drive: the paper's law, in continuous time as in the paper.
 DEFAULT_TYPE_CONTINUOUS = "smc"
 

@@ -2,7 +2,8 @@ r"""A frontier, not a point: each law's best worst-of-plants error against its p
 
 :func:`frontier` tunes a controller type (:func:`flatstep.studies.tune.tune`, the same budget and seed) under a
 sweep of peak-voltage caps, fractions of the drive's bus, and takes at each cap the best candidate any of those
-searches evaluated that meets it (a search under a higher cap may have found a better one below the lower cap).
+searches evaluated on every plant that meets it (a search under a higher cap may have found a better one below the
+lower cap; a candidate a search stopped early, :mod:`flatstep.studies.tune`, counts for no cap).
 :func:`outside_layer` says how often a sliding law's :math:`|s|` is outside its boundary layer
 (:math:`|s_1| > \epsilon_1` or :math:`|s_2| > \epsilon_2`): how much the law switches rather than running as a
 linear high-gain law.
@@ -70,8 +71,11 @@ def check_fractions(fractions: Sequence[float], source: str = "fractions") -> tu
 
 
 def best_under(evaluations: Sequence[Evaluation], caps: Caps) -> Optional[Evaluation]:
-    """The evaluation with the least worst-of-plants error among those ok on every plant and within ``caps``."""
-    ok = [e for e in evaluations if e.ok and caps.excess(e) == 0.0 and np.isfinite(e.move_max)]
+    """The evaluation with the least worst-of-plants error among those run and ok on every plant and within ``caps``.
+
+    An evaluation the search stopped early (:attr:`~flatstep.studies.tune.Evaluation.complete` false) is not one.
+    """
+    ok = [e for e in evaluations if e.complete and e.ok and caps.excess(e) == 0.0 and np.isfinite(e.move_max)]
     return min(ok, key=lambda e: e.move_max) if ok else None
 
 

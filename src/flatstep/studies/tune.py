@@ -23,6 +23,17 @@ the caps.
 The budget is the same for every law: ``budget`` evaluations, a population of ``population`` candidates (a Latin
 hypercube, seeded, with the scenario's gains in it) and ``budget // population - 1`` generations, whatever the
 number of gains.
+
+**Early stop.** From the second generation on, each trial candidate runs the plants in rounds (:data:`ROUNDS`),
+the plants that were worst for the best candidate so far first, and goes on to the next round only if it can still
+win. Differential evolution (deferred updating) keeps a trial only if its objective is no larger than that of the
+population member it challenges; the worst over a subset of the plants is a lower bound of the worst over all
+(every term of :math:`J` grows with the plants, while every plant run so far is ok), so a trial whose lower bound
+already exceeds its challenger's objective, and which cannot be the answer either (it already breaks a cap, or its
+error already exceeds the best feasible one's), is stopped: the search takes the same path, candidate for
+candidate, as with every plant run, and the answer is the same. A stopped evaluation counts toward the budget; its
+figures (:attr:`Evaluation.complete` false) are of the plants it ran and are never an answer. The plants are
+independent runs, so the result does not depend on the number of threads.
 """
 from __future__ import annotations
 
@@ -34,7 +45,7 @@ from typing import Any, Callable, Mapping, Optional, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..validate import InputError, check_integer, check_positive
+from ..validate import InputError, check_bool, check_integer, check_positive
 from .batch import run_batch
 from .compare import KEEP, default_band, metrics
 from .robustness import perturbed, plant_errors
@@ -46,6 +57,9 @@ from .tune_laws import LawGains, law_gains
 BUDGET = 120
 #: The candidates of one generation.
 POPULATION = 12
+#: The early stop's rounds (module docstring): after each of these shares of the plants (at least one plant), a
+#: trial that can no longer win stops.
+ROUNDS = (0.125, 0.5)
 #: The objective's weight on the caps' relative excess, and its penalty for a plant lost, faulted or failed.
 CAP_WEIGHT = 10.0
 FAIL_PENALTY = 20.0
@@ -107,7 +121,11 @@ DEFAULT_CAPS = Caps()
 
 @dataclass(frozen=True)
 class Evaluation:
-    """One candidate's gains and its worst over the plants [rad, V, J, s] (``settling`` ``None``: not settled)."""
+    """One candidate's gains and its worst over the plants [rad, V, J, s] (``settling`` ``None``: not settled).
+
+    ``evaluated`` is the number of plants run (``None``: all ``plants``); fewer for an evaluation the search stopped
+    early (module docstring), whose figures are those of the plants it ran.
+    """
 
     gains: dict[str, float]
     move_max: float
@@ -116,17 +134,23 @@ class Evaluation:
     settling: Optional[float]
     bad_plants: int
     plants: int
+    evaluated: Optional[int] = None
 
     @property
     def ok(self) -> bool:
-        """Every plant ran to its end, none lost or faulted."""
+        """Every plant run ran to its end, none lost or faulted."""
         return self.bad_plants == 0
+
+    @property
+    def complete(self) -> bool:
+        """Every plant was run (the evaluation was not stopped early)."""
+        return self.evaluated is None or self.evaluated == self.plants
 
     def as_dict(self) -> dict[str, Any]:
         """The evaluation by name, for JSON."""
         return {"gains": dict(self.gains), "move_max": self.move_max, "peak_voltage": self.peak_voltage,
                 "copper": self.copper, "settling": self.settling, "bad_plants": self.bad_plants,
-                "plants": self.plants}
+                "plants": self.plants, "evaluated": self.plants if self.evaluated is None else self.evaluated}
 
 
 @dataclass
@@ -167,37 +191,60 @@ def study_of(scenario: Scenario, study: Optional[Robustness]) -> list[dict[str, 
     return plant_errors(study if study is not None else Robustness())
 
 
+#: One plant's run of one candidate: ``(move_max, peak_voltage, copper, settling, bad)`` (NaN figures and
+#: ``settling`` ``None`` for a run that failed).
+PlantRun = tuple[float, float, float, Optional[float], bool]
+
+
+def run_plants(runs: Sequence[Scenario], bands: Sequence[float], **batch_options: Any) -> list[PlantRun]:
+    """Each run (a scenario on one plant, :func:`~flatstep.studies.robustness.perturbed`) and its figures, in one batch.
+
+    ``bands`` are the runs' settling bands [rad]; ``batch_options`` go to
+    :func:`~flatstep.studies.batch.run_batch`, its progress bar off.
+    """
+    rows = run_batch(runs, keep=KEEP, progress=False, **batch_options) if runs else []
+    out: list[PlantRun] = []
+    for row, run, band in zip(rows, runs, bands, strict=True):
+        bad = row["error"] is not None or row.get("status") != "ok"
+        if row["error"] is not None:
+            out.append((math.nan, math.nan, math.nan, None, True))
+            continue
+        t, e, ia, ib, va, vb = (row[f"series_{k}"] for k in KEEP)
+        m = metrics(t, e, ia, ib, va, vb, run.plan, band=band, R=run.simulated_plant.motor.R)
+        out.append((float(m["move_max"] or 0.0), float(m["peak_voltage"] or 0.0), float(m["copper_loss"] or 0.0),
+                    m["settling_time"], bad))
+    return out
+
+
+def combine(gains: Mapping[str, float], runs: Sequence[PlantRun], plants: int) -> Evaluation:
+    """The worst over the plant runs ``runs`` of a candidate with ``gains``, of ``plants`` plants in all."""
+    worst = [math.nan, math.nan, math.nan]
+    settling: Optional[float] = 0.0
+    bad = 0
+    for move, peak, copper, settled, failed in runs:
+        bad += failed
+        if math.isnan(move):
+            continue
+        worst = [float(np.fmax(w, v)) for w, v in zip(worst, (move, peak, copper), strict=True)]  # fmax: NaN loses
+        settling = None if settling is None or settled is None else max(settling, settled)
+    if bad == len(runs):
+        settling = None
+    return Evaluation(dict(gains), worst[0], worst[1], worst[2], settling, bad, plants,
+                      None if len(runs) == plants else len(runs))
+
+
 def evaluate(scenarios: Sequence[Scenario], errors: list[dict[str, float]], gains: Sequence[dict[str, float]],
              *, band: Optional[float] = None, **batch_options: Any) -> list[Evaluation]:
     """Each scenario (one per candidate, its ``gains``) on every plant of ``errors``, in one batch.
 
-    ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch` (``workers``, ``executor``, ...); its
-    progress bar is off.
+    ``band`` is the settling band [rad] (default: one encoder count, :func:`~flatstep.studies.compare.default_band`);
+    ``batch_options`` go to :func:`~flatstep.studies.batch.run_batch` (``workers``, ``executor``, ...).
     """
     runs = [p for i, sc in enumerate(scenarios) for p in perturbed(sc, errors, f"/c{i}")]
-    rows = run_batch(runs, keep=KEEP, progress=False, **batch_options) if runs else []
     n = len(errors)
-    out = []
-    for i, sc in enumerate(scenarios):
-        b = default_band(sc) if band is None else band
-        worst = {"move_max": math.nan, "peak_voltage": math.nan, "copper_loss": math.nan}
-        settling: Optional[float] = 0.0
-        bad = 0
-        for row, run in zip(rows[i * n:(i + 1) * n], runs[i * n:(i + 1) * n], strict=True):
-            if row["error"] is not None or row.get("status") != "ok":
-                bad += 1
-            if row["error"] is not None:
-                continue
-            t, e, ia, ib, va, vb = (row[f"series_{k}"] for k in KEEP)
-            m = metrics(t, e, ia, ib, va, vb, sc.plan, band=b, R=run.simulated_plant.motor.R)
-            worst = {k: float(np.fmax(v, m[k] or 0.0)) for k, v in worst.items()}  # fmax: NaN loses
-            settled = m["settling_time"]
-            settling = None if settling is None or settled is None else max(settling, settled)
-        if bad == n:
-            settling = None
-        out.append(Evaluation(dict(gains[i]), worst["move_max"], worst["peak_voltage"], worst["copper_loss"],
-                              settling, bad, n))
-    return out
+    bands = [default_band(sc) if band is None else band for sc in scenarios for _ in range(n)]
+    done = run_plants(runs, bands, **batch_options)
+    return [combine(gains[i], done[i * n:(i + 1) * n], n) for i in range(len(scenarios))]
 
 
 def objective(ev: Evaluation, caps: Caps) -> float:
@@ -208,44 +255,116 @@ def objective(ev: Evaluation, caps: Caps) -> float:
 
 
 class _Search:
-    """The candidates' evaluations, a generation at a time, for SciPy's ``workers`` map (deferred updating)."""
+    """The candidates' evaluations, a generation at a time, for SciPy's ``workers`` map (deferred updating).
+
+    It keeps a copy of the population's objectives as differential evolution updates them (deferred: a trial
+    replaces the member of its index if its objective is no larger; then the best member is swapped to the front),
+    so that it knows which objective each trial challenges (the early stop, module docstring).
+    """
 
     def __init__(self, scenario: Scenario, table: LawGains, errors: list[dict[str, float]], caps: Caps,
                  batch_options: Mapping[str, Any], log: Optional[Callable[[str], None]], kind: str,
-                 budget: int) -> None:
+                 budget: int, early_stop: bool) -> None:
         self.scenario, self.table, self.errors, self.caps = scenario, table, errors, caps
         self.batch_options, self.log, self.kind, self.budget = dict(batch_options), log, kind, budget
+        self.early_stop = early_stop
         self.centre = table.read(scenario)
         self.evaluations: list[Evaluation] = []
+        self.plant_moves: dict[int, list[float]] = {}  # id of a complete evaluation -> its error on each plant
         self.costs: dict[bytes, float] = {}
+        self.population: Optional[NDArray[np.float64]] = None  # the population's objectives, as SciPy holds them
         self.start = time.perf_counter()
 
     def gains(self, x: NDArray[np.float64]) -> dict[str, float]:
         """The gains of a search vector (decades around the scenario's values)."""
         return {g.key: self.centre[g.key] * 10.0 ** float(v) for g, v in zip(self.table.gains, x, strict=True)}
 
-    def run(self, xs: list[NDArray[np.float64]]) -> list[Evaluation]:
-        """Evaluate the candidates ``xs`` (those not yet evaluated), in one batch."""
-        todo = [x for x in xs if x.tobytes() not in self.costs]
-        gains = [self.gains(x) for x in todo]
-        scenarios = [self.table.apply(self.scenario, g) for g in gains]
-        evs = evaluate(scenarios, self.errors, gains, **self.batch_options)
-        for x, ev in zip(todo, evs, strict=True):
-            self.costs[x.tobytes()] = objective(ev, self.caps)
+    def _runs(self, todo: Sequence[tuple[int, dict[str, float]]], plants: Sequence[int]) -> list[list[PlantRun]]:
+        """The runs of candidates ``(index, gains)`` on the plants ``plants`` (indices into the errors), one batch."""
+        errors = [self.errors[p] for p in plants]
+        scenarios = [self.table.apply(self.scenario, g) for _, g in todo]
+        runs = [r for i, sc in enumerate(scenarios) for r in perturbed(sc, errors, f"/c{i}")]
+        bands = [default_band(sc) for sc in scenarios for _ in plants]
+        done = run_plants(runs, bands, **self.batch_options)
+        n = len(plants)
+        return [done[i * n:(i + 1) * n] for i in range(len(todo))]
+
+    def plant_order(self) -> list[int]:
+        """The order a trial runs the plants in: worst first for the best complete evaluation so far."""
+        moves = self.plant_moves[id(self.best())]
+        return sorted(range(len(moves)), key=lambda p: (-moves[p] if math.isfinite(moves[p]) else -math.inf, p))
+
+    def stops(self, partial: Evaluation, challenged: float, best: Optional[Evaluation]) -> bool:
+        """Whether a trial whose first round gave ``partial`` can neither replace its member nor be the answer."""
+        if not (partial.ok and math.isfinite(partial.move_max)) or not objective(partial, self.caps) > challenged:
+            return False
+        return self.caps.excess(partial) > 0.0 or (best is not None and partial.move_max > best.move_max)
+
+    def run(self, xs: list[NDArray[np.float64]], challenged: Optional[NDArray[np.float64]] = None) -> None:
+        """Evaluate the candidates ``xs`` not yet evaluated; ``challenged``: the objectives they challenge, if any."""
+        todo: list[tuple[int, dict[str, float]]] = []
+        seen = set()
+        for j, x in enumerate(xs):
+            key = x.tobytes()
+            if key not in self.costs and key not in seen:
+                seen.add(key)
+                todo.append((j, self.gains(x)))
+        if not todo:
+            return
+        n = len(self.errors)
+        results: dict[int, list[PlantRun]] = {}
+        order: list[int] = list(range(n))
+        if self.early_stop and challenged is not None and n > 1 and any(e.complete for e in self.evaluations):
+            order = self.plant_order()
+            top = self.best()
+            best = top if self.feasible(top) else None
+            results = {j: [] for j, _ in todo}
+            going, done = list(todo), 0
+            for end in sorted({max(1, int(f * n)) for f in ROUNDS} | {n}):
+                for (j, _), runs in zip(going, self._runs(going, order[done:end]), strict=True):
+                    results[j] += runs
+                done = end
+                going = [(j, g) for j, g in going
+                         if end == n or not self.stops(combine(g, results[j], n), float(challenged[j]), best)]
+                if not going:
+                    break
+        else:
+            results = {j: runs for (j, _), runs in zip(todo, self._runs(todo, order), strict=True)}
+        for j, g in todo:
+            ev = combine(g, results[j], n)
+            self.costs[xs[j].tobytes()] = objective(ev, self.caps)
             self.evaluations.append(ev)
-        if self.log is not None and todo:
+            if ev.complete:
+                moves = [math.nan] * n
+                for p, r in zip(order, results[j], strict=False):
+                    moves[p] = r[0]
+                self.plant_moves[id(ev)] = moves
+        if self.log is not None:
             best = self.best()
-            self.log(f"{self.kind}: {len(self.evaluations)}/{self.budget} evaluations, best worst-of-plants error "
-                     f"{best.move_max:.4g} rad at {best.peak_voltage:.3g} V"
+            stopped = sum(not e.complete for e in self.evaluations)
+            self.log(f"{self.kind}: {len(self.evaluations)}/{self.budget} evaluations"
+                     + (f" ({stopped} stopped early)" if stopped else "")
+                     + f", best worst-of-plants error {best.move_max:.4g} rad at {best.peak_voltage:.3g} V"
                      + ("" if self.feasible(best) else " (no candidate meets the caps yet)")
                      + f", {time.perf_counter() - self.start:.1f} s")
-        return evs
 
     def map(self, func: Callable[[Any], float], xs: Any) -> list[float]:
-        """SciPy's map-like ``workers``: one batch for the generation, then the cached costs."""
+        """SciPy's map-like ``workers``: one generation's candidates evaluated, their costs, the population updated.
+
+        The first call is the initial population; every later one holds one trial per population member, in the
+        members' order (deferred updating).
+        """
         xs = [np.asarray(x, dtype=float) for x in xs]
-        self.run(xs)
-        return [func(x) for x in xs]
+        challenged = self.population if self.population is not None and len(self.population) == len(xs) else None
+        self.run(xs, challenged)
+        costs = np.array([func(x) for x in xs], dtype=float)
+        if challenged is None:
+            self.population = costs.copy()
+        else:
+            self.population = np.where(costs <= challenged, costs, challenged)
+        lowest = int(np.argmin(self.population))  # SciPy's _promote_lowest_energy: the best member to the front
+        self.population[[0, lowest]] = self.population[[lowest, 0]]
+        return [float(c) for c in costs]
 
     def cost(self, x: NDArray[np.float64]) -> float:
         """The objective of ``x`` (evaluated by :meth:`map` before)."""
@@ -255,15 +374,15 @@ class _Search:
         return self.costs[key]
 
     def feasible(self, ev: Evaluation) -> bool:
-        """Every plant ok and every cap met."""
-        return ev.ok and self.caps.excess(ev) == 0.0 and math.isfinite(ev.move_max)
+        """Every plant run and ok, and every cap met."""
+        return ev.complete and ev.ok and self.caps.excess(ev) == 0.0 and math.isfinite(ev.move_max)
 
     def best(self) -> Evaluation:
-        """The feasible evaluation with the least error, else the one with the least objective."""
+        """The feasible evaluation with the least error, else the complete one with the least objective."""
         feasible = [e for e in self.evaluations if self.feasible(e)]
         if feasible:
             return min(feasible, key=lambda e: e.move_max)
-        return min(self.evaluations, key=lambda e: objective(e, self.caps))
+        return min((e for e in self.evaluations if e.complete), key=lambda e: objective(e, self.caps))
 
 
 def check_budget(budget: int, population: int, source: str = "budget") -> tuple[int, int]:
@@ -281,7 +400,8 @@ def check_budget(budget: int, population: int, source: str = "budget") -> tuple[
 
 def tune(scenario: Scenario, kind: Optional[str] = None, *, budget: int = BUDGET, seed: int = 0,
          caps: Caps = DEFAULT_CAPS, study: Optional[Robustness] = None, population: int = POPULATION,
-         log: Optional[Callable[[str], None]] = None, **batch_options: Any) -> TuneResult:
+         log: Optional[Callable[[str], None]] = None, early_stop: bool = True,
+         **batch_options: Any) -> TuneResult:
     """Tune the gains of controller type ``kind`` (default: the scenario's) on the scenario's plants.
 
     Parameters
@@ -303,6 +423,9 @@ def tune(scenario: Scenario, kind: Optional[str] = None, *, budget: int = BUDGET
         Candidates per generation (>= 5).
     log : callable, optional
         Told after each generation (the progress).
+    early_stop : bool
+        Stop a trial once its first plants show it can neither enter the population nor be the answer (module
+        docstring: the same search and answer as without, in less time).
     **batch_options
         For :func:`~flatstep.studies.batch.run_batch` (``workers``, ``executor``).
 
@@ -333,7 +456,8 @@ def tune(scenario: Scenario, kind: Optional[str] = None, *, budget: int = BUDGET
     base = replace(scenario, controller_type=kind)
     base.controller()  # refuse a type the scenario cannot build (a missing torque model) before any run
     caps = caps.for_scenario(base)
-    search = _Search(base, table, study_of(base, study), caps, batch_options, log, kind, budget)
+    early_stop = check_bool("early_stop", early_stop)
+    search = _Search(base, table, study_of(base, study), caps, batch_options, log, kind, budget, early_stop)
     bounds = [(g.low, g.high) for g in table.gains]
     sample = qmc.LatinHypercube(d=len(bounds), seed=seed).random(population)
     lows, highs = np.array(bounds).T
