@@ -12,6 +12,8 @@ option                 what it adds                                             
 ``observer_torques``   the cascade's observer knows those torques too                cascade (with feedforward)
 ``integral``           integral action on ``s2``                                      dq_smc
 ``km_estimate``        an online estimate of ``Km``                                   dq_smc (integral, feedforward)
+``advance``            the applied voltage turned by the angle the rotor turns over   dq_smc
+                       half a control period (the held voltage's mean delay)
 ``hold``               the detent hold from ``tf`` on                                 smc
 ``rho_plan``           ``"plan"`` (the plan's rho*) or ``"loss_aware"`` (rho*(t)      smc
                        from the torque the move needs)
@@ -129,6 +131,8 @@ OPTIONS: dict[str, Option] = {
     "km_estimate": Option(("dq_smc",), "an online estimate of Km", "Km", 4, needs=("control_period",),
                           requires=("integral", "feedforward"),
                           why="the estimate runs on the integral's error, with the torques known"),
+    "advance": Option(("dq_smc",), "the applied voltage turned by the angle of the held voltage's mean delay",
+                      "adv", 9, needs=("control_period",)),
     "hold": Option(("smc",), "hold the target's detent from tf on", "hold", 5, excludes=("rho_plan",),
                    why="the hold holds the plan's rho at the target"),
     "rho_plan": Option(("smc",), "the plan's rho*, or rho*(t) from the torque the move needs", "rho(t)", 0,
@@ -175,6 +179,8 @@ class ControllerSpec:
         The cascade's current-reference voltage (module docstring; default off).
     back_emf, load_angle : bool
         The microstepping driver's back-EMF feedforward and load-angle lead (default off).
+    advance : bool
+        The d-q law's angle advance of the applied voltage (default off).
     """
 
     law: str = "smc"
@@ -187,6 +193,7 @@ class ControllerSpec:
     voltage_feedforward: bool = False
     back_emf: bool = False
     load_angle: bool = False
+    advance: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.law, str) or self.law not in LAWS:
