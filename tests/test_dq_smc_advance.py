@@ -48,7 +48,7 @@ def test_the_advance_turns_the_voltage_by_the_angle_the_rotor_turns(motor, plan)
     assert np.max(np.abs(v1 - v0)) > 1e-3  # and it moved
 
 
-@pytest.mark.parametrize("bad", [-1e-6, np.nan, np.inf, "0.1"])
+@pytest.mark.parametrize("bad", [-1e-6, np.nan, np.inf, "0.1", True])
 def test_the_guards(bad, motor, plan):
     with pytest.raises(ValueError, match="advance="):
         fs.DQFlatnessSMC(motor, plan, DESIGNED, "ideal", advance=bad)

@@ -224,7 +224,8 @@ class DQFlatnessSMC:
             raise ValueError(f"integral={integral!r} is not a DQIntegral (or None for no integral action)")
         if adaptation is not None and not isinstance(adaptation, DQKmAdaptation):
             raise ValueError(f"adaptation={adaptation!r} is not a DQKmAdaptation (or None for the nominal Km)")
-        if not (isinstance(advance, (int, float)) and math.isfinite(advance) and advance >= 0):
+        if isinstance(advance, bool) or not (isinstance(advance, (int, float)) and math.isfinite(advance)
+                                             and advance >= 0):
             raise ValueError(f"advance={advance!r} s must be finite and >= 0: the time by which the applied voltage "
                              "leads the measured angle (half the control period for a held voltage, 0 for none)")
         self.advance = float(advance)
