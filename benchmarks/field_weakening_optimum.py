@@ -9,9 +9,15 @@ its status and the largest angle error during the move.
 
     .venv/bin/python benchmarks/field_weakening_optimum.py [--motors nema17 ldo-42sth60-2004mac ...]
         [--bus 12 24] [--distances 0.3 1 5 20] [--grid 200] [--counts 4000] [--voltage vector]
+        [--no-advance] [--no-optimum] [--wn-scale 1]
 
 Needs the bench extra (CasADi). Motors are the ``nema17`` preset (at 1 A) or the stems of examples/motors/*.toml
-(at their rated current norm).
+(at their rated current norm). The law turns its voltage by the angle of half a control period (``advance``,
+:func:`flatstep.control.dq_smc.advance_of`) unless ``--no-advance``; the 12-bit current sensor spans
+:func:`adc_range` of i_max; ``--no-optimum`` skips the collocation (its columns print as ``-``); ``--wn-scale``
+multiplies the designed error dynamics' ``wn`` of the law (default 1.5: these plans' fast current swings need
+faster error dynamics than the design rule's ``lambda/4``; 1 runs ``design_gains`` as it is; the observer keeps
+its designed bandwidth).
 """
 from __future__ import annotations
 
@@ -25,9 +31,10 @@ import numpy as np
 import tomllib
 
 from flatstep.bench.collocation import minimum_time
-from flatstep.control.dq_smc import DQFlatnessSMC
+from flatstep.control.dq_smc import DQFlatnessSMC, advance_of
 from flatstep.engine.simulate import simulate
 from flatstep.loop.design import design_gains
+from flatstep.loop.sensors import Sensors
 from flatstep.model.datasheet import motor_from_table
 from flatstep.model.motor import MotorParams
 from flatstep.plan.limits import MotorLimits
@@ -49,14 +56,31 @@ def motor(name: str) -> tuple[MotorParams, float]:
     return model.params, model.rated_rho
 
 
-def track(m: MotorParams, fw: object, v_bus: float, counts: int = 4000) -> tuple[str, float]:
-    """The d-q law's run of the plan on the 20 kHz drive: its status and the largest |theta error| [rad] in the move."""
+def adc_range(i_max: float) -> float:
+    """The current sensor's full scale [A]: 2 A, or the next whole ampere above 1.2 i_max where that is more.
+
+    A sensor that clips below the planned current feeds the law and the observer a wrong torque (the LDO-42STH60's
+    2.83 A on the default 2 A range).
+    """
+    return max(2.0, float(math.ceil(1.2 * i_max)))
+
+
+def track(m: MotorParams, fw: object, v_bus: float, counts: int = 4000, advance: bool = True,
+          i_max: float = 1.0, wn_scale: float = 1.0) -> tuple[str, float]:
+    """The d-q law's run of the plan on the 20 kHz drive: its status and the largest |theta error| [rad] in the move.
+
+    ``advance``: the law's angle advance of half a control period; the 12-bit current sensor spans
+    :func:`adc_range` of ``i_max``; the designed ``wn`` times ``wn_scale``.
+    """
     plan, d_current = fw.plan, fw.d_current  # type: ignore[attr-defined]
-    loop = drive_loop(v_bus, RATE, counts)
+    sensors = Sensors(encoder_counts=counts, current_range=adc_range(i_max))
+    loop = drive_loop(v_bus, RATE, sensors=sensors)
     d = design_gains(m, plan, control_period=loop.control_period, v_bus=v_bus, encoder_counts=counts,
-                     current_step=4 / 4096)
+                     current_step=sensors.current_step)
     loop = loop if loop.observer is not None else replace(loop, observer=d.observer)
-    ctrl = DQFlatnessSMC(m, plan, d.gains, "observer", d_current=d_current)
+    gains = replace(d.gains, wn=d.gains.wn * wn_scale)
+    ctrl = DQFlatnessSMC(m, plan, gains, "observer", d_current=d_current,
+                         advance=advance_of(loop.control_period) if advance else 0.0)
     r = simulate(m, plan, ctrl, loop=loop, t_end=plan.tf + 0.01, x0=[0.0, 0.0, 0.0, plan.theta1])
     during = (r.t >= plan.t0) & (r.t <= plan.tf)
     return r.status, float(np.max(np.abs(r.theta_error[during])))
@@ -85,6 +109,11 @@ def main() -> None:
     ap.add_argument("--voltage", choices=("vector", "phase"), default="vector",
                     help="the bus limit of both the plan and the optimum (default vector)")
     ap.add_argument("--counts", type=int, default=4000, help="encoder counts per revolution (default 4000)")
+    ap.add_argument("--no-advance", action="store_true",
+                    help="the d-q law without its angle advance (the voltage at the measured angle)")
+    ap.add_argument("--no-optimum", action="store_true", help="skip the collocation optimum (tracking only)")
+    ap.add_argument("--wn-scale", type=float, default=1.5,
+                    help="multiply the designed wn of the law's error dynamics (default 1.5)")
     a = ap.parse_args()
     print(f"{'motor':22s} {'bus':>4s} {'rad':>5s} {'plan ms':>9s} {'opt ms':>9s} {'ratio':>6s} {'cap':>5s} "
           f"{'w_pk':>5s} {'id_min':>6s} {'plan us':>8s} {'shots':>6s} {'status':>7s} {'err mrad':>8s}")
@@ -96,11 +125,16 @@ def main() -> None:
             for dist in a.distances:
                 fw = time_optimal_dq(dist, m, limits, control_rate=RATE, voltage=a.voltage)
                 plan_us, tables = plan_time(dist, m, limits)
-                opt = minimum_time(dist, m, MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE,
-                                                        speed_max=cap), voltage=a.voltage, grid=a.grid)
-                status, err = track(m, fw, v_bus, a.counts)
+                status, err = track(m, fw, v_bus, a.counts, not a.no_advance, i_max, a.wn_scale)
                 tf = fw.plan.tf - fw.plan.t0
-                print(f"{name:22s} {v_bus:4.0f} {dist:5.1f} {tf * 1e3:9.3f} {opt.tf * 1e3:9.3f} {tf / opt.tf:6.3f} "
+                if a.no_optimum:
+                    opt_ms, ratio = f"{'-':>9s}", f"{'-':>6s}"
+                else:
+                    opt = minimum_time(dist, m, MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max,
+                                                            v_use=V_USE, speed_max=cap), voltage=a.voltage,
+                                       grid=a.grid)
+                    opt_ms, ratio = f"{opt.tf * 1e3:9.3f}", f"{tf / opt.tf:6.3f}"
+                print(f"{name:22s} {v_bus:4.0f} {dist:5.1f} {tf * 1e3:9.3f} {opt_ms} {ratio} "
                       f"{cap:5.0f} {fw.found.margins['speed_peak']:5.0f} {fw.found.margins['i_d_min']:6.2f} "
                       f"{plan_us:8.0f} {tables:6d} {status:>7s} {err * 1e3:8.3f}", flush=True)
                 if not math.isfinite(err):

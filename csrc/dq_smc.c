@@ -31,6 +31,7 @@ void dq_smc_params_default(struct dq_smc_params *p)
     p->adapt.range = 0;
     p->adapt.Ts = 0;
     p->adapt.v_hold = 0;
+    p->advance = 0;
 }
 
 // Returns true when the d-current table is absent or has 2..DQ_SMC_ID_KNOTS finite knots at rising times.
@@ -78,6 +79,8 @@ int dq_smc_init(struct dq_smc *s, const struct dq_smc_params *p)
                   && p->adapt.phi0 * p->adapt.phi0 > 0  // phi0^2 + phi^2 is never 0 (dq_smc_adapt divides by it)
                   && positive(p->adapt.range) && p->adapt.range < 1))))
         return DQ_SMC_EADAPT;
+    if (!(fs_isfinite(p->advance) && p->advance >= 0))
+        return DQ_SMC_EADVANCE;
     s->p = *p;
     plan_init(&s->plan, &p->plan);
     s->alpha1 = fs_pow(g->wn, 2);
@@ -195,6 +198,8 @@ uint32_t dq_smc_step(struct dq_smc *s, fs_real t, const fs_real y[5], fs_real v[
     dE = torque_model_rate(&s->p.torques, m->Nr, t, y[3], y[2], acc);
     v_d = m->L * gamma1 + m->R * i_d - m->L * m->Nr * y[2] * i_q;
     v_q = m->L * ((m->J * gamma2 + m->B * acc + dE) / km) + m->R * i_q + m->L * m->Nr * y[2] * i_d + km * y[2];
+    if (s->p.advance != 0)  // the angle the rotor reaches over the held voltage's mean delay
+        fs_sincos(m->Nr * (y[3] + y[2] * s->p.advance), &sn, &cs);
     v[0] = v_d * cs - v_q * sn;
     v[1] = v_d * sn + v_q * cs;
     if (!(fs_isfinite(v[0]) && fs_isfinite(v[1]))) {

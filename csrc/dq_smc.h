@@ -24,6 +24,7 @@ enum dq_smc_param_error {
     DQ_SMC_EINTEGRAL,     // ki not finite and >= 0, or with ki > 0: Ts or v_hold not finite and > 0
     DQ_SMC_EADAPT,        // rate not finite and >= 0, or with rate > 0: Ts, v_hold, phi0 not finite and > 0, phi0^2
                           // underflows to 0, or range not in (0, 1)
+    DQ_SMC_EADVANCE,      // advance not finite and >= 0
 };
 
 // Integral action on s2 (off with ki = 0): Gamma2 -= ki z, z += Ts s2 after each step, held (anti-windup) while
@@ -74,6 +75,7 @@ struct dq_smc_params {
     fs_real v_limit;                  // bound on |v| = hypot(va, vb) [V], finite and >= 1e-3
     struct dq_smc_integral integral;  // integral action on s2 (ki = 0: none, a stateless law)
     struct dq_smc_adaptation adapt;   // the online Km^ (rate = 0: none)
+    fs_real advance;                  // >= 0 [s]: the inverse Park at Nr (theta + omega advance) (0: none)
 };
 
 // Caller-owned state of the law (stateless between steps but for the accumulated status).

@@ -1,13 +1,14 @@
 // libFuzzer harness for dq_smc_init/dq_smc_step and arrays_controller_step: any parameters (motor, plan, d current,
-// gains, torque model, measurement, voltage limit, integral action, adaptation) give a documented init code, and
-// then, over a sequence of steps at any times and measurements, finite voltages within v_limit, documented status
-// bits, 0 V on a fault, CTRL_NONFINITE on a non-finite input; arrays_controller_step on the same sequence from the
-// same state gives the same bits.
+// gains, torque model, measurement, voltage limit, integral action, adaptation, angle advance) give a documented
+// init code, and then, over a sequence of steps at any times and measurements, finite voltages within v_limit,
+// documented status bits, 0 V on a fault, CTRL_NONFINITE on a non-finite input; arrays_controller_step on the same
+// sequence from the same state gives the same bits.
 //
 // Input: a header byte (1 model measurement; 2 .. 64 the groups decoded hostile: motor, plan, d current, gains,
-// torque model, integral action; 128 adaptation), an options byte (1 v_limit, 2 any measurement mode), the groups'
-// values around dq_smc_params_default (integral and adaptation around ki 50, rate 100 at 200 us and 24 V), the
-// number of steps and each step's time and measurement around the planned state (fuzz/decode.h).
+// torque model, integral action; 128 adaptation), an options byte (1 v_limit, 2 any measurement mode, 4 the angle
+// advance around 25 us), the groups' values around dq_smc_params_default (integral and adaptation around ki 50,
+// rate 100 at 200 us and 24 V), the number of steps and each step's time and measurement around the planned state
+// (fuzz/decode.h).
 #include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -58,6 +59,8 @@ static void decode_params(struct fz_reader *r, uint8_t head, uint8_t opts, struc
     }
     if (opts & 1)
         p->v_limit = fz_value(r, p->v_limit);
+    if (opts & 4)
+        p->advance = fz_value(r, 2.5e-5);
     if (opts & 2)
         p->measurement = (int)fz_u32(r, SMC_IDEAL);  // mostly invalid: dq_smc_init must refuse it
 }
@@ -77,9 +80,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     int rc;
     decode_params(&r, head, opts, &p);
     rc = dq_smc_init(&s, &p);
-    if (rc < DQ_SMC_PARAMS_OK || rc > DQ_SMC_EADAPT)
+    if (rc < DQ_SMC_PARAMS_OK || rc > DQ_SMC_EADVANCE)
         FZ_FAIL("dq_smc_init returned %d, not a dq_smc_param_error", rc);
-    if (rc != DQ_SMC_PARAMS_OK && !(head & 0xfe) && !(opts & 3))
+    if (rc != DQ_SMC_PARAMS_OK && !(head & 0xfe) && !(opts & 7))
         FZ_FAIL("dq_smc_init refused the defaults (%d)", rc);
     if (rc != DQ_SMC_PARAMS_OK)
         return 0;

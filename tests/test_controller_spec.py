@@ -77,7 +77,7 @@ def test_invalid_specs_are_refused_naming_what_is_valid(value, match):
 def test_every_law_has_a_default_spec_and_options_listed():
     for law in LAWS:
         assert ControllerSpec.parse(law).law == law
-    assert ControllerSpec.options_of("dq_smc") == ["feedforward", "integral", "km_estimate"]
+    assert ControllerSpec.options_of("dq_smc") == ["feedforward", "integral", "km_estimate", "advance"]
 
 
 DRIVE = "[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n[sensors]\nencoder_counts = 16384\n[controller]\ndesign = true\n"

@@ -289,6 +289,33 @@ static int integral_checks(void)
     return 0;
 }
 
+// Returns 0; the angle advance: refused unless finite and >= 0, and the voltage turned by Nr omega advance with its
+// norm kept (the same d-q voltage at the angle the rotor reaches advance later).
+static int advance_checks(void)
+{
+    struct dq_smc_params p, q;
+    struct dq_smc s;
+    const double y[5] = {0.05, 0.3, 40.0, 0.011, 30.0}, ta = 2.5e-5, t = 0.025;
+    double v0[2], v1[2], turn, c, sn;
+    dq_smc_params_default(&p);
+    q = p, q.advance = -1e-9;
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EADVANCE, "advance < 0");
+    q.advance = NAN;
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EADVANCE, "advance = NaN");
+    q.advance = INFINITY;
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_EADVANCE, "advance infinite");
+    dq_smc_init(&s, &p);
+    dq_smc_step(&s, t, y, v0);
+    q = p, q.advance = ta;
+    CHECK(dq_smc_init(&s, &q) == DQ_SMC_PARAMS_OK, "advance = Ts/2");
+    dq_smc_step(&s, t, y, v1);
+    turn = p.motor.Nr * y[2] * ta, c = cos(turn), sn = sin(turn);
+    CHECK(fabs(v1[0] - (v0[0] * c - v0[1] * sn)) < 1e-12 * hypot(v0[0], v0[1])
+              && fabs(v1[1] - (v0[0] * sn + v0[1] * c)) < 1e-12 * hypot(v0[0], v0[1]) && turn > 0.01,
+          "turned by %g: (%g, %g) from (%g, %g)", turn, v1[0], v1[1], v0[0], v0[1]);
+    return 0;
+}
+
 // Returns 0 after running every check of the d-q law.
 int test_dq_smc(void)
 {
@@ -299,6 +326,7 @@ int test_dq_smc(void)
     contract_checks();
     loss_aware_checks();
     integral_checks();
+    advance_checks();
     test_dq_smc_km();
     return 0;
 }

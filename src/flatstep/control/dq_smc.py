@@ -41,6 +41,13 @@ measurement's noise, and 0 at rest, where the estimate stops. The demanded rate 
 :math:`\dot E` at :math:`4N_r\omega`, which keeps :math:`\phi` exciting during the move. With integral action
 both take up the back EMF's share at constant speed, where nothing tells them apart, and :math:`\hat K_m` can
 drift between them (docs/comparison.md, "The targets").
+
+The angle advance (``advance`` :math:`t_a`, off by default) turns the inverse Park to
+:math:`N_r(\theta + \omega t_a)`. A voltage computed at the sample and held over the control period :math:`T_s`
+acts on average at the angle the rotor reaches :math:`T_s/2` later; at field-weakening speeds that is a tenth of an
+electrical radian (0.22 rad per period at the speed cap of :func:`flatstep.plan.time_optimal_dq.speed_cap`), and
+the d-q voltage, dominated there by the back EMF and :math:`N_r\omega L i`, lands partly on the other axis.
+:func:`advance_of` gives :math:`T_s/2`, or :math:`3T_s/2` with a period of computation delay.
 """
 from __future__ import annotations
 
@@ -160,6 +167,14 @@ class DQKmAdaptation:
         return cls(gains.wn, phi0, 0.3, control_period, v_hold if math.isfinite(v_hold) else 1e300)
 
 
+def advance_of(control_period: float, compute_delay: bool = False) -> float:
+    """The angle advance [s] of a voltage held over ``control_period``: its mean delay.
+
+    ``Ts/2``, or ``3 Ts/2`` with a period of computation delay.
+    """
+    return (1.5 if compute_delay else 0.5) * check_positive("control_period", control_period, unit=" s")
+
+
 class DQFlatnessSMC:
     """Flatness-based sliding-mode control of (theta, i_d) along a plan (module docstring).
 
@@ -182,6 +197,9 @@ class DQFlatnessSMC:
         Integral action on ``s2`` (default none: a static law).
     adaptation : DQKmAdaptation or None
         The online estimate of ``Km`` (default none: the law uses ``motor.Km``).
+    advance : float
+        The angle advance :math:`t_a` [s] of the applied voltage, >= 0 (default 0: the voltage at the measured
+        angle; module docstring, :func:`advance_of`).
     """
 
     #: The C twin: csrc/dq_smc.h.
@@ -192,7 +210,7 @@ class DQFlatnessSMC:
     def __init__(self, motor: MotorParams, plan: Plan, gains: SMCGains = PAPER_GAINS,
                  measurement: str = "ideal", *, d_current: DCurrentPlan = ZERO_D_CURRENT,
                  torques: TorqueModel = NO_TORQUES, integral: Optional[DQIntegral] = None,
-                 adaptation: Optional[DQKmAdaptation] = None) -> None:
+                 adaptation: Optional[DQKmAdaptation] = None, advance: float = 0.0) -> None:
         if measurement not in MEASUREMENTS:
             raise ValueError(f"measurement={measurement!r} is not a measurement mode; valid: {MEASUREMENTS}")
         if gains.hold_damping is not None:
@@ -206,6 +224,11 @@ class DQFlatnessSMC:
             raise ValueError(f"integral={integral!r} is not a DQIntegral (or None for no integral action)")
         if adaptation is not None and not isinstance(adaptation, DQKmAdaptation):
             raise ValueError(f"adaptation={adaptation!r} is not a DQKmAdaptation (or None for the nominal Km)")
+        if isinstance(advance, bool) or not (isinstance(advance, (int, float)) and math.isfinite(advance)
+                                             and advance >= 0):
+            raise ValueError(f"advance={advance!r} s must be finite and >= 0: the time by which the applied voltage "
+                             "leads the measured angle (half the control period for a held voltage, 0 for none)")
+        self.advance = float(advance)
         self.motor, self.plan, self.gains, self.measurement = motor, plan, gains, measurement
         self.d_current, self.torques, self.integral, self.adaptation = d_current, torques, integral, adaptation
 
@@ -271,7 +294,8 @@ class DQFlatnessSMC:
         if self.adaptation is not None:
             dE_plan = self.torques.torque_rate(t, ref.theta, ref.dtheta, ref.ddtheta, m.Nr)
             phi = (m.J * ref.dddtheta + m.B * ref.ddtheta + dE_plan) / km - km * ref.dtheta / m.L
-        return np.array(inverse_park(v_d, v_q, m.Nr * theta)), s2, phi
+        angle = m.Nr * (theta + omega * self.advance) if self.advance != 0 else m.Nr * theta
+        return np.array(inverse_park(v_d, v_q, angle)), s2, phi
 
     @property
     def observer_torques(self) -> TorqueModel:
@@ -330,7 +354,8 @@ class DQFlatnessSMC:
                                                                   phi0=self.adaptation.phi0,
                                                                   range=self.adaptation.range,
                                                                   Ts=self.adaptation.control_period,
-                                                                  v_hold=self.adaptation.v_hold))
+                                                                  v_hold=self.adaptation.v_hold),
+                    advance=self.advance)
 
 
 def from_spec(spec: ControllerSpec, context: BuildContext) -> DQFlatnessSMC:
@@ -338,11 +363,13 @@ def from_spec(spec: ControllerSpec, context: BuildContext) -> DQFlatnessSMC:
 
     ``integral`` adds :meth:`DQIntegral.designed` (its pole at ``omega_n/4`` as the cascade's velocity integral,
     held while the bus limits) and ``km_estimate`` :meth:`DQKmAdaptation.designed` (at the integral's rate, held as
-    the integral is); both advance by the control period.
+    the integral is); both advance by the control period. ``advance`` turns the applied voltage by
+    :func:`advance_of` the run's control period (and its computation delay).
     """
     g, v = context.sliding_gains(), context.v_limit
     integral = DQIntegral.designed(g, context.period, v) if spec.integral else None
     adaptation = (DQKmAdaptation.designed(context.motor, context.plan, g, context.period, v)
                   if spec.km_estimate else None)
+    advance = advance_of(context.period, context.compute_delay) if spec.advance else 0.0
     return DQFlatnessSMC(context.motor, context.plan, g, context.measurement, torques=context.torques,
-                         d_current=context.d_current, integral=integral, adaptation=adaptation)
+                         d_current=context.d_current, integral=integral, adaptation=adaptation, advance=advance)

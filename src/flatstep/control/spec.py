@@ -12,6 +12,8 @@ option                 what it adds                                             
 ``observer_torques``   the cascade's observer knows those torques too                cascade (with feedforward)
 ``integral``           integral action on ``s2``                                      dq_smc
 ``km_estimate``        an online estimate of ``Km``                                   dq_smc (integral, feedforward)
+``advance``            the applied voltage turned by the angle the rotor turns over   dq_smc
+                       half a control period (the held voltage's mean delay)
 ``hold``               the detent hold from ``tf`` on                                 smc
 ``rho_plan``           ``"plan"`` (the plan's rho*) or ``"loss_aware"`` (rho*(t)      smc
                        from the torque the move needs)
@@ -132,6 +134,8 @@ OPTIONS: dict[str, Option] = {
     "km_estimate": Option(("dq_smc",), "an online estimate of Km", "Km", 4, needs=("control_period",),
                           requires=("integral", "feedforward"),
                           why="the estimate runs on the integral's error, with the torques known"),
+    "advance": Option(("dq_smc",), "the applied voltage turned by the angle of the held voltage's mean delay",
+                      "adv", 9, needs=("control_period",)),
     "hold": Option(("smc",), "hold the target's detent from tf on", "hold", 5, excludes=("rho_plan",),
                    why="the hold holds the plan's rho at the target"),
     "rho_plan": Option(("smc",), "the plan's rho*, or rho*(t) from the torque the move needs", "rho(t)", 0,
@@ -182,6 +186,8 @@ class ControllerSpec:
         The microstepping driver's back-EMF feedforward and load-angle lead (default off).
     plan_frame : bool
         The cascade's current loops in the plan's frame with a held d current (module docstring; default off).
+    advance : bool
+        The d-q law's angle advance of the applied voltage (default off).
     """
 
     law: str = "smc"
@@ -195,6 +201,7 @@ class ControllerSpec:
     back_emf: bool = False
     load_angle: bool = False
     plan_frame: bool = False
+    advance: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.law, str) or self.law not in LAWS:
