@@ -12,7 +12,7 @@
 #define TOD_EXTRA FS_C(0.002)             // of the excess, the extra a share shrinks by
 #define TOD_POWER FS_C(1.5)               // the power of the excess a share shrinks by
 #define TOD_SHARE FS_C(0.98)              // of v_use v_bus, the bus the move is first shot at
-#define TOD_TIME_WEIGHT FS_C(1.0)         // the measure's share of one rise time against a full change of a rate
+#define TOD_TIME_WEIGHT FS_C(2.0)         // the measure's share of one rise time against a full change of a rate
 #define TOD_CLOSE FS_C(0.25)              // of a step, samples closer than this to the one before are dropped
 #define TOD_PI FS_C(3.14159265358979323846)
 

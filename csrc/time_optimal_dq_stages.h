@@ -9,7 +9,7 @@
 #include "time_optimal_dq.h"
 
 #define TOD_LAG FS_C(0.5)          // the current's time constant under the policy, in current rise times
-#define TOD_Q_RATE FS_C(0.9)       // of V / L, the current's rate of the approach to the cap and the ramp
+#define TOD_Q_RATE FS_C(0.97)      // of V / L, the current's rate of the approach to the cap and the ramp
 #define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
 #define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
 #define TOD_TOP_SHARE FS_C(0.999)  // of the top speed, the cruise speed where that speed is below the cap

@@ -68,7 +68,7 @@ LAND_TOL = 1e-6
 BRIDGE = 0.05
 #: Of V / L, the torque current's rate the approach to the speed cap and the terminal ramp count on (the ramp's
 #: falls where it would leave the bus).
-Q_RATE = 0.9
+Q_RATE = 0.97
 #: Of the bus, the voltage the terminal ramp's rate aims at where the ramp would leave the bus; and the ramp's rate
 #: changes at most this many times.
 RAMP_SHARE = 0.99
