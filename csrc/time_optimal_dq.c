@@ -265,7 +265,7 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     struct tod_margins g;
     fs_real sign = distance < 0 ? -1 : 1, d = fs_fabs(distance), cap, v_bus, share = TOD_SHARE,
             current = TOD_CURRENT_PLAN;
-    fs_real speed = TOD_CAP_PLAN, ramp = 1, v, i_max, c[4], end, *p = work;
+    fs_real speed = TOD_CAP_PLAN, ramp = 1, switch_time = (fs_real)NAN, v, i_max, c[4], end, *p = work;
     fs_real **arrays[12] = {&sh.acc.theta, &sh.acc.omega, &sh.acc.i_d, &sh.acc.i_q, &sh.acc.t_d, &sh.acc.t_q,
                             &sh.brk.theta, &sh.brk.omega, &sh.brk.i_d, &sh.brk.i_q, &sh.brk.t_d, &sh.brk.t_q};
     fs_real **sarrays[9] = {&s.t, &s.th, &s.w, &s.id, &s.iq, &s.did, &s.diq, &s.keep, &s.meas};
@@ -291,9 +291,9 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
         v = share * v_bus, i_max = current * lim->i_max;
         if (!(v > 0 && i_max > 0 && cap > 0 && m->L * i_max / v > 0))
             break;
-        if (!tod_shoot(m, d, v, i_max, speed * cap, ramp, &sh))
+        if (!tod_shoot(m, d, v, i_max, speed * cap, ramp, switch_time, &sh))
             break;
-        ramp = sh.ramp;
+        ramp = sh.ramp, switch_time = sh.t_s;
         samples(m, &sh, d, &s);
         nk = pick_knots(&s, m->L * i_max / v, v / m->L, knots);
         if (nk < 2 || nk > TO_MAX_SEGMENTS + 1)
