@@ -386,6 +386,7 @@ def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float,
         return None
     top = last + (d - acc[0][n_acc - 1]) / acc[1][n_acc - 1] if cruise else last
     near = _guess(md, acc, n_acc, cruise, d, guess, top) if math.isfinite(guess) else None
+    end: Optional[End]
     if near is not None:
         lo, f_lo, hi, f_hi, t_s, f, end = near
     else:
