@@ -12,7 +12,7 @@
 #define TOD_EXTRA FS_C(0.002)             // of the excess, the extra a share shrinks by
 #define TOD_POWER FS_C(1.5)               // the power of the excess a share shrinks by
 #define TOD_SHARE FS_C(0.98)              // of v_use v_bus, the bus the move is first shot at
-#define TOD_TIME_WEIGHT FS_C(1.0)         // the measure's share of one rise time against a full change of a rate
+#define TOD_TIME_WEIGHT FS_C(2.0)         // the measure's share of one rise time against a full change of a rate
 #define TOD_CLOSE FS_C(0.25)              // of a step, samples closer than this to the one before are dropped
 #define TOD_PI FS_C(3.14159265358979323846)
 
@@ -265,7 +265,7 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
     struct tod_margins g;
     fs_real sign = distance < 0 ? -1 : 1, d = fs_fabs(distance), cap, v_bus, share = TOD_SHARE,
             current = TOD_CURRENT_PLAN;
-    fs_real speed = TOD_CAP_PLAN, ramp = 1, v, i_max, c[4], end, *p = work;
+    fs_real speed = TOD_CAP_PLAN, ramp = 1, switch_time = (fs_real)NAN, v, i_max, c[4], end, *p = work;
     fs_real **arrays[12] = {&sh.acc.theta, &sh.acc.omega, &sh.acc.i_d, &sh.acc.i_q, &sh.acc.t_d, &sh.acc.t_q,
                             &sh.brk.theta, &sh.brk.omega, &sh.brk.i_d, &sh.brk.i_q, &sh.brk.t_d, &sh.brk.t_q};
     fs_real **sarrays[9] = {&s.t, &s.th, &s.w, &s.id, &s.iq, &s.did, &s.diq, &s.keep, &s.meas};
@@ -291,9 +291,9 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
         v = share * v_bus, i_max = current * lim->i_max;
         if (!(v > 0 && i_max > 0 && cap > 0 && m->L * i_max / v > 0))
             break;
-        if (!tod_shoot(m, d, v, i_max, speed * cap, ramp, &sh))
+        if (!tod_shoot(m, d, v, i_max, speed * cap, ramp, switch_time, &sh))
             break;
-        ramp = sh.ramp;
+        ramp = sh.ramp, switch_time = sh.t_s;
         samples(m, &sh, d, &s);
         nk = pick_knots(&s, m->L * i_max / v, v / m->L, knots);
         if (nk < 2 || nk > TO_MAX_SEGMENTS + 1)

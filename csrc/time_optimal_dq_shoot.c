@@ -262,21 +262,68 @@ static fs_real ramp_voltage(const struct model *md, const struct tod_end *e)
     return fs_max(start, end) / md->v;
 }
 
-// Returns true and writes the switch time that lands the move on d and its end (time_optimal_dq_shoot._land).
-static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
+// The root finder's bracket on the switch time: its ends, their misses of the distance, and the time last
+// evaluated with its miss (its end in the caller's tod_end).
+struct bracket {
+    fs_real lo, f_lo, hi, f_hi, t_s, f;
+};
+
+// Returns true and writes a bracket from the guessed switch time and a probe one step from it towards the distance
+// (false: it does not bracket; time_optimal_dq_shoot._guess).
+static bool guess_bracket(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
+                          fs_real guess, fs_real top, struct tod_end *end, struct bracket *b)
+{
+    fs_real f_g, probe, f;
+    size_t n_b;
+    if (!(guess > 0 && guess < top))
+        return false;
+    if (!brake(md, a, n_acc, cruise, guess, NULL, end, &n_b))
+        return false;
+    f_g = end->theta1 + end->omega1 * end->tau / 3 - d;
+    if (!fs_isfinite(f_g))
+        return false;
+    if (fs_fabs(f_g) <= TOD_ROOT_TOL * d) {
+        b->lo = b->hi = b->t_s = guess, b->f_lo = b->f_hi = b->f = f_g;
+        return true;
+    }
+    probe = f_g < 0 ? guess + md->h : guess - md->h;
+    if (!(probe > 0 && probe < top))
+        return false;
+    if (!brake(md, a, n_acc, cruise, probe, NULL, end, &n_b))
+        return false;
+    f = end->theta1 + end->omega1 * end->tau / 3 - d;
+    if (!fs_isfinite(f) || (f < 0) == (f_g < 0))
+        return false;
+    b->t_s = probe, b->f = f;
+    if (f_g < 0)
+        b->lo = guess, b->f_lo = f_g, b->hi = probe, b->f_hi = f;
+    else
+        b->lo = probe, b->f_lo = f, b->hi = guess, b->f_hi = f_g;
+    return true;
+}
+
+// Returns true and writes the switch time that lands the move on d and its end, the root finder started from the
+// bracket of guess where it brackets (guess not finite: none; time_optimal_dq_shoot._land).
+static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d, fs_real guess,
                  fs_real *t_s_out, struct tod_end *end)
 {
-    fs_real last = (fs_real)(n_acc - 1) * md->h, t_s, hi, lo = 0, f_lo = -d, f_hi, f;
+    fs_real last = (fs_real)(n_acc - 1) * md->h, top, t_s, hi, lo, f_lo, f_hi, f;
+    struct bracket b;
     size_t n_b;
     int it, side = 0;
     if (cruise && !(a->omega[n_acc - 1] > 0))  // a cruise at no speed: the cap is 0 in fs_real
         return false;
-    t_s = hi = cruise ? last + (d - a->theta[n_acc - 1]) / a->omega[n_acc - 1] : last;
-    if (!brake(md, a, n_acc, cruise, hi, NULL, end, &n_b))
-        return false;
-    f_hi = f = end->theta1 + end->omega1 * end->tau / 3 - d;
-    if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
-        return false;
+    top = cruise ? last + (d - a->theta[n_acc - 1]) / a->omega[n_acc - 1] : last;
+    if (fs_isfinite(guess) && guess_bracket(md, a, n_acc, cruise, d, guess, top, end, &b)) {
+        lo = b.lo, f_lo = b.f_lo, hi = b.hi, f_hi = b.f_hi, t_s = b.t_s, f = b.f;
+    } else {
+        t_s = hi = top, lo = 0, f_lo = -d;
+        if (!brake(md, a, n_acc, cruise, hi, NULL, end, &n_b))
+            return false;
+        f_hi = f = end->theta1 + end->omega1 * end->tau / 3 - d;
+        if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
+            return false;
+    }
     for (it = 0; it < TOD_ROOT; it++) {
         if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > FS_C(1e-15) * hi))
             break;
@@ -305,10 +352,10 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
 }
 
 bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, fs_real ramp_rate,
-               struct tod_shot *shot)
+               fs_real switch_time, struct tod_shot *shot)
 {
     struct model md;
-    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt;
+    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt, guess;
     size_t n_acc = 0, n_b, k;
     bool cruise = false, landed;
     int dbl, tries;
@@ -317,12 +364,13 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
             return false;
         md.end_rate = ramp_rate * md.rate;
         landed = false;
-        prev = e_prev = (fs_real)NAN;
+        prev = e_prev = (fs_real)NAN, guess = switch_time;
         if (speed_up(&md, d, &shot->acc, &n_acc, &cruise))
             for (tries = 0; tries <= TOD_RAMP_TRIES; tries++) {
-                landed = land(&md, &shot->acc, n_acc, cruise, d, &t_s, &shot->end);
+                landed = land(&md, &shot->acc, n_acc, cruise, d, guess, &t_s, &shot->end);
                 if (!landed)
                     break;
+                guess = t_s;
                 excess = ramp_voltage(&md, &shot->end);
                 if (excess <= 1)
                     break;

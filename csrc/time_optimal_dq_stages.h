@@ -9,7 +9,7 @@
 #include "time_optimal_dq.h"
 
 #define TOD_LAG FS_C(0.5)          // the current's time constant under the policy, in current rise times
-#define TOD_Q_RATE FS_C(0.9)       // of V / L, the current's rate of the approach to the cap and the ramp
+#define TOD_Q_RATE FS_C(0.97)      // of V / L, the current's rate of the approach to the cap and the ramp
 #define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
 #define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
 #define TOD_TOP_SHARE FS_C(0.999)  // of the top speed, the cruise speed where that speed is below the cap
@@ -46,9 +46,10 @@ struct tod_shot {
 };
 
 // Returns true and writes the move over d > 0 at bus v, current i_max and speed cap into shot (its phases' arrays
-// set by the caller), the terminal ramp's rate starting at ramp_rate of TOD_Q_RATE V / L; false when a phase needs
+// set by the caller), the terminal ramp's rate starting at ramp_rate of TOD_Q_RATE V / L and the root finder at
+// switch_time where it and a probe one step from it bracket the distance (NAN: none); false when a phase needs
 // too many steps at every step size.
 bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max, fs_real cap, fs_real ramp_rate,
-               struct tod_shot *shot);
+               fs_real switch_time, struct tod_shot *shot);
 
 #endif

@@ -71,7 +71,21 @@ def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
     md.end_rate = shot.ramp * md.rate
     assert ramp_voltage(md, shot.end) <= 1.0
     again = shoot(0.3, NEMA17, v, 0.995, cap, shot.ramp)  # from the found rate: no further fall
-    assert again is not None and again.ramp == shot.ramp and again.end.t_end == shot.end.t_end
+    assert again is not None and again.ramp == shot.ramp
+    assert again.end.t_end == pytest.approx(shot.end.t_end, rel=1e-9)  # (the root finder's tolerance)
+
+
+def test_the_switch_guess_lands_where_the_whole_bracket_does() -> None:
+    lim = limits(12.0)
+    v = 0.98 * lim.v_use * lim.v_bus
+    cap = 0.995 * speed_cap(NEMA17, lim, 20000.0)
+    first = shoot(0.3, NEMA17, v, 0.995, cap)
+    assert first is not None
+    for guess in (first.t_s, 0.9 * first.t_s, 1.2 * first.t_s, -1.0, 1.0):  # near, far and out of the phase
+        again = shoot(0.3, NEMA17, v, 0.995, cap, 1.0, guess)
+        assert again is not None and again.ramp == pytest.approx(first.ramp, rel=1e-6)
+        assert again.t_s == pytest.approx(first.t_s, rel=1e-6)
+        assert abs(again.end.angle - 0.3) <= 1e-6 * 0.3
 
 
 def _voltages(plan: object, d_current: DCurrentPlan, m: MotorParams, n: int = 20000) -> tuple[np.ndarray, ...]:

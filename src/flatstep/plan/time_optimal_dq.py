@@ -109,17 +109,17 @@ def plan_dq_move(distance: float, motor: MotorParams, limits: MotorLimits, *, vo
         return DQCandidate(float(table.breaks[-1]), kappa, step, margins, table)
     cap = speed_cap(motor, limits, control_rate)
     v_bus = limits.v_use * limits.v_bus
-    share, current, speed, ramp = SHARE, CURRENT_PLAN, CAP_PLAN, 1.0
+    share, current, speed, ramp, switch = SHARE, CURRENT_PLAN, CAP_PLAN, 1.0, math.nan
     if not best_currents(0.0, motor, share * v_bus, current * limits.i_max)[1] > 0:
         raise ValueError(f"the motor cannot start: at rest {v_bus:g} V and {limits.i_max:g} A give no torque")
     for _ in range(SHRINKS + 1):
         v, i_max = share * v_bus, current * limits.i_max
         if not (v > 0 and i_max > 0 and cap > 0 and motor.L * i_max / v > 0):
             break
-        shot = shoot(d, motor, v, i_max, speed * cap, ramp)
+        shot = shoot(d, motor, v, i_max, speed * cap, ramp, switch)
         if shot is None:
             break
-        ramp = shot.ramp
+        ramp, switch = shot.ramp, shot.t_s
         table = dq_fit(shot, d, motor, v, i_max)
         if not abs(float(np.sum(table.theta[-1])) - d) <= LAND_TOL * (1.0 + d):  # segments so long that the fit
             break  # loses the angle

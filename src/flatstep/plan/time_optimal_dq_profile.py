@@ -32,7 +32,7 @@ V_MARGIN = 0.995
 #: Knots picked by the measure, at most (besides the switch, the cruise's ends, the ramp's start and the ends).
 KNOTS = 62
 #: The measure's share of one current rise time, against one full change of a current's rate (V / L).
-TIME_WEIGHT = 1.0
+TIME_WEIGHT = 2.0
 #: Samples closer than this share of a step to the next one are dropped.
 CLOSE = 0.25
 

@@ -68,7 +68,7 @@ LAND_TOL = 1e-6
 BRIDGE = 0.05
 #: Of V / L, the torque current's rate the approach to the speed cap and the terminal ramp count on (the ramp's
 #: falls where it would leave the bus).
-Q_RATE = 0.9
+Q_RATE = 0.97
 #: Of the bus, the voltage the terminal ramp's rate aims at where the ramp would leave the bus; and the ramp's rate
 #: changes at most this many times.
 RAMP_SHARE = 0.99
@@ -350,19 +350,54 @@ def ramp_voltage(md: _Model, e: End) -> float:
     return max(start, end) / md.v
 
 
-def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float) -> Optional[tuple[float, End]]:
-    """The switch time that lands the move on ``d`` and its end (None: a braking phase too long)."""
+def _guess(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float, guess: float,
+           top: float) -> Optional[tuple[float, float, float, float, float, float, End]]:
+    """A bracket from a guessed switch time and a probe one step from it towards the distance (None: none).
+
+    (lo, f_lo, hi, f_hi, the switch time last evaluated, its miss f, its end).
+    """
+    if not (0.0 < guess < top):
+        return None
+    end, _ = _brake(md, acc, n_acc, cruise, guess, None)
+    if end is None or not math.isfinite(end.angle - d):
+        return None
+    f_g = end.angle - d
+    if abs(f_g) <= ROOT_TOL * d:
+        return guess, f_g, guess, f_g, guess, f_g, end
+    probe = guess + md.h if f_g < 0 else guess - md.h
+    if not (0.0 < probe < top):
+        return None
+    end, _ = _brake(md, acc, n_acc, cruise, probe, None)
+    if end is None or not math.isfinite(end.angle - d) or (end.angle - d < 0) == (f_g < 0):
+        return None
+    f = end.angle - d
+    return (guess, f_g, probe, f, probe, f, end) if f_g < 0 else (probe, f, guess, f_g, probe, f, end)
+
+
+def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float,
+          guess: float = math.nan) -> Optional[tuple[float, End]]:
+    """The switch time that lands the move on ``d`` and its end (None: a braking phase too long).
+
+    ``guess``: a switch time to start from (a former shot's): where it and a probe one step from it bracket the
+    distance, the root finder starts from that bracket instead of the whole speeding-up phase.
+    """
     last = (n_acc - 1) * md.h
     if cruise and not acc[1][n_acc - 1] > 0:  # a cruise at no speed: the cap is 0 in floating point
         return None
-    t_s = hi = last + (d - acc[0][n_acc - 1]) / acc[1][n_acc - 1] if cruise else last
-    end, _ = _brake(md, acc, n_acc, cruise, hi, None)
-    if end is None:
-        return None
-    lo, f_lo = 0.0, -d
-    f_hi = f = end.angle - d
-    if not (math.isfinite(f) and t_s >= 0) or f < 0:  # the bracket's top must not fall short
-        return None
+    top = last + (d - acc[0][n_acc - 1]) / acc[1][n_acc - 1] if cruise else last
+    near = _guess(md, acc, n_acc, cruise, d, guess, top) if math.isfinite(guess) else None
+    end: Optional[End]
+    if near is not None:
+        lo, f_lo, hi, f_hi, t_s, f, end = near
+    else:
+        t_s = hi = top
+        end, _ = _brake(md, acc, n_acc, cruise, hi, None)
+        if end is None:
+            return None
+        lo, f_lo = 0.0, -d
+        f_hi = f = end.angle - d
+        if not (math.isfinite(f) and t_s >= 0) or f < 0:  # the bracket's top must not fall short
+            return None
     side = 0
     for _ in range(ROOT):
         if abs(f) <= ROOT_TOL * d or not hi - lo > 1e-15 * hi:
@@ -389,13 +424,15 @@ def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float) -> O
     return t_s, end
 
 
-def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp: float = 1.0) -> Optional[Shot]:
+def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp: float = 1.0,
+          switch: float = math.nan) -> Optional[Shot]:
     """The move over ``d`` > 0 at bus ``v`` [V], current ``i_max`` [A] and speed cap [rad/s] (None: not found).
 
     ``ramp``: the terminal ramp's rate to start from, of :data:`Q_RATE` ``v / L``. Where the ramp would leave the
     bus (at its start or its end), its rate is set by the secant on the ramp's voltage towards :data:`RAMP_SHARE`
     of the bus (the first step scales it by the square of the excess) and the switch is found again, at most
-    :data:`RAMP_TRIES` times; the shot keeps the rate (the planner starts its next shot from it).
+    :data:`RAMP_TRIES` times; the shot keeps the rate (the planner starts its next shot from it). ``switch``: a
+    switch time to start the root finder from (the planner's former shot's; each landing starts from the last).
     """
     h = motor.L * i_max / v / STEPS
     for _ in range(DOUBLINGS + 1):
@@ -407,11 +444,12 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
         landed = None
         if up is not None:
             acc, n_acc, cruise = up
-            prev, e_prev = math.nan, math.nan
+            prev, e_prev, guess = math.nan, math.nan, switch
             for _ in range(RAMP_TRIES + 1):
-                landed = _land(md, acc, n_acc, cruise, d)
+                landed = _land(md, acc, n_acc, cruise, d, guess)
                 if landed is None:
                     break
+                guess = landed[0]
                 excess = ramp_voltage(md, landed[1])
                 if excess <= 1.0:
                     break
