@@ -162,8 +162,10 @@ def test_the_plan_check_does_not_call_the_lost_trip_feasible(cli, tmp_path):
 
 
 def test_simulate_refuses_the_trip_the_check_does_not_keep(cli, tmp_path):
-    """simulate runs only what plan reports feasible: the trip the 2 kHz drive loses is refused, naming what binds."""
+    """simulate runs only what plan reports feasible: the trip the 2 kHz drive loses under the paper's law is
+    refused, naming what binds (the default controller keeps a backed-off plan of it)."""
     path = plan_file(tmp_path, rate=2000.0)
+    path.write_text(path.read_text().replace("design = true", 'law = "smc"\ndesign = true'))
     run = cli(["simulate", path], cwd=tmp_path)
     assert run.returncode == 2 and "the plan is not kept on the drive" in run.stderr and "binds" in run.stderr
     assert "--no-verify" in run.stderr and "status:" not in run.stdout  # the steps at most: nothing was run
