@@ -150,6 +150,7 @@ static struct tod_end ramp(const struct model *md, fs_real t, const struct state
     if (!(tau0 > 0))
         return e;
     dt = fs_min(TOD_BRIDGE * md->h, FS_C(0.5) * tau0);
+    dt = (t + dt) - t;  // the bridge the samples' times t, t + dt will span (in single precision not dt itself)
     deriv(md, s->id, s->iq, s->w, tg[0], tg[1], r);
     j_l = (md->Km * r[1] - md->B * a0) / md->J;
     j_r = -a0 / tau0;

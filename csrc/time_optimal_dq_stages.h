@@ -13,8 +13,10 @@
 #define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
 #define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
 #define TOD_TOP_SHARE FS_C(0.999)  // of the top speed, the cruise speed where that speed is below the cap
-#define TOD_SETTLE FS_C(1e-7)      // a cruise has settled this close to its speed and currents, relatively
-#define TOD_ROOT_TOL FS_C(1e-10)   // the root finder stops this close to the distance, relatively
+#define TOD_SETTLE                                  \
+    (FS_C(1e-7) > 16 * FS_REAL_EPSILON ? FS_C(1e-7) \
+                                       : 16 * FS_REAL_EPSILON)  // a cruise has settled this close, relatively
+#define TOD_ROOT_TOL FS_C(1e-10)  // the root finder stops this close to the distance, relatively
 #define TOD_LAND_TOL (FS_C(1e-6) > 64 * FS_REAL_EPSILON ? FS_C(1e-6) : 64 * FS_REAL_EPSILON)  // a shot lands this close
 #define TOD_BRIDGE FS_C(0.05)  // of a step, the bridge from the braking rates to the ramp's
 
