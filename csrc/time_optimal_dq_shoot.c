@@ -279,7 +279,7 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
     if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
         return false;
     for (it = 0; it < TOD_ROOT; it++) {
-        if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > FS_C(1e-15) * hi))
+        if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > TOD_BRACKET_TOL * hi))
             break;
         if (!(f_hi - f_lo > 0))
             break;

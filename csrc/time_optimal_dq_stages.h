@@ -16,7 +16,13 @@
 #define TOD_SETTLE                                  \
     (FS_C(1e-7) > 16 * FS_REAL_EPSILON ? FS_C(1e-7) \
                                        : 16 * FS_REAL_EPSILON)  // a cruise has settled this close, relatively
-#define TOD_ROOT_TOL FS_C(1e-10)  // the root finder stops this close to the distance, relatively
+#define TOD_ROOT_TOL                   \
+    (FS_C(1e-10) > 4 * FS_REAL_EPSILON \
+         ? FS_C(1e-10)                 \
+         : 4 * FS_REAL_EPSILON)  // the root finder stops this close to the distance, relatively
+#define TOD_BRACKET_TOL                          \
+    (FS_C(1e-15) > FS_REAL_EPSILON ? FS_C(1e-15) \
+                                   : FS_REAL_EPSILON)  // the bracket on the switch time stops this narrow, relatively
 #define TOD_LAND_TOL (FS_C(1e-6) > 64 * FS_REAL_EPSILON ? FS_C(1e-6) : 64 * FS_REAL_EPSILON)  // a shot lands this close
 #define TOD_BRIDGE FS_C(0.05)  // of a step, the bridge from the braking rates to the ramp's
 

@@ -271,6 +271,7 @@ def _ramp(md: _Model, t: float, s: State, tg: tuple[float, float]) -> End:
     if not tau0 > 0:
         return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
     dt = min(BRIDGE * md.h, 0.5 * tau0)
+    dt = (t + dt) - t  # the bridge its samples' times t, t + dt span (the C core in single precision)
     did, diq, _ = md.deriv(i_d, i_q, w, tg[0], tg[1])
     j_l = (md.Km * diq - md.B * a0) / md.J
     j_r = -a0 / tau0
