@@ -72,7 +72,7 @@ static void samples(const struct motor_params *m, const struct tod_shot *sh, fs_
     }
     for (i = 0; i < nb; i++) {
         rates(m, sh, b->omega[i], b->i_d[i], b->i_q[i], b->t_d[i], b->t_q[i], &did, &diq);
-        push(s, sh->t_s + (fs_real)i * sh->h, b->theta[i], b->omega[i], b->i_d[i], b->i_q[i], did, diq, i == 0);
+        push(s, tod_brake_time(sh->t_s, sh->h, i), b->theta[i], b->omega[i], b->i_d[i], b->i_q[i], did, diq, i == 0);
     }
     rates(m, sh, e->omega, e->i_d, e->i_q, e->t_d, e->t_q, &did, &diq);
     push(s, e->t, e->theta, e->omega, e->i_d, e->i_q, did, diq, true);

@@ -210,7 +210,7 @@ static struct state switch_state(const struct model *md, const struct tod_phase 
 static bool brake(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real t_s,
                   const struct tod_phase *out, struct tod_end *end, size_t *n_b)
 {
-    fs_real tg[2], into[2], t1[2], at[2], g, g_next, f, lam;
+    fs_real tg[2], into[2], t1[2], at[2], g, g_next, f, lam, t_j, w_j, t_end;
     struct state s = switch_state(md, a, n_acc, cruise, t_s, tg), nxt;
     size_t j;
     into[0] = tg[0], into[1] = tg[1];
@@ -230,13 +230,17 @@ static bool brake(const struct model *md, const struct tod_phase *a, size_t n_ac
             lam = ((fs_real)j + 1) / TOD_SWITCH;
             t1[0] = into[0] + lam * (t1[0] - into[0]), t1[1] = into[1] + lam * (t1[1] - into[1]);
         }
-        nxt = step(md, &s, tg, t1, 1);
+        t_j = tod_brake_time(t_s, md->h, j);
+        w_j = (tod_brake_time(t_s, md->h, j + 1) - t_j) / md->h;  // the step the samples' times span (float: not 1)
+        nxt = step(md, &s, tg, t1, w_j);
         g_next = curve(md, &nxt);
         if (g_next >= 0 || !(nxt.w > 0)) {
-            f = g_next >= 0 ? g / (g - g_next) : s.w / (s.w - nxt.w);
+            f = w_j * (g_next >= 0 ? g / (g - g_next) : s.w / (s.w - nxt.w));
+            t_end = t_j + f * md->h;
+            f = (t_end - t_j) / md->h;  // (likewise)
             at[0] = tg[0] + f * (t1[0] - tg[0]), at[1] = tg[1] + f * (t1[1] - tg[1]);
             nxt = step(md, &s, tg, t1, f);
-            *end = ramp(md, t_s + ((fs_real)j + f) * md->h, &nxt, at);
+            *end = ramp(md, t_end, &nxt, at);
             *n_b = j + 1;
             return true;
         }

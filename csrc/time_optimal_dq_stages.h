@@ -32,6 +32,13 @@ bool tod_best_currents(const struct motor_params *m, fs_real w, fs_real v, fs_re
 // Returns the least of cap and the speed where the largest acceleration falls to 0 (bisection).
 fs_real tod_top_speed(const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap);
 
+// Returns the time of the braking phase's sample j from the switch t_s at steps h (the shot integrates over these
+// times' differences, which in single precision are not h, and the samples are taken at them).
+static inline fs_real tod_brake_time(fs_real t_s, fs_real h, size_t j)
+{
+    return t_s + (fs_real)j * h;
+}
+
 // time_optimal_dq_shoot.c
 // Samples of a phase at steps h: theta, omega, i_d, i_q and the target currents, TOD_MAX_STEPS + 1 each.
 struct tod_phase {
