@@ -14,6 +14,7 @@
 #define TOD_SHARE FS_C(0.98)              // of v_use v_bus, the bus the move is first shot at
 #define TOD_TIME_WEIGHT FS_C(2.0)         // the measure's share of one rise time against a full change of a rate
 #define TOD_CLOSE FS_C(0.25)              // of a step, samples closer than this to the one before are dropped
+#define TOD_ANGLE_NOISE FS_C(16.0)        // roundings of the sampled angles that the angle steps may carry
 #define TOD_PI FS_C(3.14159265358979323846)
 
 // The samples of a shot (time_optimal_dq_profile.Samples), TOD_SAMPLES each.
@@ -71,7 +72,7 @@ static void samples(const struct motor_params *m, const struct tod_shot *sh, fs_
     }
     for (i = 0; i < nb; i++) {
         rates(m, sh, b->omega[i], b->i_d[i], b->i_q[i], b->t_d[i], b->t_q[i], &did, &diq);
-        push(s, sh->t_s + (fs_real)i * sh->h, b->theta[i], b->omega[i], b->i_d[i], b->i_q[i], did, diq, i == 0);
+        push(s, tod_brake_time(sh->t_s, sh->h, i), b->theta[i], b->omega[i], b->i_d[i], b->i_q[i], did, diq, i == 0);
     }
     rates(m, sh, e->omega, e->i_d, e->i_q, e->t_d, e->t_q, &did, &diq);
     push(s, e->t, e->theta, e->omega, e->i_d, e->i_q, did, diq, true);
@@ -155,9 +156,26 @@ static const fs_real HERMITE[8][8] = {
     {1, 0, 0, 0, 0, 0, 0, 0},
 };
 
-// Returns nothing; writes the row (TRAJ_NCOEF, three leading zeros) of the segment from s0 to s1 over h.
-static void hermite_row(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_real *row)
+// Returns the angle step's part beyond the trapezoid h (w0 + w1) / 2 over the segment from s0 to s1 [rad]: the
+// samples' where it differs from the two-point Hermite quadrature of omega's (exact for omega of degree 5) by more
+// than TOD_ANGLE_NOISE roundings of their angles, else the quadrature's. (In single precision the sampled angles
+// carry rounding of eps theta, far above this residual on short segments, where the fit's jerk multiplies it by
+// about 4000 / h^3; in double the samples' is taken but where the two agree to rounding.)
+static fs_real step_residual(const fs_real s0[4], const fs_real s1[4], fs_real h)
 {
+    fs_real sampled = (s1[0] - s0[0]) - h * FS_C(0.5) * (s0[1] + s1[1]);
+    fs_real quad = h * h * ((s0[2] - s1[2]) / 10 + h * (s0[3] + s1[3]) / 120);
+    fs_real noise = TOD_ANGLE_NOISE * FS_REAL_EPSILON * (fs_fabs(s0[0]) + fs_fabs(s1[0]));
+    return fs_fabs(sampled - quad) <= noise ? quad : sampled;
+}
+
+// Returns nothing; writes the row as hermite_row would for the segment from s0 to s1 over h, the angle step given
+// as its residual q beyond the trapezoid and the row's start angle as th0: the tau^7 .. tau^4 coefficients formed
+// from q and the change of the rate, so that no term of size omega h cancels in them (in single precision that
+// cancellation leaves errors of eps omega h, which the jerk multiplies by about 4000 / h^3).
+static void hermite_row_step(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_real q, fs_real th0, fs_real *row)
+{
+    static const fs_real dw[4] = {0, 1, -3, FS_C(2.5)};  // of (w1 - w0) h: H[i][5] + H[i][4] / 2
     fs_real rhs[8], p = 1, sum;
     int i, j;
     for (j = 0; j < 4; j++, p *= h)
@@ -165,19 +183,21 @@ static void hermite_row(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_
     for (i = 0; i < TRAJ_NCOEF - 8; i++)
         row[i] = 0;
     for (i = 0; i < 4; i++) {
-        for (sum = 0, j = 0; j < 8; j++)
-            sum += HERMITE[i][j] * rhs[j];
+        sum = HERMITE[i][4] * q + dw[i] * ((s1[1] - s0[1]) * h);
+        for (j = 2; j < 4; j++)
+            sum += HERMITE[i][j] * rhs[j] + HERMITE[i][4 + j] * rhs[4 + j];
         row[TRAJ_NCOEF - 8 + i] = sum;
     }
-    for (i = 4; i < 8; i++)
+    for (i = 4; i < 7; i++)
         row[TRAJ_NCOEF - 8 + i] = HERMITE[i][7 - i] * rhs[7 - i];
+    row[TRAJ_NCOEF - 1] = th0;
 }
 
 // Returns nothing; writes the table of the knots k[0..nk) of the samples into out (time_optimal_dq_profile.dq_fit).
 static void fit(const struct motor_params *m, const struct samples *s, const size_t *k, size_t nk,
                 struct tod_result *out)
 {
-    fs_real prev[4] = {0, 0, 0, 0}, cur[4], alpha;
+    fs_real prev[4] = {0, 0, 0, 0}, cur[4], alpha, h, q;
     size_t i;
     out->n = nk - 1;
     for (i = 0; i < nk; i++) {
@@ -187,8 +207,11 @@ static void fit(const struct motor_params *m, const struct samples *s, const siz
         out->breaks[i] = s->t[k[i]] - s->t[k[0]];
         out->knot_id[i] = i == nk - 1 ? 0 : s->id[k[i]];
         out->knot_did[i] = i == 0 ? 0 : s->did[k[i]];
-        if (i > 0)
-            hermite_row(prev, cur, s->t[k[i]] - s->t[k[i - 1]], out->theta + (i - 1) * TRAJ_NCOEF);
+        if (i > 0) {
+            h = s->t[k[i]] - s->t[k[i - 1]];
+            q = step_residual(prev, cur, h);
+            hermite_row_step(prev, cur, h, q, prev[0], out->theta + (i - 1) * TRAJ_NCOEF);
+        }
         memcpy(prev, cur, sizeof prev);
     }
 }

@@ -150,6 +150,7 @@ static struct tod_end ramp(const struct model *md, fs_real t, const struct state
     if (!(tau0 > 0))
         return e;
     dt = fs_min(TOD_BRIDGE * md->h, FS_C(0.5) * tau0);
+    dt = (t + dt) - t;  // the bridge the samples' times t, t + dt will span (in single precision not dt itself)
     deriv(md, s->id, s->iq, s->w, tg[0], tg[1], r);
     j_l = (md->Km * r[1] - md->B * a0) / md->J;
     j_r = -a0 / tau0;
@@ -209,7 +210,7 @@ static struct state switch_state(const struct model *md, const struct tod_phase 
 static bool brake(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real t_s,
                   const struct tod_phase *out, struct tod_end *end, size_t *n_b)
 {
-    fs_real tg[2], into[2], t1[2], at[2], g, g_next, f, lam;
+    fs_real tg[2], into[2], t1[2], at[2], g, g_next, f, lam, t_j, w_j, t_end;
     struct state s = switch_state(md, a, n_acc, cruise, t_s, tg), nxt;
     size_t j;
     into[0] = tg[0], into[1] = tg[1];
@@ -229,13 +230,17 @@ static bool brake(const struct model *md, const struct tod_phase *a, size_t n_ac
             lam = ((fs_real)j + 1) / TOD_SWITCH;
             t1[0] = into[0] + lam * (t1[0] - into[0]), t1[1] = into[1] + lam * (t1[1] - into[1]);
         }
-        nxt = step(md, &s, tg, t1, 1);
+        t_j = tod_brake_time(t_s, md->h, j);
+        w_j = (tod_brake_time(t_s, md->h, j + 1) - t_j) / md->h;  // the step the samples' times span (float: not 1)
+        nxt = step(md, &s, tg, t1, w_j);
         g_next = curve(md, &nxt);
         if (g_next >= 0 || !(nxt.w > 0)) {
-            f = g_next >= 0 ? g / (g - g_next) : s.w / (s.w - nxt.w);
+            f = w_j * (g_next >= 0 ? g / (g - g_next) : s.w / (s.w - nxt.w));
+            t_end = t_j + f * md->h;
+            f = (t_end - t_j) / md->h;  // (likewise)
             at[0] = tg[0] + f * (t1[0] - tg[0]), at[1] = tg[1] + f * (t1[1] - tg[1]);
             nxt = step(md, &s, tg, t1, f);
-            *end = ramp(md, t_s + ((fs_real)j + f) * md->h, &nxt, at);
+            *end = ramp(md, t_end, &nxt, at);
             *n_b = j + 1;
             return true;
         }
@@ -325,7 +330,7 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
             return false;
     }
     for (it = 0; it < TOD_ROOT; it++) {
-        if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > FS_C(1e-15) * hi))
+        if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > TOD_BRACKET_TOL * hi))
             break;
         if (!(f_hi - f_lo > 0))
             break;

@@ -13,8 +13,16 @@
 #define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
 #define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
 #define TOD_TOP_SHARE FS_C(0.999)  // of the top speed, the cruise speed where that speed is below the cap
-#define TOD_SETTLE FS_C(1e-7)      // a cruise has settled this close to its speed and currents, relatively
-#define TOD_ROOT_TOL FS_C(1e-10)   // the root finder stops this close to the distance, relatively
+#define TOD_SETTLE                                  \
+    (FS_C(1e-7) > 16 * FS_REAL_EPSILON ? FS_C(1e-7) \
+                                       : 16 * FS_REAL_EPSILON)  // a cruise has settled this close, relatively
+#define TOD_ROOT_TOL                   \
+    (FS_C(1e-10) > 4 * FS_REAL_EPSILON \
+         ? FS_C(1e-10)                 \
+         : 4 * FS_REAL_EPSILON)  // the root finder stops this close to the distance, relatively
+#define TOD_BRACKET_TOL                          \
+    (FS_C(1e-15) > FS_REAL_EPSILON ? FS_C(1e-15) \
+                                   : FS_REAL_EPSILON)  // the bracket on the switch time stops this narrow, relatively
 #define TOD_LAND_TOL (FS_C(1e-6) > 64 * FS_REAL_EPSILON ? FS_C(1e-6) : 64 * FS_REAL_EPSILON)  // a shot lands this close
 #define TOD_BRIDGE FS_C(0.05)  // of a step, the bridge from the braking rates to the ramp's
 
@@ -23,6 +31,13 @@
 bool tod_best_currents(const struct motor_params *m, fs_real w, fs_real v, fs_real i_max, fs_real c[4]);
 // Returns the least of cap and the speed where the largest acceleration falls to 0 (bisection).
 fs_real tod_top_speed(const struct motor_params *m, fs_real v, fs_real i_max, fs_real cap);
+
+// Returns the time of the braking phase's sample j from the switch t_s at steps h (the shot integrates over these
+// times' differences, which in single precision are not h, and the samples are taken at them).
+static inline fs_real tod_brake_time(fs_real t_s, fs_real h, size_t j)
+{
+    return t_s + (fs_real)j * h;
+}
 
 // time_optimal_dq_shoot.c
 // Samples of a phase at steps h: theta, omega, i_d, i_q and the target currents, TOD_MAX_STEPS + 1 each.

@@ -3,6 +3,7 @@
 #include <math.h>
 #include "check.h"
 #include "time_optimal_dq.h"
+#include "time_optimal_dq_cases.h"
 #include "trajectory.h"
 
 // The NEMA 17 preset of flatstep.model.motor.
@@ -77,8 +78,30 @@ static int mirror_and_errors(void)
     return 0;
 }
 
+// Returns 0; the double planner still gives the durations that the single-precision test holds its build to
+// (time_optimal_dq_cases.h), within TOD_DOUBLE_TOL.
+static int float_table_checks(void)
+{
+    size_t c, b, i, n = sizeof work / sizeof *work;
+    int rc;
+    double ms, want;
+    for (c = 0; c < sizeof TOD_CASES / sizeof *TOD_CASES; c++)
+        for (b = 0; b < 2; b++)
+            for (i = 0; i < 5; i++) {
+                const struct tod_limits lim = {TOD_CASE_BUS[b], 0.84, TOD_CASES[c].i_max, 0, 20000.0};
+                rc = time_optimal_dq_plan(&TOD_CASES[c].m, &lim, TOD_CASE_DISTANCE[i], work, n, &out);
+                ms = rc == TOD_OK ? 1e3 * out.breaks[out.n] : 0.0;
+                want = TOD_CASES[c].ms[b][i];
+                CHECK(rc == TOD_OK && rel_diff(ms, want) <= TOD_DOUBLE_TOL,
+                      "%s %g V %g rad: rc %d, %.6f ms, time_optimal_dq_cases.h has %.6f ms", TOD_CASES[c].name,
+                      TOD_CASE_BUS[b], TOD_CASE_DISTANCE[i], rc, ms, want);
+            }
+    return 0;
+}
+
 int test_time_optimal_dq(void)
 {
+    float_table_checks();
     feasible_checks();
     mirror_and_errors();
     return 0;

@@ -271,6 +271,7 @@ def _ramp(md: _Model, t: float, s: State, tg: tuple[float, float]) -> End:
     if not tau0 > 0:
         return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
     dt = min(BRIDGE * md.h, 0.5 * tau0)
+    dt = (t + dt) - t  # the bridge its samples' times t, t + dt span (the C core in single precision)
     did, diq, _ = md.deriv(i_d, i_q, w, tg[0], tg[1])
     j_l = (md.Km * diq - md.B * a0) / md.J
     j_r = -a0 / tau0
@@ -325,12 +326,16 @@ def _brake(md: _Model, acc: list[Array], n_acc: int, cruise: bool, t_s: float,
         if j + 1 < SWITCH:
             lam = (j + 1.0) / SWITCH
             t1 = (into[0] + lam * (t1[0] - into[0]), into[1] + lam * (t1[1] - into[1]))
-        nxt = md.step(s, tg, t1)
+        t_j = t_s + j * h
+        w_j = (t_s + (j + 1) * h - t_j) / h  # the step the samples' times span (as the C core, for its float build)
+        nxt = md.step(s, tg, t1, w_j)
         g_next = md.curve(nxt)
         if g_next >= 0 or not nxt[1] > 0:
-            f = g / (g - g_next) if g_next >= 0 else s[1] / (s[1] - nxt[1])
+            f = w_j * (g / (g - g_next) if g_next >= 0 else s[1] / (s[1] - nxt[1]))
+            t_end = t_j + f * h
+            f = (t_end - t_j) / h
             at = (tg[0] + f * (t1[0] - tg[0]), tg[1] + f * (t1[1] - tg[1]))
-            return _ramp(md, t_s + (j + f) * h, md.step(s, tg, t1, f), at), j + 1
+            return _ramp(md, t_end, md.step(s, tg, t1, f), at), j + 1
         s, g, tg = nxt, g_next, t1
     return None, 0
 
