@@ -3,6 +3,7 @@
 // at a smaller share where the fit crosses a limit (flatstep.plan.time_optimal_dq and
 // flatstep.plan.time_optimal_dq_profile are the reference, operation for operation).
 #include "time_optimal_dq_stages.h"
+#include "time_optimal_stages.h"
 #include <string.h>
 
 #define TOD_ELECTRICAL_SHARE FS_C(0.035)  // the largest electrical frequency over the control rate
@@ -143,19 +144,6 @@ static size_t pick_knots(const struct samples *s, fs_real rise, fs_real rate, si
     return nk;
 }
 
-// The inverse of the degree-7 Hermite system of segments.hermite_rows: coefficients (tau^7 .. tau^0) from the
-// ends' (theta, theta' h, theta'' h^2, theta''' h^3) (time_optimal_table.c's, which the paper's planner keeps).
-static const fs_real HERMITE[8][8] = {
-    {20, 10, 2, FS_C(1.0) / 6, -20, 10, -2, FS_C(1.0) / 6},
-    {-70, -36, FS_C(-7.5), FS_C(-2.0) / 3, 70, -34, FS_C(6.5), FS_C(-0.5)},
-    {84, 45, 10, 1, -84, 39, -7, FS_C(0.5)},
-    {-35, -20, -5, FS_C(-2.0) / 3, 35, -15, FS_C(2.5), FS_C(-1.0) / 6},
-    {0, 0, 0, FS_C(1.0) / 6, 0, 0, 0, 0},
-    {0, 0, FS_C(0.5), 0, 0, 0, 0, 0},
-    {0, 1, 0, 0, 0, 0, 0, 0},
-    {1, 0, 0, 0, 0, 0, 0, 0},
-};
-
 // Returns the angle step's part beyond the trapezoid h (w0 + w1) / 2 over the segment from s0 to s1 [rad]: the
 // samples' where it differs from the two-point Hermite quadrature of omega's (exact for omega of degree 5) by more
 // than TOD_ANGLE_NOISE roundings of their angles, else the quadrature's. (In single precision the sampled angles
@@ -183,13 +171,13 @@ static void hermite_row_step(const fs_real s0[4], const fs_real s1[4], fs_real h
     for (i = 0; i < TRAJ_NCOEF - 8; i++)
         row[i] = 0;
     for (i = 0; i < 4; i++) {
-        sum = HERMITE[i][4] * q + dw[i] * ((s1[1] - s0[1]) * h);
+        sum = TO_HERMITE[i][4] * q + dw[i] * ((s1[1] - s0[1]) * h);
         for (j = 2; j < 4; j++)
-            sum += HERMITE[i][j] * rhs[j] + HERMITE[i][4 + j] * rhs[4 + j];
+            sum += TO_HERMITE[i][j] * rhs[j] + TO_HERMITE[i][4 + j] * rhs[4 + j];
         row[TRAJ_NCOEF - 8 + i] = sum;
     }
     for (i = 4; i < 7; i++)
-        row[TRAJ_NCOEF - 8 + i] = HERMITE[i][7 - i] * rhs[7 - i];
+        row[TRAJ_NCOEF - 8 + i] = TO_HERMITE[i][7 - i] * rhs[7 - i];
     row[TRAJ_NCOEF - 1] = th0;
 }
 

@@ -64,6 +64,10 @@ size_t to_box(const fs_real *x, size_t len, size_t n, fs_real *s, fs_real *out);
 
 // Returns the central difference of x at i (one-sided at the ends) over dt (smoothing._gradient).
 fs_real to_gradient(const fs_real *x, size_t len, size_t i, fs_real dt);
+
+// The inverse of the degree-7 Hermite system of segments.hermite_rows: coefficients (tau^7 .. tau^0) from the
+// ends' (theta, theta' h, theta'' h^2, theta''' h^3); both time-optimal planners fit their tables with it.
+extern const fs_real TO_HERMITE[8][8];
 // Returns y at x as to_interp does, for x rising (dir 1) or falling (dir -1) between calls: *j walks to the bracket.
 static inline fs_real to_interp_walk(fs_real x, const fs_real *xs, const fs_real *ys, size_t n, size_t *j)
 {

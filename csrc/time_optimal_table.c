@@ -66,9 +66,8 @@ static size_t knots(size_t last, fs_real up, fs_real down, int cruise, fs_real *
     return n;
 }
 
-// The inverse of the degree-7 Hermite system of segments.hermite_rows: coefficients (tau^7 .. tau^0) from the
-// ends' (theta, theta' h, theta'' h^2, theta''' h^3).
-static const fs_real HERMITE[8][8] = {
+// (time_optimal_stages.h)
+const fs_real TO_HERMITE[8][8] = {
     {20, 10, 2, FS_C(1.0) / 6, -20, 10, -2, FS_C(1.0) / 6},
     {-70, -36, FS_C(-7.5), FS_C(-2.0) / 3, 70, -34, FS_C(6.5), FS_C(-0.5)},
     {84, 45, 10, 1, -84, 39, -7, FS_C(0.5)},
@@ -91,11 +90,11 @@ static void hermite_row(const fs_real s0[4], const fs_real s1[4], fs_real h, fs_
     for (i = 0; i < 4; i++) {  // tau^7 .. tau^4 from both ends
         fs_real sum = 0;
         for (j = 0; j < 8; j++)
-            sum += HERMITE[i][j] * rhs[j];
+            sum += TO_HERMITE[i][j] * rhs[j];
         row[3 + i] = sum;
     }
     for (i = 4; i < 8; i++)  // tau^3 .. tau^0: the start's own derivatives
-        row[3 + i] = HERMITE[i][7 - i] * rhs[7 - i];
+        row[3 + i] = TO_HERMITE[i][7 - i] * rhs[7 - i];
 }
 
 // Returns the planned rho* at torque current iq and speed w (MotorLimits.rho); cot is cot(torque_angle_max).
