@@ -2,6 +2,7 @@ import contextlib
 import io
 from dataclasses import dataclass
 
+import numpy as np
 import pytest
 
 import flatstep as fs
@@ -48,3 +49,17 @@ def run_cli(argv, cwd=None):
 def cli():
     """The in-process command line: ``cli(["plan", "f.toml"], cwd=tmp_path)`` returns a :class:`CliRun`."""
     return run_cli
+
+
+@pytest.fixture(scope="session")
+def near_plan():
+    """``near_plan(plan, n, seed)``: n sorted times in the move and measurements (ia, ib, omega, theta, acceleration)
+    near the plan (the d-q law's tests: |s2| on both sides of eps2 = 50)."""
+    def sample(plan, n, seed):
+        rng = np.random.default_rng(seed)
+        t = np.sort(rng.uniform(plan.t0, plan.tf, n))
+        ref = plan.flag(t)
+        y = np.array([rng.normal(0, 0.4, n), rng.normal(0, 0.4, n), ref.dtheta + rng.normal(0, 0.01, n),
+                      ref.theta + rng.normal(0, 1e-5, n), ref.ddtheta + rng.normal(0, 30, n)])
+        return t, y
+    return sample

@@ -26,18 +26,8 @@ TS = 5e-5
 DESIGNED = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500)
 
 
-def _near_plan(plan, n, seed):
-    """Times and measurements near the plan."""
-    rng = np.random.default_rng(seed)
-    t = np.sort(rng.uniform(plan.t0, plan.tf, n))
-    ref = plan.flag(t)
-    y = np.array([rng.normal(0, 0.4, n), rng.normal(0, 0.4, n), ref.dtheta + rng.normal(0, 0.01, n),
-                  ref.theta + rng.normal(0, 1e-5, n), ref.ddtheta + rng.normal(0, 30, n)])
-    return t, y
-
-
-def test_the_advance_turns_the_voltage_by_the_angle_the_rotor_turns(motor, plan):
-    t, y = _near_plan(plan, 200, 1)
+def test_the_advance_turns_the_voltage_by_the_angle_the_rotor_turns(near_plan, motor, plan):
+    t, y = near_plan(plan, 200, 1)
     plain = fs.DQFlatnessSMC(motor, plan, DESIGNED, "ideal")
     ahead = fs.DQFlatnessSMC(motor, plan, DESIGNED, "ideal", advance=advance_of(TS))
     assert plain.advance == 0.0 and ahead.advance == TS / 2 and advance_of(TS, compute_delay=True) == 1.5 * TS
@@ -64,8 +54,8 @@ def test_c_rejects_what_python_refuses(motor, plan):
 
 
 @pytest.mark.parametrize("measurement", ["ideal", "model"])
-def test_c_step_matches_python(motor, plan, measurement):
-    t, y = _near_plan(plan, 300, 4)
+def test_c_step_matches_python(near_plan, motor, plan, measurement):
+    t, y = near_plan(plan, 300, 4)
     ctrl = fs.DQFlatnessSMC(motor, plan, DESIGNED, measurement, integral=DQIntegral(2e6, TS, 3.0),
                             advance=0.7 * TS)
     bound = controller_struct(ctrl)

@@ -16,18 +16,8 @@ DESIGNED = fs.SMCGains(W1=150, W2=3e5, eps1=0.025, eps2=50, xi=0.9, wn=1500)
 ADAPT = DQKmAdaptation(rate=1500.0, phi0=50.0, range=0.3, control_period=TS, v_hold=3.0)
 
 
-def _near_plan(plan, n, seed):
-    """Times and measurements near the plan, |s2| on both sides of eps2 = 50."""
-    rng = np.random.default_rng(seed)
-    t = np.sort(rng.uniform(plan.t0, plan.tf, n))
-    ref = plan.flag(t)
-    y = np.array([rng.normal(0, 0.4, n), rng.normal(0, 0.4, n), ref.dtheta + rng.normal(0, 0.01, n),
-                  ref.theta + rng.normal(0, 1e-5, n), ref.ddtheta + rng.normal(0, 30, n)])
-    return t, y
-
-
-def test_off_is_todays_law(motor, plan):
-    t, y = _near_plan(plan, 50, 1)
+def test_off_is_todays_law(near_plan, motor, plan):
+    t, y = near_plan(plan, 50, 1)
     today = fs.DQFlatnessSMC(motor, plan, DESIGNED, "ideal", integral=DQIntegral(1e5, TS, 1e3))
     adapted = fs.DQFlatnessSMC(motor, plan, DESIGNED, "ideal", integral=DQIntegral(1e5, TS, 1e3), adaptation=ADAPT)
     assert today.adaptation is None and today.initial_state() == 0.0 and "adapt" in today.c_params()
@@ -67,8 +57,8 @@ def test_c_rejects_what_python_refuses(motor, plan):
 
 
 @pytest.mark.parametrize("measurement", ["ideal", "model"])
-def test_c_step_matches_python_with_its_state(motor, plan, measurement):
-    t, y = _near_plan(plan, 400, 4)
+def test_c_step_matches_python_with_its_state(near_plan, motor, plan, measurement):
+    t, y = near_plan(plan, 400, 4)
     ctrl = fs.DQFlatnessSMC(motor, plan, DESIGNED, measurement, integral=DQIntegral(2e6, TS, 3.0),
                             adaptation=replace(ADAPT, rate=3e4))
     bound = controller_struct(ctrl)
