@@ -10,8 +10,9 @@ static const fs_real traj_fall[4][TRAJ_NCOEF] = {
     {5040, 3024, 1680, 840, 360, 120, 24, 0, 0, 0, 0},
 };
 
-// Returns true when n >= 1, the pointers are set, every break and coefficient is finite, the breaks increase
-// and every segment's (1 / h)^4 is finite (no derivative can overflow from the scaling alone).
+// Returns true when n >= 1, the pointers are set, every break and coefficient is finite, the breaks increase,
+// every segment's width h is finite (so t - breaks[i] cannot overflow inside it) and its (1 / h)^4 is finite (no
+// derivative can overflow from the scaling alone).
 bool traj_valid(const struct traj *tr)
 {
     size_t i, j;
@@ -22,7 +23,7 @@ bool traj_valid(const struct traj *tr)
         if (!(fs_isfinite(tr->breaks[i]) && fs_isfinite(tr->breaks[i + 1]) && tr->breaks[i + 1] > tr->breaks[i]))
             return false;
         ih = 1 / (tr->breaks[i + 1] - tr->breaks[i]);
-        if (!fs_isfinite(ih * ih * ih * ih))
+        if (!(ih > 0) || !fs_isfinite(ih * ih * ih * ih))  // h overflowing: ih 0, and t - breaks[i] may overflow
             return false;
         for (j = 0; j < TRAJ_NCOEF; j++)
             if (!(fs_isfinite(tr->theta[i * TRAJ_NCOEF + j]) && fs_isfinite(tr->rho[i * TRAJ_NCOEF + j])))

@@ -25,8 +25,9 @@ struct traj {
     const fs_real *rho;     // n x TRAJ_NCOEF coefficients of the second flat output (rho [A]), row-major
 };
 
-// Returns true when n >= 1, the pointers are set, every break and coefficient is finite, the breaks increase
-// and every segment's (1 / h)^4 is finite (no derivative can overflow from the scaling alone).
+// Returns true when n >= 1, the pointers are set, every break and coefficient is finite, the breaks increase,
+// every segment's width h is finite (so t - breaks[i] cannot overflow inside it) and its (1 / h)^4 is finite (no
+// derivative can overflow from the scaling alone).
 bool traj_valid(const struct traj *tr);
 
 // Returns the segment i whose [breaks[i], breaks[i + 1]) holds t, clamped to 0 .. n - 1 (0 for a NaN t).

@@ -29,7 +29,7 @@ static bool valid_rule(const struct traj *tr)
             return false;
     for (i = 0; i < tr->n; i++) {
         ih = 1 / (tr->breaks[i + 1] - tr->breaks[i]);
-        if (!isfinite(ih * ih * ih * ih))
+        if (!isfinite(tr->breaks[i + 1] - tr->breaks[i]) || !isfinite(ih * ih * ih * ih))
             return false;
     }
     for (j = 0; j < tr->n * TRAJ_NCOEF; j++)
