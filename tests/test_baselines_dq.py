@@ -1,4 +1,6 @@
 """Fair baselines (flatstep.bench.fair_baselines): the checks against the d-q flat maps, the searches, the drive."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -76,6 +78,16 @@ def test_best_trapezoid_weakens_the_field_and_beats_ruckig_on_a_long_move():
     assert trap.margins["voltage"] <= 1.0 and trap.margins["current"] <= 1.0
     assert trap.margins["i_d_min"] < -0.3 and trap.margins["speed_peak"] > 100.0
     assert trap.duration < 0.8 * ruckig.duration
+
+
+def test_both_searches_keep_a_speed_cap():
+    capped = replace(LIMITS24, speed_max=40.0)
+    free = best_ruckig(5.0, NEMA17, LIMITS24, n=8)
+    assert free.caps["v_max"] > 40.0  # the cap binds
+    for b in (best_ruckig(5.0, NEMA17, capped, n=8), best_trapezoid(5.0, NEMA17, capped, n=8)):
+        assert b.caps["v_max"] <= 40.0 * (1 + 1e-12)
+        assert b.margins["speed_peak"] <= 40.0 * (1 + 1e-9)
+        assert b.duration > free.duration
 
 
 def test_the_d_q_law_tracks_the_ruckig_baseline_on_the_drive():

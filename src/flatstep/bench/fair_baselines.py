@@ -166,14 +166,16 @@ def _check_move(distance: Any, motor: Any, limits: Any) -> float:
 def best_ruckig(distance: float, motor: MotorParams, limits: MotorLimits, *, n: int = 16) -> Baseline:
     """The fastest Ruckig profile with ``i_d = 0`` within the limits: its caps on a 3-D grid, then a finer one.
 
-    The grid: ``n`` speed caps up to 1.2 times the steady top speed :math:`v_{use}v_{bus}/K_m`, ``n``
-    acceleration caps up to :math:`K_m i_{max}/J`, ``n`` jerk times :math:`a/j` from 0.05 to 10 L/R, all
-    geometric; then ``n`` of each across one step either side of the best. Ruckig's own duration for the
-    caps found is checked against the closed form.
+    The grid: ``n`` speed caps up to 1.2 times the steady top speed :math:`v_{use}v_{bus}/K_m` (or up to the
+    limits' ``speed_max`` where that is less), ``n`` acceleration caps up to :math:`K_m i_{max}/J`, ``n`` jerk
+    times :math:`a/j` from 0.05 to 10 L/R, all geometric; then ``n`` of each across one step either side of the
+    best. Ruckig's own duration for the caps found is checked against the closed form.
     """
     d = _check_move(distance, motor, limits)
     m = motor
     w_top = 1.2 * limits.v_use * limits.v_bus / m.Km
+    if limits.speed_max is not None:
+        w_top = min(w_top, limits.speed_max)
     a_top = m.Km * limits.i_max / m.J
     tau = m.L / m.R
 
