@@ -2,27 +2,14 @@
 
 Run ``.venv/bin/python benchmarks/plan_timing.py``.
 """
-import statistics
-import time
-
 import numpy as np
 
+from flatstep.bench.common import median_ms
 from flatstep.core.traj import traj_flag
 from flatstep.model.motor import PRESETS
 from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal import time_optimal
 from flatstep.plan.waypoints import Caps, plan_waypoints
-
-
-def median_ms(fn, repeat=7):
-    """Median wall time of ``fn()`` over ``repeat`` calls [ms]."""
-    runs = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        runs.append(time.perf_counter() - t)
-    return 1e3 * statistics.median(runs)
-
 
 motor = PRESETS["nema17"]
 limits = MotorLimits(v_bus=24.0, i_max=1.0, i_run=0.1, v_use=0.87)

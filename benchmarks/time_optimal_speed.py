@@ -7,19 +7,18 @@ at git revision ``REV`` (its relative imports made absolute) as a third column.
 """
 import importlib.util
 import re
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
-from flatstep.plan.time_optimal_c import plan_raw
+from flatstep.bench.common import median_ms
 from flatstep.model.motor import PRESETS
 from flatstep.plan import time_optimal as now
 from flatstep.plan.limits import MotorLimits
+from flatstep.plan.time_optimal_c import plan_raw
 
 
 def load_old(rev):
@@ -34,16 +33,6 @@ def load_old(rev):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
-
-
-def median_ms(fn, repeat=7):
-    """Median wall time of ``fn()`` over ``repeat`` calls [ms]."""
-    runs = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        runs.append(time.perf_counter() - t)
-    return 1e3 * statistics.median(runs)
 
 
 def limits(bus):

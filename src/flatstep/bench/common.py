@@ -89,6 +89,11 @@ def _clock(fn: Callable[[], Any], loops: int) -> float:
     return time.perf_counter() - start
 
 
+def median_ms(fn: Callable[[], Any], repeat: int = 7) -> float:
+    """The median wall time [ms] of ``repeat`` calls of ``fn`` (one call a sample)."""
+    return 1e3 * statistics.median(_clock(fn, 1) for _ in range(repeat))
+
+
 def race(cases: dict[str, Callable[[], Any]], repeat: int, min_time: float = 0.02,
          per: Optional[dict[str, int]] = None) -> tuple[dict[str, float], dict[str, Any]]:
     """Median seconds per unit of work of each case, and each case's result (from its first, untimed call).

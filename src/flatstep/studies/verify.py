@@ -188,6 +188,12 @@ def _run_scenario(scenario: Scenario, errors: dict[str, float]) -> Case:
     return _case(errors, scenario.run)
 
 
+def _run_all(run: Callable[[Any], Case], corners: list[Any], workers: Optional[int]) -> list[Case]:
+    """``run`` of every corner, in their order, on ``workers`` threads (default: the CPUs, at most 2)."""
+    with ThreadPoolExecutor(max_workers=workers or min(2, os.cpu_count() or 1)) as pool:
+        return list(pool.map(run, corners))
+
+
 def scenario_corners(scenario: Scenario, uncertainty: float = 0.1) -> list[tuple[dict[str, float], Scenario]]:
     """The scenario on its own plant, then on the :math:`2^4` corners of +-``uncertainty`` on that plant's R, L, Km, J.
 
@@ -228,10 +234,7 @@ def verify_scenario(scenario: Scenario, uncertainty: float = 0.1, limits: Option
         Verified when every case ends ``ok``; otherwise what binds and what to change.
     """
     start = time.perf_counter()
-    corners = scenario_corners(scenario, uncertainty)
-    n = workers or min(2, os.cpu_count() or 1)
-    with ThreadPoolExecutor(max_workers=n) as pool:
-        cases = list(pool.map(lambda c: _run_scenario(c[1], c[0]), corners))
+    cases = _run_all(lambda c: _run_scenario(c[1], c[0]), scenario_corners(scenario, uncertainty), workers)
     verified = all(c.status == "ok" for c in cases)
     binds = advice = None
     if not verified:
@@ -273,10 +276,7 @@ def verify_plan(plan: PiecewisePlan, motor: MotorParams, loop: DriveLoop, contro
     """
     start = time.perf_counter()
     ctrl, loop = drive_controller(motor, plan, loop, uncertainty) if controller is None else (controller, loop)
-    corners = plant_corners(motor, uncertainty)
-    n = workers or min(2, os.cpu_count() or 1)
-    with ThreadPoolExecutor(max_workers=n) as pool:
-        cases = list(pool.map(lambda c: _run(c[1], plan, ctrl, loop, c[0]), corners))
+    cases = _run_all(lambda c: _run(c[1], plan, ctrl, loop, c[0]), plant_corners(motor, uncertainty), workers)
     verified = all(c.status == "ok" for c in cases)
     binds = advice = None
     if not verified:
