@@ -95,7 +95,7 @@ static void speed_observer(struct observer_params *p, double J, double B, double
 // Returns 0 after the observer checks.
 static int observer_checks(void)
 {
-    struct observer_params p = {2, {{1, 1e-3}, {0, 1}}, {0, 0}, {1, 1000}};  // double integrator, deadbeat
+    struct observer_params p = {2, {{1, 1e-3}, {0, 1}}, {0, 0}, {1, 1000}, {0, 0}};  // double integrator, deadbeat
     struct observer o;
     double w = 3.0, Ts = 1e-3;
     int k;
@@ -119,6 +119,16 @@ static int observer_checks(void)
     observer_predict(&o, 10);
     CHECK(o.x[0] == 1.5 + 0.5 - 0.5 + 1 && o.x[1] == 500 + 1 + 2 && o.x[2] == -2, "prediction: %g %g %g", o.x[0],
           o.x[1], o.x[2]);
+    // the torque ramp: Bf times the torque's change since the last prediction (none on the first)
+    p.Bf[0] = 0.01, p.Bf[1] = 0.1, p.Bf[2] = 0;
+    observer_init(&o, &p);
+    observer_correct(&o, 1.0);
+    observer_predict(&o, 10);
+    CHECK(o.x[0] == 1 + 1 && o.x[1] == 2, "first prediction holds the torque: %g %g", o.x[0], o.x[1]);
+    observer_predict(&o, 14);
+    CHECK(o.x[0] == 2 + 1e-3 * 2 + 0.1 * 14 + 0.01 * 4 && o.x[1] == 2 + 0.2 * 14 + 0.1 * 4, "ramp: %.17g %.17g", o.x[0],
+          o.x[1]);
+    p.Bf[0] = p.Bf[1] = 0;
     p.order = 2;
     observer_init(&o, &p);
     CHECK(observer_load(&o) == 0, "no load state: zero load");
@@ -127,6 +137,9 @@ static int observer_checks(void)
     p.order = 2;
     p.Lc[1] = NAN;
     CHECK(observer_init(&o, &p) == -1, "non-finite gain refused");
+    p.Lc[1] = 1000;
+    p.Bf[0] = INFINITY;
+    CHECK(observer_init(&o, &p) == -1, "non-finite ramp refused");
     return 0;
 }
 

@@ -135,6 +135,8 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
     if observer is not None:
         Ad, Bd, Lc = observer.matrices(model, Ts)
+        Bf = observer.ramp(model, Ts)
+        Te_prev: Optional[float] = None  # the torque of the last prediction (the observer's torque ramp)
     X, V, Y = np.empty((4, n_periods + 1)), np.zeros((2, n_periods + 1)), np.empty((5, n_periods + 1))
     x = np.array(x0, dtype=float)
     history: list[tuple[float, float, float]] = []  # past readings (theta_m, ia_m, ib_m) for the measurement delay
@@ -190,5 +192,6 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
             raise RuntimeError(f"the plant state became non-finite at t={t + Ts:.6g} s")
         if observer is not None:
             assert xh is not None, "the observer corrects its estimate every period"
-            xh = Ad @ xh + Bd * Te
+            xh = Ad @ xh + Bd * Te + Bf * (0.0 if Te_prev is None else Te - Te_prev)
+            Te_prev = Te
     return {"t": np.arange(n_periods + 1) * Ts, "x": X, "v": V, "y": Y, "faults": np.array(faults)}
