@@ -45,6 +45,19 @@ void observer_correct(struct observer *o, fs_real theta_m)
         o->x[i] = o->x[i] + o->p.Lc[i] * innovation;
 }
 
+// Returns nothing; corrects the estimate with the count edge crossed age seconds ago (observer.h).
+void observer_correct_edge(struct observer *o, fs_real theta_edge, fs_real age)
+{
+    fs_real innovation = theta_edge - (o->x[0] - o->x[1] * age);
+    uint32_t i;
+    if (!o->started) {
+        observer_correct(o, theta_edge);
+        return;
+    }
+    for (i = 0; i < o->p.order; i++)
+        o->x[i] = o->x[i] + o->p.Lc[i] * innovation;
+}
+
 // Returns nothing; predicts the next period's estimate under the torque Te from the period's start, ramping by its
 // last change: x <- Ad x + Bd Te + Bf (Te - Te_prev) (Te_prev = Te on the first prediction).
 void observer_predict(struct observer *o, fs_real torque)

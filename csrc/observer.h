@@ -40,6 +40,10 @@ void observer_reset(struct observer *o);
 // first call, x <- (theta_m, 0, ...).
 void observer_correct(struct observer *o, fs_real theta_m);
 
+// Returns nothing; corrects the estimate with a count edge crossed `age` seconds ago (age >= 0): the angle then,
+// x0 - x1 age, was theta_edge: x <- x + Lc (theta_edge - (x0 - x1 age)); on the first call as observer_correct.
+void observer_correct_edge(struct observer *o, fs_real theta_edge, fs_real age);
+
 // Returns nothing; predicts the next period's estimate under the torque Te from the period's start, ramping by its
 // last change: x <- Ad x + Bd Te + Bf (Te - Te_prev) (Te_prev = Te on the first prediction).
 void observer_predict(struct observer *o, fs_real torque);

@@ -15,7 +15,7 @@ static uint32_t status[N_PERIODS + 1];
 // Returns a 14-bit encoder and 12-bit +-2 A ADC without offsets, noise or delay.
 static struct sensors_params drive_sensors(void)
 {
-    struct sensors_params p = {2 * PI / 16384, 0, 4.0 / 4096, 2.0, {0, 0}, 0};
+    struct sensors_params p = {2 * PI / 16384, 0, 4.0 / 4096, 2.0, {0, 0}, 0, false};
     return p;
 }
 
@@ -24,7 +24,8 @@ static int sensors_checks(void)
 {
     struct sensors_params p = drive_sensors();
     struct sensors s;
-    double q = p.angle_step, x[4] = {0, 0, 0, 0}, zero[2] = {0, 0}, noise[2] = {0.01, -0.3}, i[2], r[3];
+    double q = p.angle_step, x[4] = {0, 0, 0, 0}, zero[2] = {0, 0}, noise[2] = {0.01, -0.3}, i[2],
+           r[SENSORS_READING_LEN], edge[2];
     int k, delay;
     // the centre of the count, within half a count; exact without an encoder
     CHECK(sensors_angle(&p, 0.02) == q * 52 && fabs(sensors_angle(&p, 0.02) - 0.02) <= q / 2, "0.02 rad -> count 52");
@@ -67,6 +68,22 @@ static int sensors_checks(void)
     x[3] = 7 * q;
     sensors_step(&s, x, zero, r);
     CHECK(r[0] == 7 * q, "reset forgets the old readings");
+    CHECK(r[3] == 0 && r[4] == -1, "no edge timing: no edge (%g, %g)", r[3], r[4]);
+    // edge timing: the edge behind the motion, its age from the speed; none at rest
+    p = drive_sensors();
+    p.edge_timing = true;
+    sensors_edge(&p, 10.3 * q, 2.0, edge);
+    CHECK(edge[0] == 10 * q - 0.5 * q && edge[1] == (10.3 * q - edge[0]) / 2.0, "edge forward: %.17g %.17g", edge[0],
+          edge[1]);
+    sensors_edge(&p, 10.3 * q, -2.0, edge);
+    CHECK(edge[0] == 10 * q + 0.5 * q && edge[1] == (10.3 * q - edge[0]) / -2.0 && edge[1] > 0, "edge backward");
+    sensors_edge(&p, 10.3 * q, 0.0, edge);
+    CHECK(edge[0] == 0 && edge[1] == -1, "no edge at rest");
+    CHECK(sensors_init(&s, &p) == 0, "edge timing accepted");
+    x[2] = 2.0, x[3] = 10.3 * q;
+    sensors_step(&s, x, zero, r);
+    CHECK(r[3] == 10 * q - 0.5 * q && r[4] == (10.3 * q - r[3]) / 2.0, "the reading carries the edge");
+    x[2] = 0;
     p = drive_sensors();
     p.delay = SENSORS_MAX_DELAY + 1;
     CHECK(sensors_init(&s, &p) == -1, "delay beyond the ring refused");

@@ -139,7 +139,7 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
         Te_prev: Optional[float] = None  # the torque of the last prediction (the observer's torque ramp)
     X, V, Y = np.empty((4, n_periods + 1)), np.zeros((2, n_periods + 1)), np.empty((5, n_periods + 1))
     x = np.array(x0, dtype=float)
-    history: list[tuple[float, float, float]] = []  # past readings (theta_m, ia_m, ib_m) for the measurement delay
+    history: list[tuple[float, ...]] = []  # past readings (theta_m, ia_m, ib_m, theta_edge, age) for the delay
     xh: Optional[NDArray[np.float64]] = None
     v_hold = model.R * x[:2]  # what the bridge applies before the first command (the start equilibrium)
     theta_prev: Optional[float] = None
@@ -150,15 +150,21 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
         t = k * Ts
         X[:, k] = x
         if sensors is None:
-            reading = (x[3], x[0], x[1])
+            reading: tuple[float, ...] = (x[3], x[0], x[1], 0.0, -1.0)
         else:
             i_m = sensors.read_currents(x[:2], noise[k])
-            reading = (float(sensors.read_angle(x[3])), float(i_m[0]), float(i_m[1]))
+            reading = (float(sensors.read_angle(x[3])), float(i_m[0]), float(i_m[1]),
+                       *sensors.read_edge(float(x[3]), float(x[2])))
         history.append(reading)
         delay = sensors.delay if sensors else 0
-        th_m, ia_m, ib_m = history[max(0, len(history) - 1 - delay)]
+        th_m, ia_m, ib_m, th_e, age = history[max(0, len(history) - 1 - delay)]
         if observer is not None:
-            xh = np.array([th_m] + [0.0] * (observer.order - 1)) if xh is None else xh + Lc * (th_m - xh[0])
+            if xh is None:
+                xh = np.array([th_m] + [0.0] * (observer.order - 1))
+            elif 0.0 <= age < Ts:  # an edge within the period: the angle age ago was the edge's
+                xh = xh + Lc * (th_e - (xh[0] - xh[1] * age))
+            else:
+                xh = xh + Lc * (th_m - xh[0])
             x_m = (ia_m, ib_m, xh[1], xh[0])  # measured currents, estimated speed and angle
             # the motor torque less the torques the controller knows (its torque model), as the C loop computes it
             Te = torque(x_m, model) - (0.0 if torques is None else float(torques.torque(t, xh[0], xh[1], model.Nr)))
