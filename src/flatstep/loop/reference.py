@@ -4,8 +4,9 @@ One control period k, at ``t_k = k Ts``:
 
 1. the sensors read the plant (encoder angle, ADC currents with offset and noise), possibly ``delay``
    periods old;
-2. the observer corrects its estimate with the encoder angle; speed and acceleration come from it (or, with
-   no observer, the speed is the encoder's backward difference and the acceleration the zero-load model);
+2. the observer corrects its estimate with the encoder angle (with ``edge_timing``, where a count edge fell within
+   the period, with that edge's angle against the estimate its age ago); speed and acceleration come from it (or,
+   with no observer, the speed is the encoder's backward difference and the acceleration the zero-load model);
 3. the controller computes the voltages; with ``compute_delay`` they are applied one period later;
 4. the drive saturates them at the bus (direction kept) and, in switched mode, chops them into PWM
    segments;
@@ -13,7 +14,8 @@ One control period k, at ``t_k = k Ts``:
    is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
 6. the observer predicts the next angle, speed and load from the torque of the measured currents, less the
    torques the controller's model knows beyond eq. (1) (its ``observer_torques``, a
-   :class:`~flatstep.model.torque_model.TorqueModel`, if it has one).
+   :class:`~flatstep.model.torque_model.TorqueModel`, if it has one), held over the period or, with
+   ``torque_ramp``, ramping by its last change.
 
 This loop runs in Python, one period at a time: it is the specification the C engine is tested against,
 not the fast path.
@@ -199,5 +201,5 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
         if observer is not None:
             assert xh is not None, "the observer corrects its estimate every period"
             xh = Ad @ xh + Bd * Te + Bf * (0.0 if Te_prev is None else Te - Te_prev)
-            Te_prev = Te
+            Te_prev = float(Te)
     return {"t": np.arange(n_periods + 1) * Ts, "x": X, "v": V, "y": Y, "faults": np.array(faults)}
