@@ -145,7 +145,15 @@ static int observer_checks(void)
     observer_predict(&o, 14);
     CHECK(o.x[0] == 2 + 1e-3 * 2 + 0.1 * 14 + 0.01 * 4 && o.x[1] == 2 + 0.2 * 14 + 0.1 * 4, "ramp: %.17g %.17g", o.x[0],
           o.x[1]);
+    // an edge 2 ms old: the innovation is against the estimate then, x0 - x1 age
     p.Bf[0] = p.Bf[1] = 0;
+    observer_init(&o, &p);
+    observer_correct_edge(&o, 0.25, 1e-3);
+    CHECK(o.x[0] == 0.25 && o.x[1] == 0 && o.started, "first edge correction starts at rest at the edge");
+    o.x[1] = 100;
+    observer_correct_edge(&o, 0.1, 2e-3);
+    CHECK(o.x[0] == 0.25 + (0.1 - (0.25 - 100 * 2e-3)) && o.x[1] == 100 + 1000 * (0.1 - (0.25 - 100 * 2e-3)),
+          "edge correction: %.17g %.17g", o.x[0], o.x[1]);
     p.order = 2;
     observer_init(&o, &p);
     CHECK(observer_load(&o) == 0, "no load state: zero load");
