@@ -9,15 +9,17 @@ its status and the largest angle error during the move.
 
     .venv/bin/python benchmarks/field_weakening_optimum.py [--motors nema17 ldo-42sth60-2004mac ...]
         [--bus 12 24] [--distances 0.3 1 5 20] [--grid 200] [--counts 4000] [--voltage vector]
-        [--no-advance] [--no-optimum] [--wn-scale 1]
+        [--no-advance] [--no-optimum] [--wn-scale 1.5] [--no-edge-timing] [--no-torque-ramp]
+        [--bandwidth-scale 0.4]
 
 Needs the bench extra (CasADi). Motors are the ``nema17`` preset (at 1 A) or the stems of examples/motors/*.toml
 (at their rated current norm). The law turns its voltage by the angle of half a control period (``advance``,
 :func:`flatstep.control.dq_smc.advance_of`) unless ``--no-advance``; the 12-bit current sensor spans
 :func:`adc_range` of i_max; ``--no-optimum`` skips the collocation (its columns print as ``-``); ``--wn-scale``
-multiplies the designed error dynamics' ``wn`` of the law (default 1.5: these plans' fast current swings need
-faster error dynamics than the design rule's ``lambda/4``; 1 runs ``design_gains`` as it is; the observer keeps
-its designed bandwidth).
+multiplies the designed error dynamics' ``wn`` of the law (default 1: ``design_gains`` as it is) and
+``--bandwidth-scale`` the designed observer's bandwidth (default 1). The encoder latches its count edges
+(``Sensors(edge_timing=True)``) unless ``--no-edge-timing``, and the observer predicts with the torque's ramp
+(``Observer(torque_ramp=True)``) unless ``--no-torque-ramp`` (docs/controllers.md, "Quantization").
 """
 from __future__ import annotations
 
@@ -66,18 +68,22 @@ def adc_range(i_max: float) -> float:
 
 
 def track(m: MotorParams, fw: object, v_bus: float, counts: int = 4000, advance: bool = True,
-          i_max: float = 1.0, wn_scale: float = 1.0) -> tuple[str, float]:
+          i_max: float = 1.0, wn_scale: float = 1.0, edge_timing: bool = True,
+          torque_ramp: bool = True, bandwidth_scale: float = 1.0) -> tuple[str, float]:
     """The d-q law's run of the plan on the 20 kHz drive: its status and the largest |theta error| [rad] in the move.
 
     ``advance``: the law's angle advance of half a control period; the 12-bit current sensor spans
-    :func:`adc_range` of ``i_max``; the designed ``wn`` times ``wn_scale``.
+    :func:`adc_range` of ``i_max``; the designed ``wn`` times ``wn_scale``; ``edge_timing``: the encoder latches its
+    count edges; ``torque_ramp``: the designed observer predicts with the torque's ramp; its bandwidth times
+    ``bandwidth_scale``.
     """
     plan, d_current = fw.plan, fw.d_current  # type: ignore[attr-defined]
-    sensors = Sensors(encoder_counts=counts, current_range=adc_range(i_max))
+    sensors = Sensors(encoder_counts=counts, current_range=adc_range(i_max), edge_timing=edge_timing)
     loop = drive_loop(v_bus, RATE, sensors=sensors)
     d = design_gains(m, plan, control_period=loop.control_period, v_bus=v_bus, encoder_counts=counts,
                      current_step=sensors.current_step)
-    loop = loop if loop.observer is not None else replace(loop, observer=d.observer)
+    loop = replace(loop, observer=replace(d.observer, torque_ramp=torque_ramp,
+                                          bandwidth=d.observer.bandwidth * bandwidth_scale))
     gains = replace(d.gains, wn=d.gains.wn * wn_scale)
     ctrl = DQFlatnessSMC(m, plan, gains, "observer", d_current=d_current,
                          advance=advance_of(loop.control_period) if advance else 0.0)
@@ -112,8 +118,14 @@ def main() -> None:
     ap.add_argument("--no-advance", action="store_true",
                     help="the d-q law without its angle advance (the voltage at the measured angle)")
     ap.add_argument("--no-optimum", action="store_true", help="skip the collocation optimum (tracking only)")
-    ap.add_argument("--wn-scale", type=float, default=1.5,
-                    help="multiply the designed wn of the law's error dynamics (default 1.5)")
+    ap.add_argument("--wn-scale", type=float, default=1.0,
+                    help="multiply the designed wn of the law's error dynamics (default 1)")
+    ap.add_argument("--no-edge-timing", action="store_true",
+                    help="the encoder without its count edges' times (the count alone)")
+    ap.add_argument("--no-torque-ramp", action="store_true",
+                    help="the observer predicts with the torque held over the period")
+    ap.add_argument("--bandwidth-scale", type=float, default=1.0,
+                    help="multiply the designed observer's bandwidth (default 1)")
     a = ap.parse_args()
     print(f"{'motor':22s} {'bus':>4s} {'rad':>5s} {'plan ms':>9s} {'opt ms':>9s} {'ratio':>6s} {'cap':>5s} "
           f"{'w_pk':>5s} {'id_min':>6s} {'plan us':>8s} {'shots':>6s} {'status':>7s} {'err mrad':>8s}")
@@ -125,7 +137,8 @@ def main() -> None:
             for dist in a.distances:
                 fw = time_optimal_dq(dist, m, limits, control_rate=RATE, voltage=a.voltage)
                 plan_us, tables = plan_time(dist, m, limits)
-                status, err = track(m, fw, v_bus, a.counts, not a.no_advance, i_max, a.wn_scale)
+                status, err = track(m, fw, v_bus, a.counts, not a.no_advance, i_max, a.wn_scale,
+                                    not a.no_edge_timing, not a.no_torque_ramp, a.bandwidth_scale)
                 tf = fw.plan.tf - fw.plan.t0
                 if a.no_optimum:
                     opt_ms, ratio = f"{'-':>9s}", f"{'-':>6s}"

@@ -56,13 +56,16 @@ int sampled_init(struct sampled *s, const struct sampled_params *p)
 static void measure(struct sampled *s, const struct plant *plant, fs_real t, const fs_real x[4], const fs_real noise[2],
                     fs_real y[5], fs_real *torque)
 {
-    fs_real r[3] = {x[3], x[0], x[1]}, z[4];  // (theta_m, ia_m, ib_m)
+    fs_real r[SENSORS_READING_LEN] = {x[3], x[0], x[1], 0, -1}, z[4];  // (theta_m, ia_m, ib_m, edge, age)
     if (s->sensed)
         sensors_step(&s->sensors, x, noise, r);
     y[0] = r[1];
     y[1] = r[2];
     if (s->observed) {
-        observer_correct(&s->observer, r[0]);
+        if (s->observer.started && r[4] >= 0 && r[4] < s->Ts)  // an edge within the period: its angle, age ago
+            observer_correct_edge(&s->observer, r[3], r[4]);
+        else
+            observer_correct(&s->observer, r[0]);
         z[0] = r[1], z[1] = r[2], z[2] = 0, z[3] = s->observer.x[0];
         *torque = motor_torque(&s->model, z)
                   - torque_model_torque(&s->torques, s->model.Nr, t, s->observer.x[0], s->observer.x[1]);

@@ -55,7 +55,8 @@ int sampled_init(struct sampled *s, const struct sampled_params *p);
 
 // Returns SIM_OK or an error sim_status (SIM_EARGS for a non-finite x0 or start voltage R x0, or an invalid plant);
 // resets the parts and the controller and runs n_periods periods from x0 at t_k = k Ts. Period k: read the sensors
-// with noise sample k (noise: (n_periods + 1) x 2, or NULL for none), correct the observer (its acceleration and
+// with noise sample k (noise: (n_periods + 1) x 2, or NULL for none), correct the observer (by the edge the reading
+// carries where its age is within [0, Ts), else by the count; its acceleration and
 // prediction use the motor torque less the known torques), step the controller (0 V on a fault), saturate and delay
 // in the drive, integrate the plant (plant_rhs: eq. (1), load and effects) by RK4 substeps under the applied voltage
 // (switched PWM: one RK4 step per PWM segment, drive_pwm_period of the applied voltage and the currents at t_k,

@@ -56,10 +56,22 @@ void sensors_currents(const struct sensors_params *p, const fs_real i[2], const 
     }
 }
 
+// Returns nothing; writes the last count edge crossed and its age, or (0, -1) (sensors.h).
+void sensors_edge(const struct sensors_params *p, fs_real theta, fs_real omega, fs_real edge[2])
+{
+    fs_real q = p->angle_step;
+    edge[0] = 0;
+    edge[1] = -1;
+    if (!p->edge_timing || q == 0 || omega == 0)
+        return;
+    edge[0] = sensors_angle(p, theta) - (omega > 0 ? FS_C(0.5) * q : FS_C(-0.5) * q);
+    edge[1] = (theta - edge[0]) / omega;
+}
+
 // Returns nothing; reads the plant state x = (ia, ib, omega, theta) with the noise sample, stores the reading,
 // and writes the one of `delay` periods ago (the first one while fewer have been taken) as
-// (theta_m, ia_m, ib_m).
-void sensors_step(struct sensors *s, const fs_real x[4], const fs_real noise[2], fs_real reading[3])
+// (theta_m, ia_m, ib_m, theta_edge, edge_age).
+void sensors_step(struct sensors *s, const fs_real x[4], const fs_real noise[2], fs_real reading[SENSORS_READING_LEN])
 {
     // The ring holds the last MAX + 1 readings; while at most `delay` were taken none has been overwritten
     // and the first one, in slot 0, is the delayed reading, as in flatstep.sampled.
@@ -75,7 +87,8 @@ void sensors_step(struct sensors *s, const fs_real x[4], const fs_real noise[2],
     slot[0] = sensors_angle(&s->p, x[3]);
     slot[1] = i_m[0];
     slot[2] = i_m[1];
+    sensors_edge(&s->p, x[3], x[2], &slot[3]);
     back = s->taken > s->p.delay ? (s->head + slots - s->p.delay) % slots : 0;
-    for (m = 0; m < 3; m++)
+    for (m = 0; m < SENSORS_READING_LEN; m++)
         reading[m] = s->ring[back][m];
 }

@@ -19,12 +19,16 @@ struct sensors_params {
     fs_real current_range;      // ADC full scale [A], > 0: readings are clipped to +-current_range
     fs_real current_offset[2];  // offsets added to (ia, ib) before conversion [A]
     uint32_t delay;             // the controller sees the reading of `delay` periods ago, <= SENSORS_MAX_DELAY
+    bool edge_timing;           // the encoder also latches its last edge: the angle of that edge and its age
 };
 
-// Caller-owned state: the parameters and the last delay + 1 readings (theta_m, ia_m, ib_m).
+// Length of a reading: (theta_m, ia_m, ib_m, theta_edge, edge_age).
+#define SENSORS_READING_LEN 5
+
+// Caller-owned state: the parameters and the last delay + 1 readings.
 struct sensors {
     struct sensors_params p;
-    fs_real ring[SENSORS_MAX_DELAY + 1][3];
+    fs_real ring[SENSORS_MAX_DELAY + 1][SENSORS_READING_LEN];
     uint32_t head;   // slot of the newest reading
     uint32_t taken;  // readings taken since the last reset, saturating at SENSORS_MAX_DELAY + 1
 };
@@ -47,10 +51,15 @@ fs_real sensors_angle(const struct sensors_params *p, fs_real theta);
 // when |(i + offset + noise) / q| >= 1 / epsilon, where steps are integers).
 void sensors_currents(const struct sensors_params *p, const fs_real i[2], const fs_real noise[2], fs_real out[2]);
 
+// Returns nothing; writes the last count edge the rotor crossed, edge[0] = theta_m -+ q/2 behind the motion, and
+// its age edge[1] = (theta - edge[0]) / omega [s] from the speed at the sample; edge = (0, -1) (none) without
+// edge_timing, an encoder, or motion (omega = 0) (flatstep.loop.sensors.Sensors.read_edge).
+void sensors_edge(const struct sensors_params *p, fs_real theta, fs_real omega, fs_real edge[2]);
+
 // Returns nothing; reads the plant state x = (ia, ib, omega, theta) with the noise sample, stores the reading,
 // and writes the one of `delay` periods ago (the first one while fewer have been taken) as
-// (theta_m, ia_m, ib_m).
-void sensors_step(struct sensors *s, const fs_real x[4], const fs_real noise[2], fs_real reading[3]);
+// (theta_m, ia_m, ib_m, theta_edge, edge_age) (sensors_edge).
+void sensors_step(struct sensors *s, const fs_real x[4], const fs_real noise[2], fs_real reading[SENSORS_READING_LEN]);
 
 // cffi:end
 #endif

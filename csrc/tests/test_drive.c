@@ -15,7 +15,7 @@ static uint32_t status[N_PERIODS + 1];
 // Returns a 14-bit encoder and 12-bit +-2 A ADC without offsets, noise or delay.
 static struct sensors_params drive_sensors(void)
 {
-    struct sensors_params p = {2 * PI / 16384, 0, 4.0 / 4096, 2.0, {0, 0}, 0};
+    struct sensors_params p = {2 * PI / 16384, 0, 4.0 / 4096, 2.0, {0, 0}, 0, false};
     return p;
 }
 
@@ -24,7 +24,8 @@ static int sensors_checks(void)
 {
     struct sensors_params p = drive_sensors();
     struct sensors s;
-    double q = p.angle_step, x[4] = {0, 0, 0, 0}, zero[2] = {0, 0}, noise[2] = {0.01, -0.3}, i[2], r[3];
+    double q = p.angle_step, x[4] = {0, 0, 0, 0}, zero[2] = {0, 0}, noise[2] = {0.01, -0.3}, i[2],
+           r[SENSORS_READING_LEN], edge[2];
     int k, delay;
     // the centre of the count, within half a count; exact without an encoder
     CHECK(sensors_angle(&p, 0.02) == q * 52 && fabs(sensors_angle(&p, 0.02) - 0.02) <= q / 2, "0.02 rad -> count 52");
@@ -67,6 +68,22 @@ static int sensors_checks(void)
     x[3] = 7 * q;
     sensors_step(&s, x, zero, r);
     CHECK(r[0] == 7 * q, "reset forgets the old readings");
+    CHECK(r[3] == 0 && r[4] == -1, "no edge timing: no edge (%g, %g)", r[3], r[4]);
+    // edge timing: the edge behind the motion, its age from the speed; none at rest
+    p = drive_sensors();
+    p.edge_timing = true;
+    sensors_edge(&p, 10.3 * q, 2.0, edge);
+    CHECK(edge[0] == 10 * q - 0.5 * q && edge[1] == (10.3 * q - edge[0]) / 2.0, "edge forward: %.17g %.17g", edge[0],
+          edge[1]);
+    sensors_edge(&p, 10.3 * q, -2.0, edge);
+    CHECK(edge[0] == 10 * q + 0.5 * q && edge[1] == (10.3 * q - edge[0]) / -2.0 && edge[1] > 0, "edge backward");
+    sensors_edge(&p, 10.3 * q, 0.0, edge);
+    CHECK(edge[0] == 0 && edge[1] == -1, "no edge at rest");
+    CHECK(sensors_init(&s, &p) == 0, "edge timing accepted");
+    x[2] = 2.0, x[3] = 10.3 * q;
+    sensors_step(&s, x, zero, r);
+    CHECK(r[3] == 10 * q - 0.5 * q && r[4] == (10.3 * q - r[3]) / 2.0, "the reading carries the edge");
+    x[2] = 0;
     p = drive_sensors();
     p.delay = SENSORS_MAX_DELAY + 1;
     CHECK(sensors_init(&s, &p) == -1, "delay beyond the ring refused");
@@ -95,7 +112,7 @@ static void speed_observer(struct observer_params *p, double J, double B, double
 // Returns 0 after the observer checks.
 static int observer_checks(void)
 {
-    struct observer_params p = {2, {{1, 1e-3}, {0, 1}}, {0, 0}, {1, 1000}};  // double integrator, deadbeat
+    struct observer_params p = {2, {{1, 1e-3}, {0, 1}}, {0, 0}, {1, 1000}, {0, 0}};  // double integrator, deadbeat
     struct observer o;
     double w = 3.0, Ts = 1e-3;
     int k;
@@ -119,6 +136,24 @@ static int observer_checks(void)
     observer_predict(&o, 10);
     CHECK(o.x[0] == 1.5 + 0.5 - 0.5 + 1 && o.x[1] == 500 + 1 + 2 && o.x[2] == -2, "prediction: %g %g %g", o.x[0],
           o.x[1], o.x[2]);
+    // the torque ramp: Bf times the torque's change since the last prediction (none on the first)
+    p.Bf[0] = 0.01, p.Bf[1] = 0.1, p.Bf[2] = 0;
+    observer_init(&o, &p);
+    observer_correct(&o, 1.0);
+    observer_predict(&o, 10);
+    CHECK(o.x[0] == 1 + 1 && o.x[1] == 2, "first prediction holds the torque: %g %g", o.x[0], o.x[1]);
+    observer_predict(&o, 14);
+    CHECK(o.x[0] == 2 + 1e-3 * 2 + 0.1 * 14 + 0.01 * 4 && o.x[1] == 2 + 0.2 * 14 + 0.1 * 4, "ramp: %.17g %.17g", o.x[0],
+          o.x[1]);
+    // an edge 2 ms old: the innovation is against the estimate then, x0 - x1 age
+    p.Bf[0] = p.Bf[1] = 0;
+    observer_init(&o, &p);
+    observer_correct_edge(&o, 0.25, 1e-3);
+    CHECK(o.x[0] == 0.25 && o.x[1] == 0 && o.started, "first edge correction starts at rest at the edge");
+    o.x[1] = 100;
+    observer_correct_edge(&o, 0.1, 2e-3);
+    CHECK(o.x[0] == 0.25 + (0.1 - (0.25 - 100 * 2e-3)) && o.x[1] == 100 + 1000 * (0.1 - (0.25 - 100 * 2e-3)),
+          "edge correction: %.17g %.17g", o.x[0], o.x[1]);
     p.order = 2;
     observer_init(&o, &p);
     CHECK(observer_load(&o) == 0, "no load state: zero load");
@@ -127,6 +162,9 @@ static int observer_checks(void)
     p.order = 2;
     p.Lc[1] = NAN;
     CHECK(observer_init(&o, &p) == -1, "non-finite gain refused");
+    p.Lc[1] = 1000;
+    p.Bf[0] = INFINITY;
+    CHECK(observer_init(&o, &p) == -1, "non-finite ramp refused");
     return 0;
 }
 

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..model.motor import MotorParams
-from ..validate import check_count, check_positive, check_quantity
+from ..validate import check_bool, check_count, check_positive, check_quantity
 
 #: The longest estimate the C observer holds (``OBSERVER_MAX_ORDER``, csrc/observer.h): angle, speed, load, its rate.
 MAX_ORDER = 4
@@ -29,15 +29,23 @@ class Observer:
     ``load_states`` = 0 estimates angle and speed only (acceleration from the zero-load model), 1 adds a
     constant load torque, 2 a load torque ramp. The error poles sit at :math:`z = e^{-p_k T_s}` with
     :math:`p_k` spread over ``bandwidth * [1, 1.3]`` (distinct poles for a single-output placement).
+
+    ``torque_ramp`` predicts with the torque ramping over the period by its change over the last one,
+    :math:`T_e(t_k + \tau) = T_{e,k} + (T_{e,k} - T_{e,k-1})\,\tau/T_s` (a first-order hold extrapolated from
+    the samples), instead of held at :math:`T_{e,k}`: the prediction adds :math:`B_f (T_{e,k} - T_{e,k-1})`
+    (:meth:`ramp`). Where the currents slew at the bus's rate (field weakening), the held torque lags the rotor's
+    by half a period of that slew, an error the correction must take up from the encoder's counts.
     """
 
     bandwidth: float = 1200.0
     load_states: int = 2
+    torque_ramp: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "bandwidth", check_quantity("bandwidth", self.bandwidth))
         object.__setattr__(self, "load_states", check_count("load_states", self.load_states,
                                                             why="0: speed only, 1: constant load, 2: load ramp"))
+        object.__setattr__(self, "torque_ramp", check_bool("torque_ramp", self.torque_ramp))
 
     @property
     def order(self) -> int:
@@ -49,8 +57,16 @@ class Observer:
         """``(Ad, Bd, L)``: the discretized model and the correction gain (current-estimator form)."""
         return _matrices(self, motor.J, motor.B, float(Ts))
 
+    def ramp(self, motor: MotorParams, Ts: float) -> NDArray[np.float64]:
+        r"""``Bf``: the response over one period to a torque rising by 1 N m across it (0 without ``torque_ramp``).
+
+        .. math::
+            B_f = \frac{1}{T_s}\int_0^{T_s} e^{A(T_s - \tau)} B\,\tau\,d\tau
+        """
+        return _ramp(self, motor.J, motor.B, float(Ts))
+
     def as_dict(self) -> dict[str, Any]:
-        """The bandwidth and the load states, for a result's metadata."""
+        """The bandwidth, the load states and the torque ramp, for a result's metadata."""
         return asdict(self)
 
     def c_params(self, motor: MotorParams, Ts: float) -> dict[str, Any]:
@@ -61,15 +77,12 @@ class Observer:
         Ad, Bd, Lc = self.matrices(motor, Ts)
         n = self.order
         return dict(order=n, Ad=[[float(Ad[i, j]) for j in range(n)] + [0.0] * (MAX_ORDER - n) for i in range(n)],
-                    Bd=[float(b) for b in Bd], Lc=[float(c) for c in Lc])
+                    Bd=[float(b) for b in Bd], Lc=[float(c) for c in Lc],
+                    Bf=[float(f) for f in self.ramp(motor, Ts)])
 
 
-@lru_cache(maxsize=64)
-def _matrices(obs: Observer, J: float, B: float,
-              Ts: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """The matrices of :meth:`Observer.matrices` for the motor's ``J`` and ``B`` (cached: hashable arguments)."""
-    check_positive("control_period", Ts, unit=" s")
-    n = obs.order
+def _model(n: int, J: float, B: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The continuous model ``(A, B)`` of order ``n``: angle, speed and the load states, the torque as input."""
     A = np.zeros((n, n))
     A[0, 1], A[1, 1] = 1.0, -B / J
     if n > 2:
@@ -78,6 +91,32 @@ def _matrices(obs: Observer, J: float, B: float,
         A[2, 3] = 1.0
     Bc = np.zeros((n, 1))
     Bc[1, 0] = 1.0 / J
+    return A, Bc
+
+
+@lru_cache(maxsize=64)
+def _ramp(obs: Observer, J: float, B: float, Ts: float) -> NDArray[np.float64]:
+    """:meth:`Observer.ramp` for the motor's ``J`` and ``B`` (cached: hashable arguments)."""
+    check_positive("control_period", Ts, unit=" s")
+    n = obs.order
+    if not obs.torque_ramp:
+        return np.zeros(n)
+    A, Bc = _model(n, J, B)
+    from scipy.linalg import expm  # here: scipy.linalg is a large import that most commands never use
+
+    # the torque tau/Ts over the period as the state of a unit-rate integrator: its response is the ramp's
+    M = np.zeros((n + 2, n + 2))
+    M[:n, :n], M[:n, n], M[n, n + 1] = A, Bc[:, 0], 1.0
+    return np.asarray(expm(M * Ts)[:n, n + 1] / Ts)
+
+
+@lru_cache(maxsize=64)
+def _matrices(obs: Observer, J: float, B: float,
+              Ts: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The matrices of :meth:`Observer.matrices` for the motor's ``J`` and ``B`` (cached: hashable arguments)."""
+    check_positive("control_period", Ts, unit=" s")
+    n = obs.order
+    A, Bc = _model(n, J, B)
     from scipy.linalg import expm  # here: scipy.linalg is a large import that most commands never use
 
     M = expm(np.block([[A, Bc], [np.zeros((1, n + 1))]]) * Ts)

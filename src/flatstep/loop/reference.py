@@ -4,8 +4,9 @@ One control period k, at ``t_k = k Ts``:
 
 1. the sensors read the plant (encoder angle, ADC currents with offset and noise), possibly ``delay``
    periods old;
-2. the observer corrects its estimate with the encoder angle; speed and acceleration come from it (or, with
-   no observer, the speed is the encoder's backward difference and the acceleration the zero-load model);
+2. the observer corrects its estimate with the encoder angle (with ``edge_timing``, where a count edge fell within
+   the period, with that edge's angle against the estimate its age ago); speed and acceleration come from it (or,
+   with no observer, the speed is the encoder's backward difference and the acceleration the zero-load model);
 3. the controller computes the voltages; with ``compute_delay`` they are applied one period later;
 4. the drive saturates them at the bus (direction kept) and, in switched mode, chops them into PWM
    segments;
@@ -13,7 +14,8 @@ One control period k, at ``t_k = k Ts``:
    is integrated over the period by RK4 (``substeps`` per period, or one step per PWM segment);
 6. the observer predicts the next angle, speed and load from the torque of the measured currents, less the
    torques the controller's model knows beyond eq. (1) (its ``observer_torques``, a
-   :class:`~flatstep.model.torque_model.TorqueModel`, if it has one).
+   :class:`~flatstep.model.torque_model.TorqueModel`, if it has one), held over the period or, with
+   ``torque_ramp``, ramping by its last change.
 
 This loop runs in Python, one period at a time: it is the specification the C engine is tested against,
 not the fast path.
@@ -135,9 +137,11 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
     noise = sensors.noise(n_periods + 1) if sensors else np.zeros((n_periods + 1, 2))
     if observer is not None:
         Ad, Bd, Lc = observer.matrices(model, Ts)
+        Bf = observer.ramp(model, Ts)
+        Te_prev: Optional[float] = None  # the torque of the last prediction (the observer's torque ramp)
     X, V, Y = np.empty((4, n_periods + 1)), np.zeros((2, n_periods + 1)), np.empty((5, n_periods + 1))
     x = np.array(x0, dtype=float)
-    history: list[tuple[float, float, float]] = []  # past readings (theta_m, ia_m, ib_m) for the measurement delay
+    history: list[tuple[float, ...]] = []  # past readings (theta_m, ia_m, ib_m, theta_edge, age) for the delay
     xh: Optional[NDArray[np.float64]] = None
     v_hold = model.R * x[:2]  # what the bridge applies before the first command (the start equilibrium)
     theta_prev: Optional[float] = None
@@ -148,15 +152,21 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
         t = k * Ts
         X[:, k] = x
         if sensors is None:
-            reading = (x[3], x[0], x[1])
+            reading: tuple[float, ...] = (x[3], x[0], x[1], 0.0, -1.0)
         else:
             i_m = sensors.read_currents(x[:2], noise[k])
-            reading = (float(sensors.read_angle(x[3])), float(i_m[0]), float(i_m[1]))
+            reading = (float(sensors.read_angle(x[3])), float(i_m[0]), float(i_m[1]),
+                       *sensors.read_edge(float(x[3]), float(x[2])))
         history.append(reading)
         delay = sensors.delay if sensors else 0
-        th_m, ia_m, ib_m = history[max(0, len(history) - 1 - delay)]
+        th_m, ia_m, ib_m, th_e, age = history[max(0, len(history) - 1 - delay)]
         if observer is not None:
-            xh = np.array([th_m] + [0.0] * (observer.order - 1)) if xh is None else xh + Lc * (th_m - xh[0])
+            if xh is None:
+                xh = np.array([th_m] + [0.0] * (observer.order - 1))
+            elif 0.0 <= age < Ts:  # an edge within the period: the angle age ago was the edge's
+                xh = xh + Lc * (th_e - (xh[0] - xh[1] * age))
+            else:
+                xh = xh + Lc * (th_m - xh[0])
             x_m = (ia_m, ib_m, xh[1], xh[0])  # measured currents, estimated speed and angle
             # the motor torque less the torques the controller knows (its torque model), as the C loop computes it
             Te = torque(x_m, model) - (0.0 if torques is None else float(torques.torque(t, xh[0], xh[1], model.Nr)))
@@ -190,5 +200,6 @@ def run_reference(plant: MotorParams, controller: Controller, loop: DriveLoop, x
             raise RuntimeError(f"the plant state became non-finite at t={t + Ts:.6g} s")
         if observer is not None:
             assert xh is not None, "the observer corrects its estimate every period"
-            xh = Ad @ xh + Bd * Te
+            xh = Ad @ xh + Bd * Te + Bf * (0.0 if Te_prev is None else Te - Te_prev)
+            Te_prev = float(Te)
     return {"t": np.arange(n_periods + 1) * Ts, "x": X, "v": V, "y": Y, "faults": np.array(faults)}

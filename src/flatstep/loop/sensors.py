@@ -8,7 +8,7 @@ from typing import Any, Optional
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..validate import InputError, check_count, check_finite, check_quantity
+from ..validate import InputError, check_bool, check_count, check_finite, check_quantity
 
 
 @dataclass(frozen=True)
@@ -34,6 +34,11 @@ class Sensors:
         Measurement delay in control periods (the controller sees the samples of ``delay`` periods ago).
     seed : int
         Seed of the noise sequence (reproducible runs).
+    edge_timing : bool
+        The encoder interface also latches the time of each count edge (a capture timer, its resolution
+        neglected): a reading then carries the angle of the last edge crossed, ``theta_m -+ q/2`` behind the
+        motion, and its age at the sample, ``(theta - theta_edge)/omega`` from the rotor's speed at the sample
+        (exact to the acceleration's share ``a age^2/2``); :meth:`read_edge`.
     """
 
     encoder_counts: Optional[int] = 16384
@@ -44,6 +49,7 @@ class Sensors:
     current_noise: float = 0.0
     delay: int = 0
     seed: int = 0
+    edge_timing: bool = False
 
     def __post_init__(self) -> None:
         for name in ("encoder_counts", "current_bits", "delay"):
@@ -62,6 +68,7 @@ class Sensors:
         object.__setattr__(self, "current_offset",
                            tuple(check_quantity("current_offset", o) for o in self.current_offset))
         object.__setattr__(self, "current_noise", check_quantity("current_noise", self.current_noise))
+        object.__setattr__(self, "edge_timing", check_bool("edge_timing", self.edge_timing))
 
     @property
     def angle_step(self) -> float:
@@ -80,6 +87,17 @@ class Sensors:
         if q == 0.0:
             return theta
         return q * (np.round(theta / q - self.encoder_offset) + self.encoder_offset)
+
+    def read_edge(self, theta: float, omega: float) -> tuple[float, float]:
+        """``(theta_edge, age)``: the last count edge the rotor crossed and how long ago [s], or ``(0, -1)``: none.
+
+        None without ``edge_timing``, an encoder or motion (``omega = 0``). In C: ``sensors_edge``.
+        """
+        q = self.angle_step
+        if not self.edge_timing or q == 0.0 or omega == 0.0:
+            return 0.0, -1.0
+        edge = float(self.read_angle(theta)) - math.copysign(0.5 * q, omega)
+        return edge, (theta - edge) / omega
 
     def read_currents(self, i: ArrayLike, noise: ArrayLike = 0.0) -> NDArray[np.float64]:
         """ADC reading of the phase currents ``i`` (2, ...) with the given noise sample(s) added."""
@@ -103,4 +121,5 @@ class Sensors:
     def c_params(self) -> dict[str, Any]:
         """The fields of the C ``struct sensors_params`` (csrc/sensors.h) for these sensors (the noise stays here)."""
         return dict(angle_step=self.angle_step, encoder_offset=self.encoder_offset, current_step=self.current_step,
-                    current_range=self.current_range, current_offset=list(self.current_offset), delay=self.delay)
+                    current_range=self.current_range, current_offset=list(self.current_offset), delay=self.delay,
+                    edge_timing=self.edge_timing)
