@@ -56,6 +56,10 @@ OTHER: list[tuple[str, str, str]] = [
 ] + [
     ("drive", "compute_delay", v) for v in ("1", '"yes"', "0")
 ] + [
+    ("sensors", "edge_timing", v) for v in ("1", '"yes"')
+] + [
+    ("observer", "torque_ramp", v) for v in ("1", '"yes"')
+] + [
     ("sensors", "current_offset", v) for v in ("[0.0]", "[0.0, nan]", '[0.0, "x"]', "0.1", "[0.0, 1e9]")
 ] + [
     ("robustness", "parameters", v) for v in ('"RL"', "[]", '["R", "Q"]', '["R", "R"]', "[1]", "5")

@@ -34,6 +34,20 @@ def test_realistic_drive_file():
     assert study.samples == 0 and study.parameters == ("R", "L", "Km", "J", "B")
 
 
+def test_the_count_edges_and_the_torque_ramp_from_a_file(tmp_path):
+    text = (EXAMPLES[0].parent / "compare-nema17-fast-weakening.toml").read_text()
+    text = text.replace("[sensors]\n", "[sensors]\nedge_timing = true\n").replace(
+        "[load]\n", "[observer]\ntorque_ramp = true\n\n[load]\n")
+    s, _ = load_scenario(write(tmp_path, text))
+    assert s.loop.sensors.edge_timing and s.loop.observer.torque_ramp
+    assert s.loop.observer.bandwidth > 0 and s.measurement == "observer"  # the design's observer, the ramp added
+    run = s.run()
+    assert run.status == "ok"
+    plain, _ = load_scenario(EXAMPLES[0].parent / "compare-nema17-fast-weakening.toml")
+    assert not plain.loop.sensors.edge_timing and not plain.loop.observer.torque_ramp
+    assert abs(run.theta[-1] - plain.run().theta[-1]) > 0  # the options reach the C loop
+
+
 def write(tmp_path, text):
     p = tmp_path / "s.toml"
     p.write_text(text)

@@ -207,9 +207,14 @@ KEYS: dict[str, dict[str, Key]] = {
         "current_noise": _q("current_noise", _default(Sensors, "current_noise"), "current noise standard deviation"),
         "delay": _i("delay", _default(Sensors, "delay"), "measurement delay in control periods"),
         "seed": _i("seed", _default(Sensors, "seed"), "the noise's seed"),
+        "edge_timing": Key("", "true, false", _fmt(_default(Sensors, "edge_timing")),
+                           "the encoder latches its last count edge's time (a capture timer); the observer corrects "
+                           "with that edge's angle"),
     },
     "observer": {"bandwidth": _q("bandwidth", _default(Observer, "bandwidth"), "the observer's bandwidth"),
-                 "load_states": _i("load_states", _default(Observer, "load_states"), "load states estimated")},
+                 "load_states": _i("load_states", _default(Observer, "load_states"), "load states estimated"),
+                 "torque_ramp": Key("", "true, false", _fmt(_default(Observer, "torque_ramp")),
+                                    "predict with the torque ramping over the period by its last change")},
     "load": {"torque": _q("load", 0.0, "a constant load torque on the plant")},
     "feedforward": {
         **{k: Key("N m", ">= 0", _fmt(_default(TorqueModel, k)), doc) for k, doc in (
