@@ -4,9 +4,9 @@ For each motor, bus and move: the planned duration of :func:`flatstep.plan.time_
 of the two fair baselines of :mod:`flatstep.bench.fair_baselines` under the same limits (the bus share, ``i_max``
 and the planner's speed cap from the control rate): Ruckig with ``i_d = 0``, its three caps searched on a grid,
 and a trapezoid with field weakening, its caps and weakening searched; the ratios (above 1: the planner slower);
-and each plan run by the d-q law on the 20 kHz drive of :mod:`flatstep.bench.drive_tracking` (designed gains and
-observer, 14-bit encoder, 12-bit current sensor, from rest at zero current): the largest angle error during the
-move and the status.
+and each plan run by the d-q law on the 20 kHz drive of the planner's benchmark (:mod:`flatstep.bench.field_weakening`:
+designed gains and observer, 4000-count encoder with its count edges' times, 12-bit current sensor, from rest at
+zero current): the largest angle error during the move and the status.
 
     .venv/bin/python benchmarks/field_weakening_baselines.py [--motors nema17 ldo-42sth60-2004mac ...]
         [--bus 12 24] [--distances 0.3 1 5 20]
@@ -20,33 +20,18 @@ import argparse
 import math
 from pathlib import Path
 
-import tomllib
-
-from flatstep.bench.drive_tracking import track
 from flatstep.bench.fair_baselines import best_ruckig, best_trapezoid
-from flatstep.model.datasheet import motor_from_table
-from flatstep.model.motor import MotorParams
+from flatstep.bench.field_weakening import RATE, V_USE, motor, track
 from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal_dq import speed_cap, time_optimal_dq
 
-RATE = 20000.0
-V_USE = 0.84
 MOTORS = Path(__file__).resolve().parent.parent / "examples" / "motors"
 
 
-def motor(name: str) -> tuple[MotorParams, float]:
-    """The motor and its i_max [A]: the preset at 1 A, or a datasheet file at its rated current norm."""
-    if name in ("nema17", "paper"):
-        return MotorParams.preset(name), 1.0
-    path = MOTORS / f"{name}.toml"
-    model = motor_from_table(tomllib.loads(path.read_text())["motor"], str(path))
-    return model.params, model.rated_rho
-
-
-def tracked(run: dict[str, object]) -> str:
+def tracked(run: tuple[str, float]) -> str:
     """The error [mrad] and the status of a tracked run, for one column."""
-    err = float(run["max_error"])  # type: ignore[arg-type]
-    return f"{err * 1e3:9.3f} {str(run['status']):>7s}" if math.isfinite(err) else f"{'nan':>9s} {'failed':>7s}"
+    status, err = run
+    return f"{err * 1e3:9.3f} {status:>7s}" if math.isfinite(err) else f"{'nan':>9s} {'failed':>7s}"
 
 
 def main() -> None:
@@ -60,7 +45,7 @@ def main() -> None:
           f"{'trap FW':>9s} {'/trap':>6s} "
           + " ".join(f"{k + ' mrad':>9s} {'status':>7s}" for k in ("plan", "ruck", "trap")))
     for name in a.motors:
-        m, i_max = motor(name)
+        m, i_max = motor(name, MOTORS)
         for v_bus in a.bus:
             limits = MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE)
             cap = speed_cap(m, limits, RATE)
@@ -69,8 +54,7 @@ def main() -> None:
                 fw = time_optimal_dq(dist, m, limits, control_rate=RATE)
                 tf = fw.plan.tf - fw.plan.t0
                 ruckig, trap = best_ruckig(dist, m, capped), best_trapezoid(dist, m, capped)
-                runs = [track(p, m, v_bus, dc) for p, dc in
-                        ((fw.plan, fw.d_current), (ruckig.plan, ruckig.d_current), (trap.plan, trap.d_current))]
+                runs = [track(m, p, v_bus, i_max=i_max) for p in (fw, ruckig, trap)]
                 print(f"{name:22s} {v_bus:4.0f} {dist:5.1f} {cap:5.0f} {tf * 1e3:9.3f} "
                       f"{ruckig.duration * 1e3:9.3f} {tf / ruckig.duration:7.3f} {trap.duration * 1e3:9.3f} "
                       f"{tf / trap.duration:6.3f} " + " ".join(tracked(r) for r in runs), flush=True)

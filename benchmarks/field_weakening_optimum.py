@@ -12,84 +12,33 @@ its status and the largest angle error during the move.
         [--no-advance] [--no-optimum] [--wn-scale 1.5] [--no-edge-timing] [--no-torque-ramp]
         [--bandwidth-scale 0.4]
 
-Needs the bench extra (CasADi). Motors are the ``nema17`` preset (at 1 A) or the stems of examples/motors/*.toml
-(at their rated current norm). The law turns its voltage by the angle of half a control period (``advance``,
+Needs the bench extra (CasADi). Motors are the ``nema17`` preset (at 1 A) or the stems of examples/motors/*.toml (at
+their rated current norm). The law turns its voltage by the angle of half a control period (``advance``,
 :func:`flatstep.control.dq_smc.advance_of`) unless ``--no-advance``; the 12-bit current sensor spans
-:func:`adc_range` of i_max; ``--no-optimum`` skips the collocation (its columns print as ``-``); ``--wn-scale``
-multiplies the designed error dynamics' ``wn`` of the law (default 1: ``design_gains`` as it is) and
-``--bandwidth-scale`` the designed observer's bandwidth (default 1). The encoder latches its count edges
-(``Sensors(edge_timing=True)``) unless ``--no-edge-timing``, and the observer predicts with the torque's ramp
-(``Observer(torque_ramp=True)``) unless ``--no-torque-ramp`` (docs/controllers.md, "Quantization").
+:func:`flatstep.bench.field_weakening.adc_range` of i_max (the drive: that module); ``--no-optimum`` skips the
+collocation (its columns print as ``-``); ``--wn-scale`` multiplies the designed error dynamics' ``wn`` of the law
+(default 1: ``design_gains`` as it is) and ``--bandwidth-scale`` the designed observer's bandwidth (default 1). The
+encoder latches its count edges (``Sensors(edge_timing=True)``) unless ``--no-edge-timing``, and the observer
+predicts with the torque's ramp (``Observer(torque_ramp=True)``) unless ``--no-torque-ramp`` (docs/controllers.md,
+"Quantization").
 """
 from __future__ import annotations
 
 import argparse
 import math
 import time
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-import tomllib
 
 from flatstep.bench.collocation import minimum_time
-from flatstep.control.dq_smc import DQFlatnessSMC, advance_of
-from flatstep.engine.simulate import simulate
-from flatstep.loop.design import design_gains
-from flatstep.loop.sensors import Sensors
-from flatstep.model.datasheet import motor_from_table
+from flatstep.bench.field_weakening import RATE, V_USE, motor, track
 from flatstep.model.motor import MotorParams
 from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal_dq import speed_cap, time_optimal_dq
 from flatstep.plan.time_optimal_dq_c import plan_raw
-from flatstep.studies.verify import drive_loop
 
-RATE = 20000.0
-V_USE = 0.84
 MOTORS = Path(__file__).resolve().parent.parent / "examples" / "motors"
-
-
-def motor(name: str) -> tuple[MotorParams, float]:
-    """The motor and its i_max [A]: the preset at 1 A, or a datasheet file at its rated current norm."""
-    if name in ("nema17", "paper"):
-        return MotorParams.preset(name), 1.0
-    path = MOTORS / f"{name}.toml"
-    model = motor_from_table(tomllib.loads(path.read_text())["motor"], str(path))
-    return model.params, model.rated_rho
-
-
-def adc_range(i_max: float) -> float:
-    """The current sensor's full scale [A]: 2 A, or the next whole ampere above 1.2 i_max where that is more.
-
-    A sensor that clips below the planned current feeds the law and the observer a wrong torque (the LDO-42STH60's
-    2.83 A on the default 2 A range).
-    """
-    return max(2.0, float(math.ceil(1.2 * i_max)))
-
-
-def track(m: MotorParams, fw: object, v_bus: float, counts: int = 4000, advance: bool = True,
-          i_max: float = 1.0, wn_scale: float = 1.0, edge_timing: bool = True,
-          torque_ramp: bool = True, bandwidth_scale: float = 1.0) -> tuple[str, float]:
-    """The d-q law's run of the plan on the 20 kHz drive: its status and the largest |theta error| [rad] in the move.
-
-    ``advance``: the law's angle advance of half a control period; the 12-bit current sensor spans
-    :func:`adc_range` of ``i_max``; the designed ``wn`` times ``wn_scale``; ``edge_timing``: the encoder latches its
-    count edges; ``torque_ramp``: the designed observer predicts with the torque's ramp; its bandwidth times
-    ``bandwidth_scale``.
-    """
-    plan, d_current = fw.plan, fw.d_current  # type: ignore[attr-defined]
-    sensors = Sensors(encoder_counts=counts, current_range=adc_range(i_max), edge_timing=edge_timing)
-    loop = drive_loop(v_bus, RATE, sensors=sensors)
-    d = design_gains(m, plan, control_period=loop.control_period, v_bus=v_bus, encoder_counts=counts,
-                     current_step=sensors.current_step)
-    loop = replace(loop, observer=replace(d.observer, torque_ramp=torque_ramp,
-                                          bandwidth=d.observer.bandwidth * bandwidth_scale))
-    gains = replace(d.gains, wn=d.gains.wn * wn_scale)
-    ctrl = DQFlatnessSMC(m, plan, gains, "observer", d_current=d_current,
-                         advance=advance_of(loop.control_period) if advance else 0.0)
-    r = simulate(m, plan, ctrl, loop=loop, t_end=plan.tf + 0.01, x0=[0.0, 0.0, 0.0, plan.theta1])
-    during = (r.t >= plan.t0) & (r.t <= plan.tf)
-    return r.status, float(np.max(np.abs(r.theta_error[during])))
 
 
 def plan_time(dist: float, m: MotorParams, limits: MotorLimits) -> tuple[float, int]:
@@ -130,7 +79,7 @@ def main() -> None:
     print(f"{'motor':22s} {'bus':>4s} {'rad':>5s} {'plan ms':>9s} {'opt ms':>9s} {'ratio':>6s} {'cap':>5s} "
           f"{'w_pk':>5s} {'id_min':>6s} {'plan us':>8s} {'shots':>6s} {'status':>7s} {'err mrad':>8s}")
     for name in a.motors:
-        m, i_max = motor(name)
+        m, i_max = motor(name, MOTORS)
         for v_bus in a.bus:
             limits = MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE)
             cap = speed_cap(m, limits, RATE)

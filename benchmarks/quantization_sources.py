@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
-from field_weakening_optimum import RATE, V_USE, adc_range, motor
 
+from flatstep.bench.field_weakening import RATE, V_USE, adc_range, motor
 from flatstep.control.dq_smc import DQFlatnessSMC, advance_of
 from flatstep.loop.design import design_gains
 from flatstep.loop.drive import Drive
@@ -27,6 +28,7 @@ from flatstep.model.motor import torque
 from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal_dq import time_optimal_dq
 
+MOTORS = Path(__file__).resolve().parent.parent / "examples" / "motors"
 CASES = [("nothing (the drive as it is)", ()), ("the currents (no 12-bit ADC)", ("currents",)),
          ("the angle of the Park transforms only", ("park",)), ("the angle of the error e only", ("error",)),
          ("the speed", ("speed",)), ("the acceleration", ("acceleration",)),
@@ -46,7 +48,7 @@ class _Shifted:
 
 def run(args: argparse.Namespace, exact: tuple[str, ...], counts: int) -> float:
     """The largest |theta - theta*| [rad] in the move with the ``exact`` inputs read from the plant."""
-    m, i_max = motor(args.motor)
+    m, i_max = motor(args.motor, MOTORS)
     limits = MotorLimits(v_bus=args.bus, i_max=i_max, i_hold=0.01 * i_max, v_use=V_USE)
     fw = time_optimal_dq(args.distance, m, limits, control_rate=RATE)
     plan, Ts = fw.plan, 1 / RATE
