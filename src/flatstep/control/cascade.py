@@ -253,7 +253,10 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
               \omega_s = \sqrt{\frac{K_m h \rho^*_{max} N_r}{J}},
 
     the held current's spring frequency (its stiffness over the inertia) capped by what the sampling allows:
-    :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60w^2`. The velocity gain has its own bounds,
+    :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60(rw)^2`. Where the sampling caps the loop below the spring,
+    :math:`r = 0.0871/(T_s\omega_s) < 1` (else :math:`r = 1`), the spring takes over what the loop loses: the held
+    share rises to :math:`h/r^2` (at most 1: the spring's frequency rises by :math:`1/r`) and the velocity
+    integral's bandwidth falls by :math:`r`. The velocity gain has its own bounds,
 
     .. math:: k_\omega = \min\left(\frac{0.5}{T_s},\ 2\,\frac{K_m\rho^*_{max}}{J}\,\frac{T_s}{q}\right),
 
@@ -267,25 +270,27 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
     scale = context.bandwidth_scale
     lam = (context.lambda_ts if context.lambda_ts is not None else r["lambda_ts"]) / Ts
     rho = float(np.max(np.abs(context.plan.flag(np.array([context.plan.t0, context.plan.tf])).rho)))
-    hold = held_share(context, rho)
     spring = math.sqrt(m.Km * r["d_hold"] * max(rho, 1e-12) * m.Nr / m.J)
+    short = min(1.0, r["w_ts"] / Ts / spring)  # < 1 where the sampling caps the loop below the spring
+    hold = held_share(context, rho, min(1.0, r["d_hold"] / short**2))
     w = scale * min(r["w_ts"] / Ts, spring)
     k_omega = r["k_omega_ts"] / Ts
     if context.angle_step > 0.0:  # one count per period of speed error asks at most k_omega_count rho* of current
         k_omega = min(k_omega, r["k_omega_count"] * m.Km * max(rho, 1e-12) * Ts / (m.J * context.angle_step))
     return dict(current_bandwidth=scale * lam, position_bandwidth=w, k_omega=scale * k_omega,
-                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * w * w, d_hold=hold)
+                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * (short * w) ** 2, d_hold=hold)
 
 
-def held_share(context: BuildContext, rho: float) -> float:
-    r"""The share of ``rho`` [A] the plan-frame rule holds on d: the rule's, less where the bus is short.
+def held_share(context: BuildContext, rho: float, h0: Optional[float] = None) -> float:
+    r"""The share of ``rho`` [A] the plan-frame rule holds on d: ``h0``, less where the bus is short.
 
-    The largest of :math:`h_0, 0.9h_0, \ldots, 0` (:math:`h_0` the rule's ``d_hold``) whose feedforward phase
+    The largest of :math:`h_0, 0.9h_0, \ldots, 0` (:math:`h_0` default the rule's ``d_hold``) whose feedforward phase
     voltages along the move (:func:`~flatstep.control.feedforward.reference` with :math:`i_d^* = h\rho`, the known
     torques) stay within :data:`HOLD_VOLTAGE_SHARE` of the bus: the held current may not take the voltage the
     move needs. Without a bus limit, :math:`h_0`.
     """
-    h0, limit = PLAN_FRAME_RULE["d_hold"], HOLD_VOLTAGE_SHARE * context.v_limit
+    h0 = PLAN_FRAME_RULE["d_hold"] if h0 is None else h0
+    limit = HOLD_VOLTAGE_SHARE * context.v_limit
     if not math.isfinite(limit):
         return h0
     plan = context.plan
