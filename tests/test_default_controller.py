@@ -1,4 +1,5 @@
 """The controller a scenario file runs when it names none (docs/comparison.md, "The default controller")."""
+import math
 from pathlib import Path
 
 import pytest
@@ -95,10 +96,57 @@ def test_the_default_follows_the_plan_frame_rule(tmp_path):
     Ts = 1 / 20000.0
     w = min(r["w_ts"] / Ts, math.sqrt(m.Km * r["d_hold"] * 1.0 * m.Nr / m.J))
     assert g.current_bandwidth == pytest.approx(r["lambda_ts"] / Ts)
-    assert (g.k_omega, g.k_theta, g.ki_omega) == pytest.approx((r["k_omega"] * w, r["k_theta"] * w,
-                                                                 r["ki_omega"] * w * w))
+    assert w < r["w_ts"] / Ts  # the spring, not the sampling, sets the loop here: no take-over
+    assert (g.k_theta, g.ki_omega) == pytest.approx((r["k_theta"] * w, r["ki_omega"] * w * w))
+    assert g.k_omega == pytest.approx(r["k_omega_ts"] / Ts)  # no encoder in the file: the sampling's bound alone
     slow = load_scenario(path.write_text(path.read_text().replace("20000.0", "5000.0")) and path)[0]
-    assert slow.controller().gains.k_omega == pytest.approx(r["k_omega"] * r["w_ts"] * 5000.0)  # capped by Ts
+    gs = slow.controller().gains
+    assert gs.k_omega == pytest.approx(r["k_omega_ts"] * 5000.0)  # capped by Ts
+    # the sampling caps the loop below the spring: the spring takes over (more held), the integral slows
+    spring = math.sqrt(m.Km * r["d_hold"] * 1.0 * m.Nr / m.J)
+    cap = r["w_ts"] * 5000.0
+    short = cap / spring
+    assert short < 1.0 and gs.k_theta == pytest.approx(r["k_theta"] * cap)
+    assert gs.ki_omega == pytest.approx(r["ki_omega"] * (short * cap) ** 2)
+    assert r["d_hold"] < gs.d_hold <= min(1.0, r["d_hold"] / short**2)
+
+
+@pytest.mark.parametrize("counts, rho", [(16384, 1.0), (16384, 0.3), (4000, 1.0), (4000, 0.3)])
+def test_the_default_velocity_gain_follows_the_encoder(tmp_path, counts, rho):
+    """k_omega: half the sampling rate, or less where one count per period of speed error asks more than 2 rho*."""
+    import math
+
+    from flatstep.control.cascade import PLAN_FRAME_RULE
+
+    path = tmp_path / "s.toml"
+    path.write_text(f't_end = 0.1\n[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = {rho}\nrho2 = {rho}\n'
+                    f't0 = 0.01\ntf = 0.07\n[sensors]\nencoder_counts = {counts}\n' + DRIVE)
+    sc = load_scenario(path)[0]
+    g, m, r, Ts, q = sc.controller().gains, sc.motor, PLAN_FRAME_RULE, 1 / 20000.0, 2 * math.pi / counts
+    by_count = r["k_omega_count"] * m.Km * rho * Ts / (m.J * q)
+    assert g.k_omega == pytest.approx(min(r["k_omega_ts"] / Ts, by_count))
+    # the bound: a speed error of one count per period asks at most k_omega_count times rho* of the q loop
+    assert m.J * g.k_omega * q / (m.Km * Ts) <= r["k_omega_count"] * rho * (1 + 1e-12)
+    # which bound holds: the sampling's on the fine encoder at 1 A, the encoder's on the coarse one or at 0.3 A
+    assert (g.k_omega < r["k_omega_ts"] / Ts * 0.999) == (counts == 4000 or rho == 0.3)
+
+
+def test_the_rule_without_an_angle_step_keeps_the_sampling_bound():
+    """A context that knows no encoder count (an exact angle) gives the sampling's bound alone; a negative is refused."""
+    from flatstep.control.build import BuildContext
+    from flatstep.control.cascade import PLAN_FRAME_RULE, plan_frame_rule
+    from flatstep.model.motor import PRESETS
+    from flatstep.plan.rest_to_rest import RestToRest
+
+    plan = RestToRest(0.0, 0.5, 0.3, 0.3, 0.01, 0.07)
+    exact = plan_frame_rule(BuildContext(PRESETS["nema17"], plan, "observer", control_period=5e-5))
+    counted = plan_frame_rule(BuildContext(PRESETS["nema17"], plan, "observer", control_period=5e-5,
+                                           angle_step=2 * math.pi / 16384))
+    assert exact["k_omega"] == pytest.approx(PLAN_FRAME_RULE["k_omega_ts"] / 5e-5)
+    assert counted["k_omega"] < exact["k_omega"]
+    assert {k: v for k, v in exact.items() if k != "k_omega"} == {k: v for k, v in counted.items() if k != "k_omega"}
+    with pytest.raises(ValueError, match=r"angle_step=-1.0 rad must be >= 0"):
+        BuildContext(PRESETS["nema17"], plan, "observer", control_period=5e-5, angle_step=-1.0)
 
 
 def test_the_default_holds_less_where_the_bus_is_short(tmp_path):

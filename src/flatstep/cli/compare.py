@@ -130,7 +130,7 @@ COMPARE_FILES = {"overlay.png": PNG_MARK, "plants.png": PNG_MARK, "compare.json"
 
 def cmd_compare(args: argparse.Namespace) -> int:
     """``flatstep compare``: every controller on the scenario's plant, its robustness study and bandwidth sweep."""
-    if args.tuned is not None:
+    if args.tuned is not None or args.held_out:
         from .compare_tuned import cmd_compare_tuned
 
         return cmd_compare_tuned(args)
@@ -298,6 +298,10 @@ def add_compare_command(sub: argparse._SubParsersAction[argparse.ArgumentParser]
                       "--controllers default: one type per law), or read from PATH (a tuned file, or a directory "
                       "of them); prints the tuned rows, the frontier and how often a sliding law's |s| is outside "
                       "its boundary layer; --out writes frontier.png and tuned.json")
+    cmp_.add_argument("--held-out", action="store_true",
+                      help="with --tuned PATH: re-run the read gains, and the default controller at its rule gains, "
+                      "on runs they were not tuned on (32 random plants, the move 1 and 2 %% shorter and longer) "
+                      "and print each law's mean over them (docs/comparison.md)")
     cmp_.add_argument("--frontier", default="0.5,0.75,1", metavar="FRACTIONS",
                       help="with --tuned: the peak-voltage caps of the frontier, fractions of the bus separated by "
                       "commas (default 0.5,0.75,1; each is a search)")

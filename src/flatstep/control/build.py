@@ -27,7 +27,7 @@ from ..model.torque_model import NO_TORQUES, TorqueModel
 from ..plan.d_current import ZERO_D_CURRENT, DCurrentPlan
 from ..plan.loss_aware import LossAwareRho
 from ..plan.protocol import Plan
-from ..validate import InputError, check_positive
+from ..validate import InputError, check_finite, check_positive
 from .smc import SMCGains
 
 #: The design rules of flatstep.loop.design (docs/drive.md): the boundary layer's bandwidth times the control period
@@ -93,6 +93,8 @@ class BuildContext:
         The current loop's speed times Ts, in (0, 1] (``None``: the rule's 0.3, 0.15 delayed).
     law_gains : mapping
         The law's gains by name, over its rule (empty: the rule's).
+    angle_step : float
+        One count of the angle the law reads [rad] (0: an exact angle, or none known).
     """
 
     motor: MotorParams
@@ -108,8 +110,13 @@ class BuildContext:
     loss_aware: Optional[LossAwareRho] = None
     lambda_ts: Optional[float] = None
     law_gains: Mapping[str, Any] = field(default_factory=dict)
+    angle_step: float = 0.0
 
     def __post_init__(self) -> None:
+        step = check_finite("angle_step", self.angle_step)
+        if step < 0:
+            raise InputError("angle_step", step, f"angle_step={step!r} rad must be >= 0 (one encoder count; 0: exact)")
+        object.__setattr__(self, "angle_step", step)
         if self.lambda_ts is not None:
             object.__setattr__(self, "lambda_ts", check_lambda_ts(self.lambda_ts))
         if not isinstance(self.law_gains, Mapping):

@@ -61,9 +61,12 @@ if TYPE_CHECKING:
     from .spec import ControllerSpec
 
 #: The rule of the cascade in the plan's frame (:func:`plan_frame_rule`): the current loops' speed
-#: :math:`\lambda T_s`, the outer bandwidth's cap :math:`w T_s`, the P-PI gains over that bandwidth
-#: (:math:`k_\omega/w`, :math:`k_\theta/w`, :math:`k_{i\omega}/w^2`) and the share of :math:`\rho^*` held on d.
-PLAN_FRAME_RULE = dict(lambda_ts=0.895, w_ts=0.0871, k_omega=3.20, k_theta=1.28, ki_omega=1.60, d_hold=0.535)
+#: :math:`\lambda T_s`, the outer bandwidth's cap :math:`w T_s`, the position and integral gains over that bandwidth
+#: (:math:`k_\theta/w`, :math:`k_{i\omega}/w^2`), the velocity gain's two bounds (:math:`k_\omega T_s`, and the
+#: current one count per period of speed error may ask, in shares of :math:`\rho^*`) and the share of
+#: :math:`\rho^*` held on d.
+PLAN_FRAME_RULE = dict(lambda_ts=0.895, w_ts=0.0871, k_omega_ts=0.5, k_omega_count=2.0, k_theta=1.28, ki_omega=1.60,
+                       d_hold=0.535)
 #: The share of the bus the plan-frame rule's feedforward may take with its held current (:func:`plan_frame_rule`).
 HOLD_VOLTAGE_SHARE = 0.75
 
@@ -243,37 +246,51 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
     r"""The rule gains of the cascade in the plan's frame, from the control period, the plan and the model.
 
     The current loops at :math:`\lambda = 0.895/T_s` (``lambda_ts`` replaces 0.895; a computation delay doubles
-    :math:`T_s` here), a share :math:`h = 0.535` of the plan's largest :math:`\rho^*` held on d (less where the bus
-    is short: :func:`held_share`), and the P-PI loop over the bandwidth
+    :math:`T_s` here, in every bound below), a share :math:`h = 0.535` of the plan's largest :math:`\rho^*` held on
+    d (less where the bus is short: :func:`held_share`), and the P-PI loop over the bandwidth
 
     .. math:: w = \min\left(\frac{0.0871}{T_s},\ \omega_s\right),\qquad
               \omega_s = \sqrt{\frac{K_m h \rho^*_{max} N_r}{J}},
 
     the held current's spring frequency (its stiffness over the inertia) capped by what the sampling allows:
-    :math:`k_\omega = 3.20w`, :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60w^2`. Every figure is
-    :data:`PLAN_FRAME_RULE`; docs/comparison.md ("The default controller") says where they come from and what they
-    give on scenarios they were and were not chosen on. ``bandwidth_scale`` multiplies both bandwidths.
+    :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60(rw)^2`. Where the sampling caps the loop below the spring,
+    :math:`r = 0.0871/(T_s\omega_s) < 1` (else :math:`r = 1`), the spring takes over what the loop loses: the held
+    share rises to :math:`h/r^2` (at most 1: the spring's frequency rises by :math:`1/r`) and the velocity
+    integral's bandwidth falls by :math:`r`. The velocity gain has its own bounds,
+
+    .. math:: k_\omega = \min\left(\frac{0.5}{T_s},\ 2\,\frac{K_m\rho^*_{max}}{J}\,\frac{T_s}{q}\right),
+
+    half the sampling rate, or less where a speed error of one encoder count :math:`q` per period would ask more
+    than twice the plan's current of the q loop (:math:`J k_\omega q / (K_m T_s) \le 2\rho^*`; ``angle_step``
+    of the context, without which only the first bound holds). Every figure is :data:`PLAN_FRAME_RULE`;
+    docs/comparison.md ("The default controller") says where they come from and what they give on scenarios they
+    were and were not chosen on. ``bandwidth_scale`` multiplies every gain's bandwidth.
     """
     r, m, Ts = PLAN_FRAME_RULE, context.motor, context.period * (2.0 if context.compute_delay else 1.0)
     scale = context.bandwidth_scale
     lam = (context.lambda_ts if context.lambda_ts is not None else r["lambda_ts"]) / Ts
     rho = float(np.max(np.abs(context.plan.flag(np.array([context.plan.t0, context.plan.tf])).rho)))
-    hold = held_share(context, rho)
     spring = math.sqrt(m.Km * r["d_hold"] * max(rho, 1e-12) * m.Nr / m.J)
+    short = min(1.0, r["w_ts"] / Ts / spring)  # < 1 where the sampling caps the loop below the spring
+    hold = held_share(context, rho, min(1.0, r["d_hold"] / short**2))
     w = scale * min(r["w_ts"] / Ts, spring)
-    return dict(current_bandwidth=scale * lam, position_bandwidth=w, k_omega=r["k_omega"] * w,
-                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * w * w, d_hold=hold)
+    k_omega = r["k_omega_ts"] / Ts
+    if context.angle_step > 0.0:  # one count per period of speed error asks at most k_omega_count rho* of current
+        k_omega = min(k_omega, r["k_omega_count"] * m.Km * max(rho, 1e-12) * Ts / (m.J * context.angle_step))
+    return dict(current_bandwidth=scale * lam, position_bandwidth=w, k_omega=scale * k_omega,
+                k_theta=r["k_theta"] * w, ki_omega=r["ki_omega"] * (short * w) ** 2, d_hold=hold)
 
 
-def held_share(context: BuildContext, rho: float) -> float:
-    r"""The share of ``rho`` [A] the plan-frame rule holds on d: the rule's, less where the bus is short.
+def held_share(context: BuildContext, rho: float, h0: Optional[float] = None) -> float:
+    r"""The share of ``rho`` [A] the plan-frame rule holds on d: ``h0``, less where the bus is short.
 
-    The largest of :math:`h_0, 0.9h_0, \ldots, 0` (:math:`h_0` the rule's ``d_hold``) whose feedforward phase
+    The largest of :math:`h_0, 0.9h_0, \ldots, 0` (:math:`h_0` default the rule's ``d_hold``) whose feedforward phase
     voltages along the move (:func:`~flatstep.control.feedforward.reference` with :math:`i_d^* = h\rho`, the known
     torques) stay within :data:`HOLD_VOLTAGE_SHARE` of the bus: the held current may not take the voltage the
     move needs. Without a bus limit, :math:`h_0`.
     """
-    h0, limit = PLAN_FRAME_RULE["d_hold"], HOLD_VOLTAGE_SHARE * context.v_limit
+    h0 = PLAN_FRAME_RULE["d_hold"] if h0 is None else h0
+    limit = HOLD_VOLTAGE_SHARE * context.v_limit
     if not math.isfinite(limit):
         return h0
     plan = context.plan

@@ -38,7 +38,7 @@ def make_controller(kind: object, motor: MotorParams, plan: Plan, *, control_per
                     torques: Optional[TorqueModel] = None,
                     d_current: DCurrentPlan = ZERO_D_CURRENT,
                     loss_aware: Optional[LossAwareRho] = None, lambda_ts: Optional[float] = None,
-                    law_gains: Optional[Mapping[str, Any]] = None) -> AnyController:
+                    law_gains: Optional[Mapping[str, Any]] = None, angle_step: float = 0.0) -> AnyController:
     """The controller ``kind`` for this motor model, plan and drive.
 
     ``kind`` is a :class:`~flatstep.control.spec.ControllerSpec`, a name (one of :data:`CONTROLLER_TYPES` or
@@ -49,7 +49,8 @@ def make_controller(kind: object, motor: MotorParams, plan: Plan, *, control_per
     planned d current, ``loss_aware`` the loss-aware rho*(t) (default ``LossAwareRho.for_plan(plan)``).
     ``lambda_ts`` replaces the rule's current-loop speed times Ts for every law (a sliding law's boundary layers,
     a baseline's current bandwidth; needs ``control_period``), and ``law_gains`` gives the law's gains by name over
-    its rule (:class:`~flatstep.control.build.BuildContext`). What each option adds is said by its law's
+    its rule (:class:`~flatstep.control.build.BuildContext`); ``angle_step`` is one count of the angle the law reads
+    [rad] (0: exact or unknown; the default controller's rule reads it). What each option adds is said by its law's
     ``from_spec``.
 
     Raises
@@ -69,6 +70,6 @@ def make_controller(kind: object, motor: MotorParams, plan: Plan, *, control_per
                            v_limit=v_limit, bandwidth_scale=bandwidth_scale, compute_delay=compute_delay,
                            torques=torques if spec.needs_torques and torques is not None else NO_TORQUES,
                            d_current=d_current, loss_aware=loss_aware, lambda_ts=lambda_ts,
-                           law_gains=dict(law_gains or {}))
+                           law_gains=dict(law_gains or {}), angle_step=angle_step)
     controller: AnyController = spec.build(context)
     return controller

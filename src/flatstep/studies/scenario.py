@@ -130,7 +130,9 @@ class Scenario:
                                compute_delay=loop.compute_delay if loop is not None else False,
                                torques=self.torques, d_current=self.d_current, loss_aware=self.loss_aware,
                                lambda_ts=self.lambda_ts,
-                               law_gains=(self.law_gains or {}).get(ControllerSpec.parse(self.controller_type).law))
+                               law_gains=(self.law_gains or {}).get(ControllerSpec.parse(self.controller_type).law),
+                               angle_step=loop.sensors.angle_step if loop is not None and loop.sensors is not None
+                               else 0.0)
 
     def feasibility(self) -> FeasibilityReport:
         """The plan checked against the controller's singularity; the load is unknown to the plan."""
