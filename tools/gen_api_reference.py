@@ -41,7 +41,7 @@ PUBLIC: dict[str, list[str]] = {
                 "studies.verify", "studies.backoff", "studies.identify", "studies.identify_coverage",
                 "studies.identify_result", "studies.excitation", "studies.record", "studies.calibrate",
                 "studies.executors", "studies.pullout", "studies.open_loop", "studies.tune", "studies.tune_laws",
-                "studies.frontier"],
+                "studies.frontier", "studies.held_out"],
     "interop": ["interop"],
     "validate": ["validate", "validate.limits", "validate.paths", "errors"],
 }
