@@ -396,33 +396,41 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
                fs_real switch_time, struct tod_shot *shot)
 {
     struct model md;
-    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt, guess;
+    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt, guess, kept_rate = 0,
+            kept_switch = 0;
     size_t n_acc = 0, n_b, k;
-    bool cruise = false, landed;
+    bool cruise = false, landed, kept;
     int dbl, tries;
     for (dbl = 0; dbl <= TOD_DOUBLINGS; dbl++, h *= 2) {
         if (!model_init(&md, m, v, i_max, cap, h))
             return false;
         md.end_rate = ramp_rate * md.rate;
-        landed = false;
-        prev = e_prev = (fs_real)NAN, guess = switch_time;
-        if (speed_up(&md, d, &shot->acc, &n_acc, &cruise))
+        landed = kept = false;
+        prev = e_prev = excess = (fs_real)NAN, guess = switch_time;
+        if (speed_up(&md, d, &shot->acc, &n_acc, &cruise)) {
             for (tries = 0; tries <= TOD_RAMP_TRIES; tries++) {
                 landed = land(&md, &shot->acc, n_acc, cruise, d, guess, &t_s, &shot->end);
                 if (!landed)
                     break;
                 guess = t_s;
                 excess = ramp_voltage(&md, &shot->end);
-                if (excess <= 1)
+                if (excess <= 1 && (excess >= TOD_RAMP_LOW || !(e_prev > 1) || kept))
                     break;
                 rate = md.end_rate;
+                if (excess <= 1)  // well within the bus after a fall: raised once, between the two
+                    kept = true, kept_rate = rate, kept_switch = guess;
                 if (fs_isfinite(e_prev) && excess != e_prev) {
                     nxt = rate + (TOD_RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev);
-                    nxt = fs_min(fs_max(nxt, FS_C(0.25) * rate), rate);
+                    nxt = fs_min(fs_max(nxt, FS_C(0.25) * rate), fs_max(rate, prev));
                 } else
                     nxt = rate * ((TOD_RAMP_SHARE / excess) * (TOD_RAMP_SHARE / excess));
                 prev = rate, e_prev = excess, md.end_rate = TOD_RAMP_AIM * nxt;
             }
+            if (kept && (!landed || !(excess <= 1))) {
+                md.end_rate = kept_rate;  // the raise left the bus: back to the rate within it
+                landed = land(&md, &shot->acc, n_acc, cruise, d, kept_switch, &t_s, &shot->end);
+            }
+        }
         if (!landed || !brake(&md, &shot->acc, n_acc, cruise, t_s, &shot->brk, &shot->end, &n_b))
             continue;
         excess = shot->end.theta1 + shot->end.omega1 * shot->end.tau / 3 - d;

@@ -12,6 +12,7 @@
 #define TOD_Q_RATE FS_C(0.97)      // of V / L, the current's rate of the approach to the cap and the ramp
 #define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
 #define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
+#define TOD_RAMP_LOW FS_C(0.97)    // of the bus, the ramp's voltage below which a fallen rate is raised once
 #define TOD_TOP_SHARE FS_C(0.999)  // of the top speed, the cruise speed where that speed is below the cap
 #define TOD_SETTLE                                  \
     (FS_C(1e-7) > 16 * FS_REAL_EPSILON ? FS_C(1e-7) \

@@ -88,6 +88,9 @@ RAMP_SHARE = 0.99
 RAMP_TRIES = 4
 #: Of the secant's rate, the one tried (a little below, so that the next try lands within the bus).
 RAMP_AIM = 0.995
+#: Of the bus, the ramp's voltage below which a rate that fell is raised once more (by the secant between the last
+#: rate beyond the bus and the one within it).
+RAMP_LOW = 0.97
 #: Of the top speed where no torque is left, the cruise speed when that speed is below the cap.
 TOP_SHARE = 0.999
 #: A cruise has settled when its speed and currents are this close to their targets, relatively.
@@ -499,8 +502,10 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
     ``ramp``: the terminal ramp's rate to start from, of :data:`Q_RATE` ``v / L``. Where the ramp would leave the
     bus (at its start or its end), its rate is set by the secant on the ramp's voltage towards :data:`RAMP_SHARE`
     of the bus (the first step scales it by the square of the excess) and the switch is found again, at most
-    :data:`RAMP_TRIES` times; the shot keeps the rate (the planner starts its next shot from it). ``switch``: a
-    switch time to start the root finder from (the planner's former shot's; each landing starts from the last).
+    :data:`RAMP_TRIES` times; a rate that fell below :data:`RAMP_LOW` of the bus is raised once by the secant (and
+    kept where the raise leaves the bus); the shot keeps the rate (the planner starts its next shot from it).
+    ``switch``: a switch time to start the root finder from (the planner's former shot's; each landing starts from
+    the last).
     """
     h = motor.L * i_max / v / STEPS
     for _ in range(DOUBLINGS + 1):
@@ -512,22 +517,28 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
         landed = None
         if up is not None:
             acc, n_acc, cruise = up
-            prev, e_prev, guess = math.nan, math.nan, switch
+            prev, e_prev, guess, excess = math.nan, math.nan, switch, math.nan
+            kept: Optional[tuple[float, float]] = None  # a rate and switch within the bus, before a raise
             for _ in range(RAMP_TRIES + 1):
                 landed = _land(md, acc, n_acc, cruise, d, guess)
                 if landed is None:
                     break
                 guess = landed[0]
                 excess = ramp_voltage(md, landed[1])
-                if excess <= 1.0:
+                if excess <= 1.0 and (excess >= RAMP_LOW or not e_prev > 1.0 or kept is not None):
                     break
                 rate = md.end_rate
+                if excess <= 1.0:  # well within the bus after a fall: raised once, between the two
+                    kept = (rate, guess)
                 if math.isfinite(e_prev) and excess != e_prev:
                     nxt = rate + (RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev)
-                    nxt = min(max(nxt, 0.25 * rate), rate)
+                    nxt = min(max(nxt, 0.25 * rate), max(rate, prev))
                 else:
                     nxt = rate * (RAMP_SHARE / excess) ** 2
                 prev, e_prev, md.end_rate = rate, excess, RAMP_AIM * nxt
+            if kept is not None and (landed is None or not excess <= 1.0):
+                md.end_rate = kept[0]  # the raise left the bus: back to the rate within it
+                landed = _land(md, acc, n_acc, cruise, d, kept[1])
         if landed is None:
             h *= 2.0
             continue
