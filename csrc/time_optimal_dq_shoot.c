@@ -85,7 +85,8 @@ static void target(const struct model *md, fs_real w, bool braking, fs_real lead
 static void next_target(const struct model *md, const struct state *s, bool braking, fs_real t[2])
 {
     fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J,
-            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * fs_min(md->rho / TOD_RHO_FULL, 1);
+            share = fs_min(fs_min(md->rho / TOD_RHO_FULL, (TOD_RHO_END - md->rho) / FS_C(0.1)), 1),
+            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * fs_max(share, 0);
     target(md, s->w + md->h * alpha, braking, md->tc * alpha, ahead * md->tc * fs_max(alpha, 0), t);
 }
 
