@@ -12,7 +12,13 @@ voltage that brings the current to its target with the time constant :math:`T_c`
 the bus (as a drive's current loop saturates); the target moves linearly within each step (the currents' rates
 stay continuous, so that a cubic and a degree-7 fit follow them). The target is the envelope's best current
 (:func:`~flatstep.plan.time_optimal_dq_envelope.best_currents`) at the speed each step ends at: the top of the two
-discs while speeding up, the bottom while braking. Speeding up, the torque current is held to
+discs while speeding up, the bottom while braking. Where the bus limits the whole move (the resistive share
+:math:`\rho = R i_{max}/V` large), the currents go beyond the steady envelope on the inductance's transient, as the
+optimum's do (the collocation yardstick, :mod:`flatstep.bench.collocation`): speeding up, the d target is the
+envelope's at the speed :data:`AHEAD` :math:`T_c` ahead (the field weakened before the speed needs it; in full
+for :math:`\rho` from :data:`RHO_FULL` to 0.5, in proportion below, none from :data:`RHO_END`); braking, the
+envelope's bus disc is scaled by up to :math:`1 +` :data:`BRAKE_REACH` (from :math:`\rho` = :data:`REACH_FROM`
+on), so that the voltage stays on the bus. Speeding up, the torque current is held to
 :math:`i_q^* \le B W/K_m + g(W - \omega)` so that the speed meets the cap :math:`W` at the current's rate
 :data:`Q_RATE` :math:`V/L` (:math:`g` the square root of the time-optimal approach, linear within a small band so
 that the cruise settles).
@@ -23,8 +29,10 @@ braking current meets the switching curve :math:`-i_q = \sqrt{2 Q_{RATE}(V/L)(J/
 fraction where the interpolated distance to the curve is 0, integrated from the step's start), a short bridge
 takes the jerk and the d current's rate linearly to the ramp's (so that the voltage passes between the two sides',
 within the bus), then the acceleration falls linearly to 0 over :math:`\tau = -2\omega/\dot\omega` and the speed
-with it, to rest, and :math:`i_d` linearly to 0. Where the ramp would leave the bus (at its start or its end), its
-rate falls (:func:`shoot`).
+with it, to rest, and :math:`i_d` to 0 as a quadratic whose start rate is the share :math:`c` of the linear one
+(:func:`ramp_share`: 1 unless the start's voltage is above the end's; then the two are balanced, so that a braking
+current beyond the envelope leaves its d current later). Where the ramp would leave the bus (at its start or its
+end), its rate falls, and a rate that fell far within it is raised once (:func:`shoot`).
 
 The speeding-up phase is integrated once, until it settles at the cap (a cruise: the state then constant but the
 angle) or passes the distance. The braking phase starts from it at the switch time :math:`t_s`; its end angle rises
