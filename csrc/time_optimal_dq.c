@@ -64,7 +64,7 @@ static void samples(const struct motor_params *m, const struct tod_shot *sh, fs_
     const struct tod_phase *a = &sh->acc, *b = &sh->brk;
     const struct tod_end *e = &sh->end;
     size_t i, na = sh->n_acc, nb = sh->n_brake, last;
-    fs_real did, diq, alpha1, jerk, ramp_d, t;
+    fs_real did, diq, alpha1, jerk, ramp_d, rest_d, t;
     s->n = 0;
     for (i = 0; i < na; i++) {
         rates(m, sh, a->omega[i], a->i_d[i], a->i_q[i], a->t_d[i], a->t_q[i], &did, &diq);
@@ -73,16 +73,18 @@ static void samples(const struct motor_params *m, const struct tod_shot *sh, fs_
     }
     for (i = 0; i < nb; i++) {
         rates(m, sh, b->omega[i], b->i_d[i], b->i_q[i], b->t_d[i], b->t_q[i], &did, &diq);
-        push(s, tod_brake_time(sh->t_s, sh->h, i), b->theta[i], b->omega[i], b->i_d[i], b->i_q[i], did, diq, i == 0);
+        push(s, tod_brake_time(sh->t_s, sh->h, i), b->theta[i], b->omega[i], b->i_d[i], b->i_q[i], did, diq,
+             i == 0 || i == TOD_SWITCH);
     }
     rates(m, sh, e->omega, e->i_d, e->i_q, e->t_d, e->t_q, &did, &diq);
     push(s, e->t, e->theta, e->omega, e->i_d, e->i_q, did, diq, true);
     alpha1 = (m->Km * e->i_q1 - m->B * e->omega1) / m->J;
     jerk = e->tau > 0 ? -alpha1 / e->tau : 0;
-    ramp_d = e->tau > 0 ? -e->i_d1 / e->tau : 0;
+    ramp_d = e->tau > 0 ? -e->d_share * e->i_d1 / e->tau : 0;
+    rest_d = e->tau > 0 ? -(2 - e->d_share) * e->i_d1 / e->tau : 0;
     push(s, e->t + e->bridge, e->theta1, e->omega1, e->i_d1, e->i_q1, ramp_d, (m->J * jerk + m->B * alpha1) / m->Km,
          true);
-    push(s, e->t + e->bridge + e->tau, d, 0, 0, 0, ramp_d, m->J * jerk / m->Km, true);
+    push(s, e->t + e->bridge + e->tau, d, 0, 0, 0, rest_d, m->J * jerk / m->Km, true);
     // drop the close ones in place
     for (last = 0, i = 1; i < s->n; i++) {
         t = s->t[last];

@@ -17,7 +17,8 @@ enum {
     TOD_MAX_STEPS = 512,                  // steps of one phase, at most (more double the step)
     TOD_DOUBLINGS = 8,                    // doublings of the step, at most
     TOD_ROOT = 48,                        // braking phases tried by the root finder on the switch time, at most
-    TOD_SWITCH = 5,                       // steps over which the target passes from speeding up to braking
+    TOD_SWITCH = 4,                       // steps over which the target passes from speeding up to braking
+    TOD_SHARE_HALVINGS = 24,              // halvings of the bisection on the terminal ramp's d share
     TOD_RAMP_TRIES = 4,                   // times the terminal ramp's rate may fall
     TOD_SHRINKS = 6,                      // shots after the first, at most
     TOD_KNOTS = 62,                       // knots picked by the measure (besides the kept ones)

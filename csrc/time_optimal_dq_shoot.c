@@ -7,7 +7,7 @@
 struct model {
     const struct motor_params *m;
     fs_real R, L, Km, J, B, Nr;
-    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rate, end_rate, cap, hold, band;
+    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rho, rate, end_rate, cap, hold, band;
 };
 
 // A state: theta, omega, i_d, i_q.
@@ -28,6 +28,7 @@ static bool model_init(struct model *md, const struct motor_params *m, fs_real v
     if (!(fs_isfinite(md->lk) && md->lk > 0))
         return false;
     md->tc = m->L / md->lk;
+    md->rho = m->R * i_max / v;  // the resistive share of the bus
     md->rate = TOD_Q_RATE * v / m->L * (m->J / m->Km);
     md->end_rate = md->rate;
     top = tod_top_speed(m, v, i_max, cap);
@@ -61,12 +62,14 @@ static void deriv(const struct model *md, fs_real id, fs_real iq, fs_real w, fs_
     out[2] = (md->Km * iq - md->B * w) * md->inv_j;
 }
 
-// Returns nothing; writes the target at speed w (braking: the envelope's bottom; else its top, held to the cap's
-// approach, which counts lead [rad/s] more for the current's lag).
-static void target(const struct model *md, fs_real w, bool braking, fs_real lead, fs_real t[2])
+// Returns nothing; writes the target at speed w (braking: the bottom of the envelope with its bus disc scaled by
+// 1 + 2 (rho - TOD_REACH_FROM) within [1, 1 + TOD_BRAKE_REACH], rho = R i_max / V; else its top, held to the cap's approach, which counts lead [rad/s] more for the current's lag,
+// its d current the envelope's at w + ahead where that weakens more).
+static void target(const struct model *md, fs_real w, bool braking, fs_real lead, fs_real ahead, fs_real t[2])
 {
-    fs_real c[4], e, g;
-    if (!tod_best_currents(md->m, fs_min(fs_max(w, 0), md->cap), md->v, md->i_max, c))
+    fs_real c[4], c2[4], e, g,
+        reach = braking ? 1 + fs_min(fs_max(2 * (md->rho - TOD_REACH_FROM), 0), TOD_BRAKE_REACH) : 1;
+    if (!tod_best_currents(md->m, fs_min(fs_max(w, 0), md->cap), reach * md->v, md->i_max, c))
         c[0] = c[1] = c[2] = c[3] = 0;
     if (braking) {
         t[0] = c[2], t[1] = c[3];
@@ -75,12 +78,16 @@ static void target(const struct model *md, fs_real w, bool braking, fs_real lead
     e = md->cap - w - lead;
     g = e >= md->band ? fs_sqrt(2 * md->rate * e) : e * fs_sqrt(2 * md->rate / md->band);
     t[0] = c[0], t[1] = fs_min(c[1], md->hold + g);
+    if (ahead > 0 && tod_best_currents(md->m, fs_min(fs_max(w + ahead, 0), md->cap), md->v, md->i_max, c2))
+        t[0] = fs_min(t[0], c2[0]);
 }
 
 static void next_target(const struct model *md, const struct state *s, bool braking, fs_real t[2])
 {
-    fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J;
-    target(md, s->w + md->h * alpha, braking, md->tc * alpha, t);
+    fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J,
+            share = fs_min(fs_min(md->rho / TOD_RHO_FULL, (TOD_RHO_END - md->rho) / FS_C(0.1)), 1),
+            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * fs_max(share, 0);
+    target(md, s->w + md->h * alpha, braking, md->tc * alpha, ahead * md->tc * fs_max(alpha, 0), t);
 }
 
 // Returns the state RK4 takes s to over f h, the target moving from t0 towards t1 (reached at a full step).
@@ -116,7 +123,7 @@ static bool speed_up(const struct model *md, fs_real d, const struct tod_phase *
     struct state s = {0, 0, 0, 0};
     fs_real tg[2], nxt[2];
     size_t k;
-    target(md, 0, false, 0, tg);
+    target(md, 0, false, 0, 0, tg);
     for (k = 0; k <= TOD_MAX_STEPS; k++) {
         a->theta[k] = s.th, a->omega[k] = s.w, a->i_d[k] = s.id, a->i_q[k] = s.iq, a->t_d[k] = tg[0], a->t_q[k] = tg[1];
         if (s.th >= d) {
@@ -138,12 +145,48 @@ static bool speed_up(const struct model *md, fs_real d, const struct tod_phase *
     return false;
 }
 
+// Returns nothing; writes the terminal ramp's voltage [V] at its start and at rest, from (w, id, iq) over tau, its
+// d current's rate at the start c of -id / tau (time_optimal_dq_shoot.ramp_ends).
+static void ramp_ends(const struct model *md, fs_real w, fs_real id, fs_real iq, fs_real tau, fs_real c, fs_real out[2])
+{
+    fs_real a = (md->Km * iq - md->B * w) / md->J, jerk = -a / tau, diq, x, vd, vq, end_d, end_q;
+    diq = (md->J * jerk + md->B * a) / md->Km;
+    x = md->Nr * w * md->L;
+    vd = md->R * id - x * iq - md->L * c * id / tau;
+    vq = md->R * iq + x * id + md->Km * w + md->L * diq;
+    end_d = (2 - c) * id / tau, end_q = md->J * jerk / md->Km;
+    out[0] = fs_sqrt(vd * vd + vq * vq), out[1] = md->L * fs_sqrt(end_d * end_d + end_q * end_q);
+}
+
+// Returns the terminal ramp's d share in [0, 1]: 1 unless its start's voltage is above its end's, then the share
+// where the two are equal (bisection), or 0 (time_optimal_dq_shoot.ramp_share).
+static fs_real ramp_share(const struct model *md, fs_real w, fs_real id, fs_real iq, fs_real tau)
+{
+    fs_real v[2], lo = 0, hi = 1, mid;
+    int k;
+    ramp_ends(md, w, id, iq, tau, 1, v);
+    if (v[0] <= v[1])
+        return 1;
+    ramp_ends(md, w, id, iq, tau, 0, v);
+    if (v[0] >= v[1])
+        return 0;
+    for (k = 0; k < TOD_SHARE_HALVINGS; k++) {
+        mid = FS_C(0.5) * (lo + hi);
+        ramp_ends(md, w, id, iq, tau, mid, v);
+        if (v[0] < v[1])
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 // Returns the bridge from s at t and the terminal ramp after it (time_optimal_dq_shoot._ramp).
 static struct tod_end ramp(const struct model *md, fs_real t, const struct state *s, const fs_real tg[2])
 {
     struct tod_end e = {t, s->th, fs_max(s->w, 0), s->id, s->iq, tg[0], tg[1],
-                        0, s->th, fs_max(s->w, 0), s->id, s->iq, 0};
-    fs_real a0 = (md->Km * s->iq - md->B * s->w) / md->J, tau0, dt, r[3], j_l, j_r, a1, w1;
+                        0, s->th, fs_max(s->w, 0), s->id, s->iq, 0,     1};
+    fs_real a0 = (md->Km * s->iq - md->B * s->w) / md->J, tau0, dt, r[3], j_l, j_r, a1, w1, c;
     if (!(a0 < 0 && s->w > 0))
         return e;
     tau0 = -2 * s->w / a0;
@@ -160,7 +203,9 @@ static struct tod_end ramp(const struct model *md, fs_real t, const struct state
     e.bridge = dt;
     e.theta1 = s->th + s->w * dt + a0 * dt * dt / 2 + (j_l / 8 + j_r / 24) * (dt * dt * dt);
     e.omega1 = fs_max(w1, 0);
-    e.i_d1 = s->id + FS_C(0.5) * (r[0] - s->id / tau0) * dt;
+    c = ramp_share(md, s->w, s->id, s->iq, tau0);
+    e.d_share = c;
+    e.i_d1 = s->id + FS_C(0.5) * (r[0] - c * s->id / tau0) * dt;
     e.i_q1 = (md->J * a1 + md->B * w1) / md->Km;
     e.tau = a1 < 0 && w1 > 0 ? -2 * w1 / a1 : 0;
     return e;
@@ -252,19 +297,11 @@ static bool brake(const struct model *md, const struct tod_phase *a, size_t n_ac
 // Returns the largest voltage of the terminal ramp over the bus: at its start and at its end.
 static fs_real ramp_voltage(const struct model *md, const struct tod_end *e)
 {
-    fs_real a1, did, jerk, diq, x, vd, vq, start, end, q;
+    fs_real v[2];
     if (!(e->tau > 0))
         return 0;
-    a1 = (md->Km * e->i_q1 - md->B * e->omega1) / md->J;
-    did = -e->i_d1 / e->tau, jerk = -a1 / e->tau;
-    diq = (md->J * jerk + md->B * a1) / md->Km;
-    x = md->Nr * e->omega1 * md->L;
-    vd = md->R * e->i_d1 - x * e->i_q1 + md->L * did;
-    vq = md->R * e->i_q1 + x * e->i_d1 + md->Km * e->omega1 + md->L * diq;
-    start = fs_sqrt(vd * vd + vq * vq);
-    q = md->J * jerk / md->Km;
-    end = md->L * fs_sqrt(did * did + q * q);
-    return fs_max(start, end) / md->v;
+    ramp_ends(md, e->omega1, e->i_d1, e->i_q1, e->tau, e->d_share, v);
+    return fs_max(v[0], v[1]) / md->v;
 }
 
 // The root finder's bracket on the switch time: its ends, their misses of the distance, and the time last
@@ -360,33 +397,41 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
                fs_real switch_time, struct tod_shot *shot)
 {
     struct model md;
-    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt, guess;
+    fs_real h = m->L * i_max / v / TOD_STEPS, t_s = 0, excess, rate, prev, e_prev, nxt, guess, kept_rate = 0,
+            kept_switch = 0;
     size_t n_acc = 0, n_b, k;
-    bool cruise = false, landed;
+    bool cruise = false, landed, kept;
     int dbl, tries;
     for (dbl = 0; dbl <= TOD_DOUBLINGS; dbl++, h *= 2) {
         if (!model_init(&md, m, v, i_max, cap, h))
             return false;
         md.end_rate = ramp_rate * md.rate;
-        landed = false;
-        prev = e_prev = (fs_real)NAN, guess = switch_time;
-        if (speed_up(&md, d, &shot->acc, &n_acc, &cruise))
+        landed = kept = false;
+        prev = e_prev = excess = (fs_real)NAN, guess = switch_time;
+        if (speed_up(&md, d, &shot->acc, &n_acc, &cruise)) {
             for (tries = 0; tries <= TOD_RAMP_TRIES; tries++) {
                 landed = land(&md, &shot->acc, n_acc, cruise, d, guess, &t_s, &shot->end);
                 if (!landed)
                     break;
                 guess = t_s;
                 excess = ramp_voltage(&md, &shot->end);
-                if (excess <= 1)
+                if (excess <= 1 && (excess >= TOD_RAMP_LOW || !(e_prev > 1) || kept))
                     break;
                 rate = md.end_rate;
+                if (excess <= 1)  // well within the bus after a fall: raised once, between the two
+                    kept = true, kept_rate = rate, kept_switch = guess;
                 if (fs_isfinite(e_prev) && excess != e_prev) {
                     nxt = rate + (TOD_RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev);
-                    nxt = fs_min(fs_max(nxt, FS_C(0.25) * rate), rate);
+                    nxt = fs_min(fs_max(nxt, FS_C(0.25) * rate), fs_max(rate, prev));
                 } else
                     nxt = rate * ((TOD_RAMP_SHARE / excess) * (TOD_RAMP_SHARE / excess));
                 prev = rate, e_prev = excess, md.end_rate = TOD_RAMP_AIM * nxt;
             }
+            if (kept && (!landed || !(excess <= 1))) {
+                md.end_rate = kept_rate;  // the raise left the bus: back to the rate within it
+                landed = land(&md, &shot->acc, n_acc, cruise, d, kept_switch, &t_s, &shot->end);
+            }
+        }
         if (!landed || !brake(&md, &shot->acc, n_acc, cruise, t_s, &shot->brk, &shot->end, &n_b))
             continue;
         excess = shot->end.theta1 + shot->end.omega1 * shot->end.tau / 3 - d;

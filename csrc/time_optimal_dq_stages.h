@@ -12,6 +12,7 @@
 #define TOD_Q_RATE FS_C(0.97)      // of V / L, the current's rate of the approach to the cap and the ramp
 #define TOD_RAMP_SHARE FS_C(0.99)  // of the bus, the voltage the terminal ramp's rate aims at where it would leave it
 #define TOD_RAMP_AIM FS_C(0.995)   // of the secant's ramp rate, the one tried
+#define TOD_RAMP_LOW FS_C(0.97)    // of the bus, the ramp's voltage below which a fallen rate is raised once
 #define TOD_TOP_SHARE FS_C(0.999)  // of the top speed, the cruise speed where that speed is below the cap
 #define TOD_SETTLE                                  \
     (FS_C(1e-7) > 16 * FS_REAL_EPSILON ? FS_C(1e-7) \
@@ -24,7 +25,12 @@
     (FS_C(1e-15) > FS_REAL_EPSILON ? FS_C(1e-15) \
                                    : FS_REAL_EPSILON)  // the bracket on the switch time stops this narrow, relatively
 #define TOD_LAND_TOL (FS_C(1e-6) > 64 * FS_REAL_EPSILON ? FS_C(1e-6) : 64 * FS_REAL_EPSILON)  // a shot lands this close
-#define TOD_BRIDGE FS_C(0.05)  // of a step, the bridge from the braking rates to the ramp's
+#define TOD_BRIDGE FS_C(0.05)      // of a step, the bridge from the braking rates to the ramp's
+#define TOD_AHEAD FS_C(3.0)        // speeding up, the d target looks this many time constants T_c ahead
+#define TOD_RHO_FULL FS_C(0.4)     // the resistive share R i_max / V from which the look-ahead is in full
+#define TOD_RHO_END FS_C(0.6)      // ... and above which it is not (falling linearly over the last 0.1 before it)
+#define TOD_BRAKE_REACH FS_C(0.5)  // braking, the target's bus disc scaled by at most 1 + this
+#define TOD_REACH_FROM FS_C(0.2)   // ... and by 1 + 2 (R i_max / V - this) below
 
 // time_optimal_dq_envelope.c
 // Returns true when the discs meet at speed w and writes (i_d+, i_q+, i_d-, i_q-) into c.
@@ -45,10 +51,10 @@ struct tod_phase {
     fs_real *theta, *omega, *i_d, *i_q, *t_d, *t_q;
 };
 
-// The end of the braking phase: the bridge's start (time, state, braking target), its length, the ramp's start
-// and its duration.
+// The end of the braking phase: the bridge's start (time, state, braking target), its length, the ramp's start,
+// its duration and its d share (the d current's rate at the start, of -i_d1 / tau; at rest 2 - d_share of it).
 struct tod_end {
-    fs_real t, theta, omega, i_d, i_q, t_d, t_q, bridge, theta1, omega1, i_d1, i_q1, tau;
+    fs_real t, theta, omega, i_d, i_q, t_d, t_q, bridge, theta1, omega1, i_d1, i_q1, tau, d_share;
 };
 
 // The shot move (time_optimal_dq_shoot.Shot).

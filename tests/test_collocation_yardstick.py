@@ -31,18 +31,17 @@ def _limits(v_bus):
 
 
 #: flatstep / optimum of the field-weakening planner where it misses its bound (benchmarks/field_weakening_optimum.py,
-#: grid 200), and why: at 12 V (R i_max is 41 % of the bus) the bus limits the whole move, and the optimum drives
-#: the currents beyond the steady-state envelope (the inductance's transient: it speeds up and brakes harder than
-#: any current it could hold at that speed) where the planner's policy steers them to the envelope's best current
-FW_MISSES = {(12.0, 0.3): 1.100, (12.0, 1.0): 1.054}
+#: grid 200), each marked a strict expected failure with its ratio: none since the policy weakens ahead and brakes
+#: beyond the steady envelope where the bus limits the whole move (NEMA 17 at 12 V, 0.3 and 1 rad, were 1.100 and
+#: 1.054 before; docs/planning.md section 8)
+FW_MISSES: dict[tuple[float, float], float] = {}
 
 
 def _case(v_bus, distance):
     ratio = FW_MISSES.get((v_bus, distance))
     if not FW_PLANNER or ratio is None:
         return pytest.param(v_bus, distance)
-    why = (f"measured {ratio:.3f}x the optimum: the policy steers to the steady-state envelope where the bus "
-           "limits the whole move, at 12 V (docs/planning.md section 8)")
+    why = f"measured {ratio:.3f}x the optimum (docs/planning.md section 8)"
     return pytest.param(v_bus, distance, marks=pytest.mark.xfail(strict=True, reason=why))
 
 

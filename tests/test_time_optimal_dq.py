@@ -17,7 +17,7 @@ from flatstep.plan.time_optimal_dq import plan_dq_move, speed_cap, time_optimal_
 from flatstep.plan.time_optimal_dq_c import plan_raw
 from flatstep.plan.time_optimal_dq_envelope import best_currents, dq_envelope
 from flatstep.plan.time_optimal_dq_profile import dq_fit
-from flatstep.plan.time_optimal_dq_shoot import _Model, ramp_voltage, shoot
+from flatstep.plan.time_optimal_dq_shoot import RAMP_LOW, _Model, ramp_ends, ramp_voltage, shoot
 from flatstep.studies.verify import drive_loop
 
 NEMA17 = MotorParams.preset("nema17")
@@ -73,6 +73,51 @@ def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
     again = shoot(0.3, NEMA17, v, 0.995, cap, shot.ramp)  # from the found rate: no further fall
     assert again is not None and again.ramp == shot.ramp
     assert again.end.t_end == pytest.approx(shot.end.t_end, rel=1e-9)  # (the root finder's tolerance)
+
+
+def test_terminal_ramp_ends_near_the_bus_with_its_d_share_balancing_start_and_end() -> None:
+    lim = limits(12.0)
+    v = 0.98 * lim.v_use * lim.v_bus
+    cap = 0.995 * speed_cap(NEMA17, lim, 20000.0)
+    shot = shoot(0.3, NEMA17, v, 0.995, cap)
+    assert shot is not None
+    md = _Model(NEMA17, v, 0.995, cap, shot.h)
+    md.end_rate = shot.ramp * md.rate
+    assert RAMP_LOW <= ramp_voltage(md, shot.end) <= 1.0  # the fallen rate raised once, within the bus
+    e = shot.end
+    assert 0.0 <= e.d_share < 1.0  # the braking current beyond the envelope: the d current leaves later
+    start, end = ramp_ends(md, e.omega1, e.i_d1, e.i_q1, e.tau, e.d_share)
+    assert start == pytest.approx(end, rel=0.02)  # balanced at the bridge's start; the bridge moves it a little
+    linear_start, _ = ramp_ends(md, e.omega1, e.i_d1, e.i_q1, e.tau, 1.0)
+    assert linear_start > start
+
+
+@pytest.mark.parametrize("v_bus,beyond", [(12.0, True), (24.0, False)])
+def test_braking_target_beyond_the_envelope_only_where_the_bus_binds_the_whole_move(v_bus: float,
+                                                                                    beyond: bool) -> None:
+    lim = limits(v_bus)
+    v = 0.98 * lim.v_use * lim.v_bus  # R i_max / V: 0.41 at 12 V, 0.20 at 24 V
+    md = _Model(NEMA17, v, 0.995, speed_cap(NEMA17, lim, 20000.0), 1e-5)
+    for w in (30.0, 50.0, 70.0):
+        t_d, t_q = md.target(w, True)
+        steady = best_currents(w, NEMA17, v, 0.995)
+        assert math.hypot(t_d, t_q) <= 0.995 * (1 + 1e-12)
+        if beyond:
+            assert t_q < steady[3] - 0.02
+        else:
+            assert abs(t_q - steady[3]) < 0.01  # R i_max / V 0.21: the disc scaled by 1.01
+
+
+def test_speeding_up_weakens_ahead_of_the_steady_envelope_at_12_v() -> None:
+    lim = limits(12.0)
+    v = 0.98 * lim.v_use * lim.v_bus
+    shot = shoot(1.0, NEMA17, v, 0.995, 0.995 * speed_cap(NEMA17, lim, 20000.0))
+    assert shot is not None
+    a = shot.accel
+    steady = np.array([best_currents(float(w), NEMA17, v, 0.995)[0] for w in a.omega[:shot.n_acc]])
+    ahead = a.t_d[:shot.n_acc] - steady
+    assert np.all(ahead <= 1e-12)  # never less weakening than the envelope's
+    assert np.min(ahead) < -0.3  # and well ahead of it where the envelope's d current starts to fall
 
 
 def test_the_switch_guess_lands_where_the_whole_bracket_does() -> None:

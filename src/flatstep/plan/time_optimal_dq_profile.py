@@ -22,7 +22,7 @@ from ..model.motor import MotorParams
 from .d_current import hermite_cubic
 from .piecewise import horner_rows
 from .segments import hermite_rows
-from .time_optimal_dq_shoot import Shot
+from .time_optimal_dq_shoot import SWITCH, Shot
 
 Array = NDArray[np.float64]
 #: Samples per segment of the margin check (tau = j / CHECK, and the end).
@@ -93,15 +93,18 @@ def samples(shot: Shot, d: float, m: MotorParams) -> Samples:
         keep[na - 1] = True
     if nb:
         keep[na] = True  # the switch
+    if nb > SWITCH:
+        keep[na + SWITCH] = True  # the end of the target's passage to braking (the rates turn there)
     # the bridge's start (the braking rates), the ramp's start and the end at rest (module docstring)
     r_d, r_q = _rates(m, shot.v, shot.gain, np.array([[e.theta], [e.omega], [e.i_d], [e.i_q]]),
                       np.array([[e.t_d], [e.t_q]]))
     alpha1 = (m.Km * e.i_q1 - m.B * e.omega1) / m.J
     jerk = -alpha1 / e.tau if e.tau > 0 else 0.0
-    ramp_d = -e.i_d1 / e.tau if e.tau > 0 else 0.0
+    ramp_d = -e.d_share * e.i_d1 / e.tau if e.tau > 0 else 0.0
+    rest_d = -(2.0 - e.d_share) * e.i_d1 / e.tau if e.tau > 0 else 0.0
     tt = np.concatenate([tt, [e.t, e.t + e.bridge, e.t_end]])
     s = np.column_stack([s, [e.theta, e.omega, e.i_d, e.i_q], [e.theta1, e.omega1, e.i_d1, e.i_q1], [d, 0.0, 0.0, 0.0]])
-    did = np.concatenate([did, r_d, [ramp_d, ramp_d]])
+    did = np.concatenate([did, r_d, [ramp_d, rest_d]])
     diq = np.concatenate([diq, r_q, [(m.J * jerk + m.B * alpha1) / m.Km, m.J * jerk / m.Km]])
     keep = np.concatenate([keep, [True, True, True]])
     # a sample closer than CLOSE h to the one before is dropped (a kept one replaces one not kept, the end any)

@@ -12,7 +12,13 @@ voltage that brings the current to its target with the time constant :math:`T_c`
 the bus (as a drive's current loop saturates); the target moves linearly within each step (the currents' rates
 stay continuous, so that a cubic and a degree-7 fit follow them). The target is the envelope's best current
 (:func:`~flatstep.plan.time_optimal_dq_envelope.best_currents`) at the speed each step ends at: the top of the two
-discs while speeding up, the bottom while braking. Speeding up, the torque current is held to
+discs while speeding up, the bottom while braking. Where the bus limits the whole move (the resistive share
+:math:`\rho = R i_{max}/V` large), the currents go beyond the steady envelope on the inductance's transient, as the
+optimum's do (the collocation yardstick, :mod:`flatstep.bench.collocation`): speeding up, the d target is the
+envelope's at the speed :data:`AHEAD` :math:`T_c` ahead (the field weakened before the speed needs it; in full
+for :math:`\rho` from :data:`RHO_FULL` to 0.5, in proportion below, none from :data:`RHO_END`); braking, the
+envelope's bus disc is scaled by up to :math:`1 +` :data:`BRAKE_REACH` (from :math:`\rho` = :data:`REACH_FROM`
+on), so that the voltage stays on the bus. Speeding up, the torque current is held to
 :math:`i_q^* \le B W/K_m + g(W - \omega)` so that the speed meets the cap :math:`W` at the current's rate
 :data:`Q_RATE` :math:`V/L` (:math:`g` the square root of the time-optimal approach, linear within a small band so
 that the cruise settles).
@@ -23,8 +29,10 @@ braking current meets the switching curve :math:`-i_q = \sqrt{2 Q_{RATE}(V/L)(J/
 fraction where the interpolated distance to the curve is 0, integrated from the step's start), a short bridge
 takes the jerk and the d current's rate linearly to the ramp's (so that the voltage passes between the two sides',
 within the bus), then the acceleration falls linearly to 0 over :math:`\tau = -2\omega/\dot\omega` and the speed
-with it, to rest, and :math:`i_d` linearly to 0. Where the ramp would leave the bus (at its start or its end), its
-rate falls (:func:`shoot`).
+with it, to rest, and :math:`i_d` to 0 as a quadratic whose start rate is the share :math:`c` of the linear one
+(:func:`ramp_share`: 1 unless the start's voltage is above the end's; then the two are balanced, so that a braking
+current beyond the envelope leaves its d current later). Where the ramp would leave the bus (at its start or its
+end), its rate falls, and a rate that fell far within it is raised once (:func:`shoot`).
 
 The speeding-up phase is integrated once, until it settles at the cap (a cruise: the state then constant but the
 angle) or passes the distance. The braking phase starts from it at the switch time :math:`t_s`; its end angle rises
@@ -55,7 +63,24 @@ MAX_STEPS = 512
 #: The current's time constant under the policy, in current rise times (the fit follows it between knots).
 LAG = 0.5
 #: Steps over which the target passes from the speeding-up one to the braking one at the switch.
-SWITCH = 5
+SWITCH = 4
+#: Speeding up, the d target is the envelope's at the speed the acceleration adds over this many time constants
+#: T_c ahead, where that weakens more (the d current takes about that long to get there), in full where the
+#: resistive share of the bus :math:`\rho = R i_{max}/V` is at least :data:`RHO_FULL` (less in proportion below),
+#: and not where it is above :data:`RHO_END` (the d current's own resistive drop then eats the voltage it saves:
+#: measured on the Sanyo 103H5208, :math:`\rho` 0.67 and 1.33, 0.1-1.9 % slower with it), falling linearly over
+#: the last 0.1 before it.
+AHEAD = 3.0
+RHO_FULL = 0.4
+RHO_END = 0.6
+#: Braking, the target is the bottom of the envelope with its bus disc scaled by
+#: :math:`1 + \min(\max(2(\rho - \rho_0), 0), r)`, :math:`\rho_0` = :data:`REACH_FROM`, r = :data:`BRAKE_REACH`:
+#: beyond the steady envelope, so that the voltage stays on the bus while the current's transient carries it there,
+#: where the bus binds the whole move (the resistance takes much of it); the steady envelope where it does not.
+BRAKE_REACH = 0.5
+REACH_FROM = 0.2
+#: Halvings of the bisection on the terminal ramp's d rate share.
+SHARE_HALVINGS = 24
 #: Doublings of the step, at most (``TOD_DOUBLINGS``).
 DOUBLINGS = 8
 #: Braking phases tried by the root finder on the switch time, at most (``TOD_ROOT``).
@@ -75,6 +100,9 @@ RAMP_SHARE = 0.99
 RAMP_TRIES = 4
 #: Of the secant's rate, the one tried (a little below, so that the next try lands within the bus).
 RAMP_AIM = 0.995
+#: Of the bus, the ramp's voltage below which a rate that fell is raised once more (by the secant between the last
+#: rate beyond the bus and the one within it).
+RAMP_LOW = 0.97
 #: Of the top speed where no torque is left, the cruise speed when that speed is below the cap.
 TOP_SHARE = 0.999
 #: A cruise has settled when its speed and currents are this close to their targets, relatively.
@@ -96,7 +124,7 @@ class End(NamedTuple):
     """The end of the braking phase, at rest.
 
     The bridge's start (time, state, the braking target there), its length, the ramp's start (theta, omega, i_d,
-    i_q) and the ramp's duration.
+    i_q), the ramp's duration and its d share :math:`c` (:func:`ramp_share`).
     """
 
     t: float
@@ -112,6 +140,7 @@ class End(NamedTuple):
     i_d1: float
     i_q1: float
     tau: float
+    d_share: float
 
     @property
     def angle(self) -> float:
@@ -147,7 +176,7 @@ class _Model:
         self.R, self.L, self.Km, self.J, self.B, self.Nr = m.R, m.L, m.Km, m.J, m.B, float(m.Nr)
         self.m, self.v, self.i_max, self.h = m, v, i_max, h
         self.inv_l, self.inv_j = 1.0 / m.L, 1.0 / m.J
-        self.lk = self.tc = self.rate = self.end_rate = self.cap = self.hold = self.band = math.nan
+        self.lk = self.tc = self.rho = self.rate = self.end_rate = self.cap = self.hold = self.band = math.nan
         self.valid = self._constants(cap)
 
     def _constants(self, cap: float) -> bool:
@@ -160,6 +189,7 @@ class _Model:
         if not (math.isfinite(self.lk) and self.lk > 0):
             return False
         self.tc = m.L / self.lk
+        self.rho = m.R * i_max / v  # the resistive share of the bus
         self.rate = Q_RATE * v / m.L * (m.J / m.Km)  # the cap's approach law's current rate times J / Km
         self.end_rate = self.rate  # the terminal ramp's (lowered where the ramp would leave the bus)
         top = top_speed(m, v, i_max, cap)
@@ -192,24 +222,37 @@ class _Model:
         v_d, v_q, a_d, a_q = self.policy(i_d, i_q, w, t_d, t_q)
         return (v_d - a_d) * self.inv_l, (v_q - a_q) * self.inv_l, (self.Km * i_q - self.B * w) * self.inv_j
 
-    def target(self, w: float, braking: bool, lead: float = 0.0) -> tuple[float, float]:
-        """The target current at speed ``w`` (module docstring); ``lead``: the speed the current's lag adds [rad/s]."""
-        c = best_currents(min(max(w, 0.0), self.cap), self.m, self.v, self.i_max)
+    def target(self, w: float, braking: bool, lead: float = 0.0, ahead: float = 0.0) -> tuple[float, float]:
+        """The target current at speed ``w`` (module docstring).
+
+        ``lead``: the speed the current's lag adds [rad/s]; ``ahead``: the speed ahead whose d target is taken
+        where it weakens more (speeding up).
+        """
+        reach = 1.0 + min(max(2.0 * (self.rho - REACH_FROM), 0.0), BRAKE_REACH) if braking else 1.0
+        c = best_currents(min(max(w, 0.0), self.cap), self.m, reach * self.v, self.i_max)
         if math.isnan(c[1]):  # the discs do not meet (not below the top speed): no current
             c = (0.0, 0.0, 0.0, 0.0)
         if braking:
             return c[2], c[3]
         e = self.cap - w - lead
         g = math.sqrt(2.0 * self.rate * e) if e >= self.band else e * math.sqrt(2.0 * self.rate / self.band)
-        return c[0], min(c[1], self.hold + g)
+        t_d = c[0]
+        if ahead > 0:
+            c2 = best_currents(min(max(w + ahead, 0.0), self.cap), self.m, self.v, self.i_max)
+            if not math.isnan(c2[1]):
+                t_d = min(t_d, c2[0])
+        return t_d, min(c[1], self.hold + g)
 
     def next_target(self, s: State, braking: bool) -> tuple[float, float]:
         """The target at the end of the step from ``s``: at the speed predicted there.
 
-        The approach to the cap counts the speed the current's lag behind its target adds (T_c times the acceleration).
+        The approach to the cap counts the speed the current's lag behind its target adds (T_c times the acceleration);
+        speeding up, the d target looks :data:`AHEAD` T_c ahead.
         """
         alpha = (self.Km * s[3] - self.B * s[1]) / self.J
-        return self.target(s[1] + self.h * alpha, braking, self.tc * alpha)
+        share = min(self.rho / RHO_FULL, (RHO_END - self.rho) / 0.1, 1.0)
+        ahead = min(max((self.cap - s[1]) / self.band, 0.0), 1.0) * AHEAD * max(share, 0.0)
+        return self.target(s[1] + self.h * alpha, braking, self.tc * alpha, ahead * self.tc * max(alpha, 0.0))
 
     def step(self, s: State, t0: tuple[float, float], t1: tuple[float, float], f: float = 1.0) -> State:
         """RK4 over ``f h`` from ``s``, the target moving from ``t0`` towards ``t1`` (reached at a full step)."""
@@ -261,15 +304,16 @@ def _ramp(md: _Model, t: float, s: State, tg: tuple[float, float]) -> End:
 
     Over the bridge (:data:`BRIDGE` steps, at most half the ramp) the jerk and the d current's rate pass linearly
     from the braking policy's to the ramp's; the ramp then takes the acceleration linearly to 0 as the speed falls
-    to 0 over :math:`\tau = -2\omega/\dot\omega`, and the d current linearly to 0.
+    to 0 over :math:`\tau = -2\omega/\dot\omega`, and the d current to 0 as a quadratic in time, its rate
+    :math:`-c\,i_{d1}/\tau` at the start and :math:`-(2 - c)\,i_{d1}/\tau` at rest (:func:`ramp_share`).
     """
     th, w, i_d, i_q = s
     a0 = (md.Km * i_q - md.B * w) / md.J
     if not (a0 < 0 and w > 0):
-        return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
+        return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0, 1.0)
     tau0 = -2.0 * w / a0
     if not tau0 > 0:
-        return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0)
+        return End(t, th, max(w, 0.0), i_d, i_q, tg[0], tg[1], 0.0, th, max(w, 0.0), i_d, i_q, 0.0, 1.0)
     dt = min(BRIDGE * md.h, 0.5 * tau0)
     dt = (t + dt) - t  # the bridge its samples' times t, t + dt span (the C core in single precision)
     did, diq, _ = md.deriv(i_d, i_q, w, tg[0], tg[1])
@@ -278,9 +322,51 @@ def _ramp(md: _Model, t: float, s: State, tg: tuple[float, float]) -> End:
     a1 = a0 + 0.5 * (j_l + j_r) * dt
     w1 = w + a0 * dt + (j_l / 3.0 + j_r / 6.0) * dt * dt
     th1 = th + w * dt + a0 * dt * dt / 2.0 + (j_l / 8.0 + j_r / 24.0) * (dt * dt * dt)
-    i_d1 = i_d + 0.5 * (did - i_d / tau0) * dt
+    c = ramp_share(md, w, i_d, i_q, tau0)
+    i_d1 = i_d + 0.5 * (did - c * i_d / tau0) * dt
     tau = -2.0 * w1 / a1 if a1 < 0 and w1 > 0 else 0.0
-    return End(t, th, w, i_d, i_q, tg[0], tg[1], dt, th1, max(w1, 0.0), i_d1, (md.J * a1 + md.B * w1) / md.Km, tau)
+    return End(t, th, w, i_d, i_q, tg[0], tg[1], dt, th1, max(w1, 0.0), i_d1, (md.J * a1 + md.B * w1) / md.Km, tau, c)
+
+
+def ramp_ends(md: _Model, w: float, i_d: float, i_q: float, tau: float, c: float) -> tuple[float, float]:
+    r"""The terminal ramp's voltage [V] at its start and at rest, from (``w``, ``i_d``, ``i_q``) over ``tau``.
+
+    ``c``: the d current's rate at the start, of :math:`-i_d/\tau` (at rest: 2 - c of it).
+    """
+    a = (md.Km * i_q - md.B * w) / md.J
+    jerk = -a / tau
+    diq = (md.J * jerk + md.B * a) / md.Km
+    x = md.Nr * w * md.L
+    v_d = md.R * i_d - x * i_q - md.L * c * i_d / tau
+    v_q = md.R * i_q + x * i_d + md.Km * w + md.L * diq
+    end_d, end_q = (2.0 - c) * i_d / tau, md.J * jerk / md.Km
+    return math.sqrt(v_d * v_d + v_q * v_q), md.L * math.sqrt(end_d * end_d + end_q * end_q)
+
+
+def ramp_share(md: _Model, w: float, i_d: float, i_q: float, tau: float) -> float:
+    """The terminal ramp's d share :math:`c` in [0, 1] (the d current's rate at the start, of its linear one).
+
+    1 (the d current linear) unless the start's voltage is above the end's; then the share where the two are equal
+    (bisection, :data:`SHARE_HALVINGS`), or 0.
+
+    A braking current beyond the steady envelope needs most of the bus at the ramp's start: its d current then
+    leaves later and faster.
+    """
+    s1, e1 = ramp_ends(md, w, i_d, i_q, tau, 1.0)
+    if s1 <= e1:
+        return 1.0
+    s0, e0 = ramp_ends(md, w, i_d, i_q, tau, 0.0)
+    if s0 >= e0:
+        return 0.0
+    lo, hi = 0.0, 1.0
+    for _ in range(SHARE_HALVINGS):
+        mid = 0.5 * (lo + hi)
+        sm, em = ramp_ends(md, w, i_d, i_q, tau, mid)
+        if sm < em:
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 def _step_index(t: float, h: float, n_acc: int) -> int:
@@ -344,14 +430,7 @@ def ramp_voltage(md: _Model, e: End) -> float:
     """The largest voltage of the terminal ramp over the bus: at its start and at its end."""
     if not e.tau > 0:
         return 0.0
-    a1 = (md.Km * e.i_q1 - md.B * e.omega1) / md.J
-    did, jerk = -e.i_d1 / e.tau, -a1 / e.tau
-    diq = (md.J * jerk + md.B * a1) / md.Km
-    x = md.Nr * e.omega1 * md.L
-    v_d = md.R * e.i_d1 - x * e.i_q1 + md.L * did
-    v_q = md.R * e.i_q1 + x * e.i_d1 + md.Km * e.omega1 + md.L * diq
-    start = math.sqrt(v_d * v_d + v_q * v_q)
-    end = md.L * math.sqrt(did * did + (md.J * jerk / md.Km) ** 2)
+    start, end = ramp_ends(md, e.omega1, e.i_d1, e.i_q1, e.tau, e.d_share)
     return max(start, end) / md.v
 
 
@@ -436,8 +515,10 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
     ``ramp``: the terminal ramp's rate to start from, of :data:`Q_RATE` ``v / L``. Where the ramp would leave the
     bus (at its start or its end), its rate is set by the secant on the ramp's voltage towards :data:`RAMP_SHARE`
     of the bus (the first step scales it by the square of the excess) and the switch is found again, at most
-    :data:`RAMP_TRIES` times; the shot keeps the rate (the planner starts its next shot from it). ``switch``: a
-    switch time to start the root finder from (the planner's former shot's; each landing starts from the last).
+    :data:`RAMP_TRIES` times; a rate that fell below :data:`RAMP_LOW` of the bus is raised once by the secant (and
+    kept where the raise leaves the bus); the shot keeps the rate (the planner starts its next shot from it).
+    ``switch``: a switch time to start the root finder from (the planner's former shot's; each landing starts from
+    the last).
     """
     h = motor.L * i_max / v / STEPS
     for _ in range(DOUBLINGS + 1):
@@ -449,22 +530,28 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
         landed = None
         if up is not None:
             acc, n_acc, cruise = up
-            prev, e_prev, guess = math.nan, math.nan, switch
+            prev, e_prev, guess, excess = math.nan, math.nan, switch, math.nan
+            kept: Optional[tuple[float, float]] = None  # a rate and switch within the bus, before a raise
             for _ in range(RAMP_TRIES + 1):
                 landed = _land(md, acc, n_acc, cruise, d, guess)
                 if landed is None:
                     break
                 guess = landed[0]
                 excess = ramp_voltage(md, landed[1])
-                if excess <= 1.0:
+                if excess <= 1.0 and (excess >= RAMP_LOW or not e_prev > 1.0 or kept is not None):
                     break
                 rate = md.end_rate
+                if excess <= 1.0:  # well within the bus after a fall: raised once, between the two
+                    kept = (rate, guess)
                 if math.isfinite(e_prev) and excess != e_prev:
                     nxt = rate + (RAMP_SHARE - excess) * (rate - prev) / (excess - e_prev)
-                    nxt = min(max(nxt, 0.25 * rate), rate)
+                    nxt = min(max(nxt, 0.25 * rate), max(rate, prev))
                 else:
                     nxt = rate * (RAMP_SHARE / excess) ** 2
                 prev, e_prev, md.end_rate = rate, excess, RAMP_AIM * nxt
+            if kept is not None and (landed is None or not excess <= 1.0):
+                md.end_rate = kept[0]  # the raise left the bus: back to the rate within it
+                landed = _land(md, acc, n_acc, cruise, d, kept[1])
         if landed is None:
             h *= 2.0
             continue
