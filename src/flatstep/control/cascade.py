@@ -259,7 +259,8 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
     integral's bandwidth falls by :math:`r`, and the loops that act through the spring follow it, the current
     loops' speed and the position gain rising by :math:`1/\max(r, 0.5)`: :math:`\lambda = 0.895/(T_s r)` and
     :math:`k_\theta = 1.28 w / r = 1.28\,\omega_s` while :math:`r \ge 0.5` (the floor ``r_min`` keeps
-    :math:`\lambda T_s \le 1.79`, the current loop's discrete pole inside the unit circle, on longer periods). The velocity gain has its own bounds,
+    :math:`\lambda T_s \le 1.79`, the current loop's discrete pole inside the unit circle, on longer periods).
+    The velocity gain has its own bounds,
 
     .. math:: k_\omega = \min\left(\frac{0.5}{T_s},\ 2\,\frac{K_m\rho^*_{max}}{J}\,\frac{T_s}{q}\right),
 
