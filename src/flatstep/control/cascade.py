@@ -257,7 +257,8 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
     :math:`r = 0.0871/(T_s\omega_s) < 1` (else :math:`r = 1`), the spring takes over what the loop loses: the held
     share rises to :math:`h/r^2` (at most 1: the spring's frequency rises by :math:`1/r`), the velocity
     integral's bandwidth falls by :math:`r`, and the loops that act through the spring follow it, the current
-    loops' speed and the position gain rising by :math:`1/\max(r, 0.5)`: :math:`\lambda = 0.895/(T_s r)` and
+    loops' speed (``lambda_ts``'s too) and the position gain rising by :math:`1/\max(r, 0.5)`:
+    :math:`\lambda = 0.895/(T_s r)` and
     :math:`k_\theta = 1.28 w / r = 1.28\,\omega_s` while :math:`r \ge 0.5` (the floor ``r_min`` keeps
     :math:`\lambda T_s \le 1.79`, the current loop's discrete pole inside the unit circle, on longer periods).
     The velocity gain has its own bounds,
