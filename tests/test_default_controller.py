@@ -99,16 +99,25 @@ def test_the_default_follows_the_plan_frame_rule(tmp_path):
     assert w < r["w_ts"] / Ts  # the spring, not the sampling, sets the loop here: no take-over
     assert (g.k_theta, g.ki_omega) == pytest.approx((r["k_theta"] * w, r["ki_omega"] * w * w))
     assert g.k_omega == pytest.approx(r["k_omega_ts"] / Ts)  # no encoder in the file: the sampling's bound alone
-    slow = load_scenario(path.write_text(path.read_text().replace("20000.0", "5000.0")) and path)[0]
-    gs = slow.controller().gains
-    assert gs.k_omega == pytest.approx(r["k_omega_ts"] * 5000.0)  # capped by Ts
-    # the sampling caps the loop below the spring: the spring takes over (more held), the integral slows
     spring = math.sqrt(m.Km * r["d_hold"] * 1.0 * m.Nr / m.J)
-    cap = r["w_ts"] * 5000.0
-    short = cap / spring
-    assert short < 1.0 and gs.k_theta == pytest.approx(r["k_theta"] * cap)
-    assert gs.ki_omega == pytest.approx(r["ki_omega"] * (short * cap) ** 2)
-    assert r["d_hold"] < gs.d_hold <= min(1.0, r["d_hold"] / short**2)
+    text = path.read_text()
+    for rate in (8000.0, 5000.0):
+        slow = load_scenario(path.write_text(text.replace("20000.0", str(rate))) and path)[0]
+        gs = slow.controller().gains
+        assert gs.k_omega == pytest.approx(r["k_omega_ts"] * rate)  # capped by Ts
+        # the sampling caps the loop below the spring: the spring takes over (more held), the integral slows
+        cap = r["w_ts"] * rate
+        short = cap / spring
+        assert short < 1.0 and gs.ki_omega == pytest.approx(r["ki_omega"] * (short * cap) ** 2)
+        assert r["d_hold"] < gs.d_hold <= min(1.0, r["d_hold"] / short**2)
+        # and the current loops and the position gain follow the spring: by 1/r, at most 1/r_min
+        follow = 1.0 / max(short, r["r_min"])
+        assert gs.current_bandwidth == pytest.approx(r["lambda_ts"] * rate * follow)
+        assert gs.k_theta == pytest.approx(r["k_theta"] * cap * follow)
+        if rate == 8000.0:  # r = 0.61: the position gain is the spring's frequency's, not the sampling cap's
+            assert short > r["r_min"] and gs.k_theta == pytest.approx(r["k_theta"] * spring)
+        else:  # r = 0.38: the floor holds the current loop's discrete pole inside the unit circle
+            assert short < r["r_min"] and gs.current_bandwidth / rate == pytest.approx(r["lambda_ts"] / r["r_min"])
 
 
 @pytest.mark.parametrize("counts, rho", [(16384, 1.0), (16384, 0.3), (4000, 1.0), (4000, 0.3)])
