@@ -7,6 +7,35 @@ import pytest
 
 import flatstep as fs
 
+#: The paper's move on a 20 kHz drive, two plants (R off by +-10 %): a tiny study that runs in a
+#: second (the tuner's and the held-out check's tests).
+TINY = """name = "tiny"
+t_end = 0.05
+
+[plan]
+theta1 = 0.0
+theta2 = 0.02
+rho1 = 0.4
+rho2 = 0.4
+t0 = 0.01
+tf = 0.03
+
+[controller]
+design = true
+uncertainty = 0.1
+
+[drive]
+control_rate = 20000.0
+v_bus = 24.0
+
+[sensors]
+encoder_counts = 16384
+
+[robustness]
+relative_error = 0.1
+parameters = ["R"]
+"""
+
 
 @pytest.fixture(scope="session")
 def motor():

@@ -4,39 +4,13 @@ import math
 from dataclasses import replace
 
 import pytest
+from conftest import TINY
 
 from flatstep.studies.held_out import RANDOM_PLANTS, STRETCHES, held_out, held_out_mean, held_out_runs, stretched
 from flatstep.studies.scenario_file import read_scenario_file
 from flatstep.studies.tune import Evaluation, evaluate, study_of
 from flatstep.studies.tune_laws import law_gains
 
-#: The paper's move on a 20 kHz drive, two plants (R off by +-10 %): runs in a second.
-TINY = """name = "tiny"
-t_end = 0.05
-
-[plan]
-theta1 = 0.0
-theta2 = 0.02
-rho1 = 0.4
-rho2 = 0.4
-t0 = 0.01
-tf = 0.03
-
-[controller]
-design = true
-uncertainty = 0.1
-
-[drive]
-control_rate = 20000.0
-v_bus = 24.0
-
-[sensors]
-encoder_counts = 16384
-
-[robustness]
-relative_error = 0.1
-parameters = ["R"]
-"""
 CASCADE = "cascade+voltage_feedforward"
 GAINS = {"current_bandwidth": 9000.0, "k_theta": 300.0, "k_omega": 1200.0, "ki_omega": 2e5}
 

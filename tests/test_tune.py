@@ -4,6 +4,7 @@ import math
 from pathlib import Path
 
 import pytest
+from conftest import TINY
 
 from flatstep.studies.frontier import check_fractions, frontier, outside_layer
 from flatstep.studies.scenario_file import read_scenario_file
@@ -12,33 +13,6 @@ from flatstep.studies.tune_file import TUNED_MARK, read_tuned, tuned_toml
 from flatstep.studies.tune_laws import TUNABLE, law_gains
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-#: The paper's move on a 20 kHz drive, two plants (R off by +-10 %): a tiny study that runs in a second.
-TINY = """name = "tiny"
-t_end = 0.05
-
-[plan]
-theta1 = 0.0
-theta2 = 0.02
-rho1 = 0.4
-rho2 = 0.4
-t0 = 0.01
-tf = 0.03
-
-[controller]
-design = true
-uncertainty = 0.1
-
-[drive]
-control_rate = 20000.0
-v_bus = 24.0
-
-[sensors]
-encoder_counts = 16384
-
-[robustness]
-relative_error = 0.1
-parameters = ["R"]
-"""
 FAST = dict(budget=10, population=5)
 
 
