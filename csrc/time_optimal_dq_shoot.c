@@ -7,7 +7,7 @@
 struct model {
     const struct motor_params *m;
     fs_real R, L, Km, J, B, Nr;
-    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rho, rate, end_rate, cap, hold, band;
+    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rho, rate, end_rate, cap, hold, band, reactance;
 };
 
 // A state: theta, omega, i_d, i_q.
@@ -34,6 +34,7 @@ static bool model_init(struct model *md, const struct motor_params *m, fs_real v
     top = tod_top_speed(m, v, i_max, cap);
     md->cap = top >= cap ? cap : TOD_TOP_SHARE * top;
     md->hold = m->B * md->cap / m->Km;
+    md->reactance = m->R > 0 ? md->Nr * md->cap * m->L / m->R : (fs_real)INFINITY;  // N_r W L / R at the cap W
     den = 4 * h * m->Km;
     if (!(fs_isfinite(md->rate) && md->rate > 0 && fs_isfinite(md->cap) && md->cap > 0 && den > 0))
         return false;
@@ -85,9 +86,18 @@ static void target(const struct model *md, fs_real w, bool braking, fs_real lead
 static void next_target(const struct model *md, const struct state *s, bool braking, fs_real t[2])
 {
     fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J,
-            share = fs_min(fs_min(md->rho / TOD_RHO_FULL, (TOD_RHO_END - md->rho) / FS_C(0.1)), 1),
-            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * fs_max(share, 0);
+            share = fs_min(md->rho / TOD_RHO_FULL, 1)
+                    * fs_min(fs_max((md->reactance - TOD_X_END) / (TOD_X_FULL - TOD_X_END), 0), 1),
+            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * share;
     target(md, s->w + md->h * alpha, braking, md->tc * alpha, ahead * md->tc * fs_max(alpha, 0), t);
+}
+
+// Writes the speeding-up target at the end of the step from s into t, its d part within TOD_D_SLEW h V / L of tg's.
+static void next_speed_up(const struct model *md, const struct state *s, const fs_real tg[2], fs_real t[2])
+{
+    fs_real slew = TOD_D_SLEW * md->h * md->v * md->inv_l;
+    next_target(md, s, false, t);
+    t[0] = fs_min(fs_max(t[0], tg[0] - slew), tg[0] + slew);
 }
 
 // Returns the state RK4 takes s to over f h, the target moving from t0 towards t1 (reached at a full step).
@@ -137,7 +147,7 @@ static bool speed_up(const struct model *md, fs_real d, const struct tod_phase *
             return true;
         }
         if (k < TOD_MAX_STEPS) {
-            next_target(md, &s, false, nxt);
+            next_speed_up(md, &s, tg, nxt);
             s = step(md, &s, tg, nxt, 1);
             tg[0] = nxt[0], tg[1] = nxt[1];
         }
@@ -244,7 +254,7 @@ static struct state switch_state(const struct model *md, const struct tod_phase 
     if (k + 1 < n_acc)
         t1[0] = a->t_d[k + 1], t1[1] = a->t_q[k + 1];
     else
-        next_target(md, &s, false, t1);
+        next_speed_up(md, &s, t0, t1);
     f = (t_s - (fs_real)k * h) / h;
     tg[0] = t0[0] + f * (t1[0] - t0[0]), tg[1] = t0[1] + f * (t1[1] - t0[1]);
     return step(md, &s, t0, t1, f);
@@ -346,10 +356,39 @@ static bool guess_bracket(const struct model *md, const struct tod_phase *a, siz
 
 // Returns true and writes the switch time that lands the move on d and its end, the root finder started from the
 // bracket of guess where it brackets (guess not finite: none; time_optimal_dq_shoot._land).
+// Returns a first switch time: where the braking distance from top (over beyond d), scaled by the square of the
+// speed, lands on d (NAN: none); from a cruise, exact (the braking from any switch on it is the same, shifted).
+static fs_real estimate(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
+                        fs_real top, fs_real over)
+{
+    size_t k = n_acc - 1, j;
+    fs_real t, b, c, g, g0 = -d;
+    if (!(a->omega[k] > 0))
+        return (fs_real)NAN;
+    if (cruise) {
+        t = top - over / a->omega[k];
+        if (t >= (fs_real)k * md->h)
+            return t;
+        b = over;
+    } else {
+        b = over + d - a->theta[k];
+    }
+    c = b / (a->omega[k] * a->omega[k]);
+    if (!(fs_isfinite(c) && c > 0))
+        return (fs_real)NAN;
+    for (j = 1; j < n_acc; j++) {
+        g = a->theta[j] + c * a->omega[j] * a->omega[j] - d;
+        if (g >= 0)
+            return ((fs_real)(j - 1) + g0 / (g0 - g)) * md->h;
+        g0 = g;
+    }
+    return (fs_real)NAN;
+}
+
 static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d, fs_real guess,
                  fs_real *t_s_out, struct tod_end *end)
 {
-    fs_real last = (fs_real)(n_acc - 1) * md->h, top, t_s, hi, lo, f_lo, f_hi, f;
+    fs_real last = (fs_real)(n_acc - 1) * md->h, top, t_s, hi, lo, f_lo, f_hi, f, est = (fs_real)NAN;
     struct bracket b;
     size_t n_b;
     int it, side = 0;
@@ -365,6 +404,7 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
         f_hi = f = end->theta1 + end->omega1 * end->tau / 3 - d;
         if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
             return false;
+        est = estimate(md, a, n_acc, cruise, d, top, f);
     }
     for (it = 0; it < TOD_ROOT; it++) {
         if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > TOD_BRACKET_TOL * hi))
@@ -372,6 +412,9 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
         if (!(f_hi - f_lo > 0))
             break;
         t_s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        if (lo < est && est < hi)  // the first try: the estimate from the top's braking distance
+            t_s = est;
+        est = (fs_real)NAN;
         if (!brake(md, a, n_acc, cruise, t_s, NULL, end, &n_b))
             return false;
         f = end->theta1 + end->omega1 * end->tau / 3 - d;
