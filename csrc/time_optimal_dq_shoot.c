@@ -88,8 +88,16 @@ static void next_target(const struct model *md, const struct state *s, bool brak
     fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J,
             share = fs_min(md->rho / TOD_RHO_FULL, 1)
                     * fs_min(fs_max((md->reactance - TOD_X_END) / (TOD_X_FULL - TOD_X_END), 0), 1),
-            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * share;
+            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * share, n2, r2, q;
     target(md, s->w + md->h * alpha, braking, md->tc * alpha, ahead * md->tc * fs_max(alpha, 0), t);
+    if (braking) {  // a current beyond TOD_PULL_FROM i_max pulls its target in
+        n2 = s->id * s->id + s->iq * s->iq;
+        r2 = (TOD_PULL_FROM * md->i_max) * (TOD_PULL_FROM * md->i_max);
+        if (n2 > r2) {
+            q = r2 / n2;
+            t[0] = t[0] * q * q, t[1] = t[1] * q * q;
+        }
+    }
 }
 
 // Writes the speeding-up target at the end of the step from s into t, its d part within TOD_D_SLEW h V / L of tg's.
@@ -323,13 +331,13 @@ struct bracket {
 // Returns true and writes a bracket from the guessed switch time and a probe one step from it towards the distance
 // (false: it does not bracket; time_optimal_dq_shoot._guess).
 static bool guess_bracket(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
-                          fs_real guess, fs_real top, struct tod_end *end, struct bracket *b)
+                          fs_real guess, fs_real top, const struct tod_phase *out, struct tod_end *end, size_t *n_b,
+                          struct bracket *b)
 {
     fs_real f_g, probe, f;
-    size_t n_b;
     if (!(guess > 0 && guess < top))
         return false;
-    if (!brake(md, a, n_acc, cruise, guess, NULL, end, &n_b))
+    if (!brake(md, a, n_acc, cruise, guess, out, end, n_b))
         return false;
     f_g = end->theta1 + end->omega1 * end->tau / 3 - d;
     if (!fs_isfinite(f_g))
@@ -341,7 +349,7 @@ static bool guess_bracket(const struct model *md, const struct tod_phase *a, siz
     probe = f_g < 0 ? guess + md->h : guess - md->h;
     if (!(probe > 0 && probe < top))
         return false;
-    if (!brake(md, a, n_acc, cruise, probe, NULL, end, &n_b))
+    if (!brake(md, a, n_acc, cruise, probe, out, end, n_b))
         return false;
     f = end->theta1 + end->omega1 * end->tau / 3 - d;
     if (!fs_isfinite(f) || (f < 0) == (f_g < 0))
@@ -354,8 +362,6 @@ static bool guess_bracket(const struct model *md, const struct tod_phase *a, siz
     return true;
 }
 
-// Returns true and writes the switch time that lands the move on d and its end, the root finder started from the
-// bracket of guess where it brackets (guess not finite: none; time_optimal_dq_shoot._land).
 // Returns a first switch time: where the braking distance from top (over beyond d), scaled by the square of the
 // speed, lands on d (NAN: none); from a cruise, exact (the braking from any switch on it is the same, shifted).
 static fs_real estimate(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
@@ -385,21 +391,23 @@ static fs_real estimate(const struct model *md, const struct tod_phase *a, size_
     return (fs_real)NAN;
 }
 
+// Returns true and writes the switch time that lands the move on d and its end, the root finder started from the
+// bracket of guess where it brackets (guess not finite: none; time_optimal_dq_shoot._land); every braking phase
+// it tries writes its samples into out and their count into n_b, so the last (at the switch time) is the shot's.
 static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d, fs_real guess,
-                 fs_real *t_s_out, struct tod_end *end)
+                 const struct tod_phase *out, fs_real *t_s_out, struct tod_end *end, size_t *n_b)
 {
     fs_real last = (fs_real)(n_acc - 1) * md->h, top, t_s, hi, lo, f_lo, f_hi, f, est = (fs_real)NAN;
     struct bracket b;
-    size_t n_b;
     int it, side = 0;
     if (cruise && !(a->omega[n_acc - 1] > 0))  // a cruise at no speed: the cap is 0 in fs_real
         return false;
     top = cruise ? last + (d - a->theta[n_acc - 1]) / a->omega[n_acc - 1] : last;
-    if (fs_isfinite(guess) && guess_bracket(md, a, n_acc, cruise, d, guess, top, end, &b)) {
+    if (fs_isfinite(guess) && guess_bracket(md, a, n_acc, cruise, d, guess, top, out, end, n_b, &b)) {
         lo = b.lo, f_lo = b.f_lo, hi = b.hi, f_hi = b.f_hi, t_s = b.t_s, f = b.f;
     } else {
         t_s = hi = top, lo = 0, f_lo = -d;
-        if (!brake(md, a, n_acc, cruise, hi, NULL, end, &n_b))
+        if (!brake(md, a, n_acc, cruise, hi, out, end, n_b))
             return false;
         f_hi = f = end->theta1 + end->omega1 * end->tau / 3 - d;
         if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
@@ -415,7 +423,7 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
         if (lo < est && est < hi)  // the first try: the estimate from the top's braking distance
             t_s = est;
         est = (fs_real)NAN;
-        if (!brake(md, a, n_acc, cruise, t_s, NULL, end, &n_b))
+        if (!brake(md, a, n_acc, cruise, t_s, out, end, n_b))
             return false;
         f = end->theta1 + end->omega1 * end->tau / 3 - d;
         if (!fs_isfinite(f))
@@ -453,7 +461,7 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
         prev = e_prev = excess = (fs_real)NAN, guess = switch_time;
         if (speed_up(&md, d, &shot->acc, &n_acc, &cruise)) {
             for (tries = 0; tries <= TOD_RAMP_TRIES; tries++) {
-                landed = land(&md, &shot->acc, n_acc, cruise, d, guess, &t_s, &shot->end);
+                landed = land(&md, &shot->acc, n_acc, cruise, d, guess, &shot->brk, &t_s, &shot->end, &n_b);
                 if (!landed)
                     break;
                 guess = t_s;
@@ -472,10 +480,10 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
             }
             if (kept && (!landed || !(excess <= 1))) {
                 md.end_rate = kept_rate;  // the raise left the bus: back to the rate within it
-                landed = land(&md, &shot->acc, n_acc, cruise, d, kept_switch, &t_s, &shot->end);
+                landed = land(&md, &shot->acc, n_acc, cruise, d, kept_switch, &shot->brk, &t_s, &shot->end, &n_b);
             }
         }
-        if (!landed || !brake(&md, &shot->acc, n_acc, cruise, t_s, &shot->brk, &shot->end, &n_b))
+        if (!landed)  // (the landing's last braking phase is at t_s: its samples are the shot's)
             continue;
         excess = shot->end.theta1 + shot->end.omega1 * shot->end.tau / 3 - d;
         if (!(fs_fabs(excess) <= TOD_LAND_TOL * d))  // the root finder stopped short of the distance

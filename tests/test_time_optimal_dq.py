@@ -169,6 +169,22 @@ def test_speeding_up_d_target_moves_within_the_bus_rate() -> None:
         assert out.tables == 1
 
 
+def test_braking_current_held_to_the_current_limit_on_the_bus() -> None:
+    from flatstep.bench.field_weakening import motor
+
+    m, i_max = motor("trinamic-qsh5718-51-28-101", Path(__file__).resolve().parent.parent / "examples" / "motors")
+    lim = MotorLimits(v_bus=24.0, i_max=i_max, i_hold=0.01 * i_max, v_use=0.84)
+    v = 0.98 * lim.v_use * lim.v_bus
+    shot = shoot(0.3, m, v, 0.995 * i_max, 0.995 * speed_cap(m, lim, 20000.0))
+    assert shot is not None
+    b = shot.brake
+    current = np.hypot(b.i_d[:shot.n_brake], b.i_q[:shot.n_brake])
+    assert np.max(current) <= 0.995 * i_max * 1.005  # (without the pull: 1.4 % beyond, and a second shot)
+    assert np.max(current) >= 0.98 * 0.995 * i_max  # still braking on the limit
+    _, out = plan_raw(0.3, m, lim, 20000.0)
+    assert out.tables == 1
+
+
 @pytest.mark.parametrize("distance,exact", [(5.0, True), (0.3, False)])
 def test_root_finders_first_try_from_the_braking_distance(distance: float, exact: bool) -> None:
     lim = limits(24.0)

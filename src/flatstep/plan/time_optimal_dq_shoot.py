@@ -21,7 +21,8 @@ for :math:`\rho` from :data:`RHO_FULL`, in proportion below, and only where the 
 the bus's current rate (a d target that jumps within a step bends the d current's rate there, and the fitted
 table crosses the bus between knots); braking, the
 envelope's bus disc is scaled by up to :math:`1 +` :data:`BRAKE_REACH` (from :math:`\rho` = :data:`REACH_FROM`
-on), so that the voltage stays on the bus. Speeding up, the torque current is held to
+on), so that the voltage stays on the bus, and pulled in where the current passes the current limit
+(:data:`PULL_FROM`). Speeding up, the torque current is held to
 :math:`i_q^* \le B W/K_m + g(W - \omega)` so that the speed meets the cap :math:`W` at the current's rate
 :data:`Q_RATE` :math:`V/L` (:math:`g` the square root of the time-optimal approach, linear within a small band so
 that the cruise settles).
@@ -84,6 +85,11 @@ X_FULL = 5.0
 #: Speeding up, the d target moves by at most this share of the bus's current rate V / L (a target that jumps
 #: within a step turns the d current's rate sharply there, and the fitted table overshoots the bus between knots).
 D_SLEW = 1.0
+#: Braking, where the current is beyond this share of i_max, its target is scaled by :math:`q^2`,
+#: :math:`q = (s\,i_{max}/|i|)^2`: the bus-saturated voltage, scaled back along its own direction, bends the current
+#: out of the current disc while the target moves along the disc's edge (the QSH5718-51 at 24 V: 1.4 % beyond the
+#: shot's i_max, and its fitted table 1 % beyond the limit: a second shot).
+PULL_FROM = 0.995
 #: Braking, the target is the bottom of the envelope with its bus disc scaled by
 #: :math:`1 + \min(\max(2(\rho - \rho_0), 0), r)`, :math:`\rho_0` = :data:`REACH_FROM`, r = :data:`BRAKE_REACH`:
 #: beyond the steady envelope, so that the voltage stays on the bus while the current's transient carries it there,
@@ -264,7 +270,14 @@ class _Model:
         alpha = (self.Km * s[3] - self.B * s[1]) / self.J
         share = min(self.rho / RHO_FULL, 1.0) * min(max((self.reactance - X_END) / (X_FULL - X_END), 0.0), 1.0)
         ahead = min(max((self.cap - s[1]) / self.band, 0.0), 1.0) * AHEAD * share
-        return self.target(s[1] + self.h * alpha, braking, self.tc * alpha, ahead * self.tc * max(alpha, 0.0))
+        t = self.target(s[1] + self.h * alpha, braking, self.tc * alpha, ahead * self.tc * max(alpha, 0.0))
+        if braking:  # a current beyond PULL_FROM i_max pulls its target in (PULL_FROM)
+            n2 = s[2] * s[2] + s[3] * s[3]
+            r2 = (PULL_FROM * self.i_max) * (PULL_FROM * self.i_max)
+            if n2 > r2:
+                q = r2 / n2
+                t = (t[0] * q * q, t[1] * q * q)
+        return t
 
     def next_speed_up(self, s: State, tg: tuple[float, float]) -> tuple[float, float]:
         """The speeding-up target at the end of the step from ``s``, its d part slew-limited (:data:`D_SLEW`).
