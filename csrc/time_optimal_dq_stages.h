@@ -30,7 +30,7 @@
 #define TOD_RHO_FULL FS_C(0.4)     // the resistive share R i_max / V from which the look-ahead is in full
 #define TOD_X_END FS_C(3.0)        // ... where the reactance N_r W L at the cap W is above this many R (none below)
 #define TOD_X_FULL FS_C(5.0)       // ... and in full from this many (linear between)
-#define TOD_D_SLEW FS_C(1.0)       // speeding up, the d target moves by at most this share of h V / L a step
+#define TOD_D_SLEW FS_C(2.0)       // speeding up, the d target moves by at most this many h V / L a step
 #define TOD_PULL_FROM FS_C(0.995)  // braking, a current beyond this share of i_max pulls its target in by q^2,
                                    // q = (share i_max / |i|)^2
 #define TOD_BRAKE_REACH FS_C(0.5)  // braking, the target's bus disc scaled by at most 1 + this
