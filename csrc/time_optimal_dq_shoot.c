@@ -379,7 +379,10 @@ static fs_real estimate(const struct model *md, const struct tod_phase *a, size_
     } else {
         b = over + d - a->theta[k];
     }
-    c = b / (a->omega[k] * a->omega[k]);
+    c = a->omega[k] * a->omega[k];
+    if (!(c > 0))  // the speed's square underflows: no estimate
+        return (fs_real)NAN;
+    c = b / c;
     if (!(fs_isfinite(c) && c > 0))
         return (fs_real)NAN;
     for (j = 1; j < n_acc; j++) {

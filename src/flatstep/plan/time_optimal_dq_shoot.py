@@ -511,7 +511,10 @@ def estimate(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float, t
         b = over
     else:
         b = over + d - th[k]
-    c = b / (w[k] * w[k])
+    c = w[k] * w[k]
+    if not c > 0:  # the speed's square underflows: no estimate
+        return math.nan
+    c = b / c
     if not (math.isfinite(c) and c > 0):
         return math.nan
     g0 = -d
