@@ -12,6 +12,7 @@
 #define TOD_V_MARGIN FS_C(0.995)          // of the bus, the voltage a table may reach at its samples
 #define TOD_EXTRA FS_C(0.002)             // of the excess, the extra a share shrinks by
 #define TOD_POWER FS_C(1.5)               // the power of the excess a share shrinks by
+#define TOD_V_POWER FS_C(2.0)             // ... the bus's (the fitted table's peak voltage falls by less)
 #define TOD_SHARE FS_C(0.98)              // of v_use v_bus, the bus the move is first shot at
 #define TOD_TIME_WEIGHT FS_C(2.0)         // the measure's share of one rise time against a full change of a rate
 #define TOD_CLOSE FS_C(0.25)              // of a step, samples closer than this to the one before are dropped
@@ -328,7 +329,7 @@ int time_optimal_dq_plan(const struct motor_params *m, const struct tod_limits *
             return TOD_OK;
         }
         if (g.voltage / TOD_V_MARGIN - 1 > 0)
-            share /= fs_pow(g.voltage / TOD_V_MARGIN + TOD_EXTRA, TOD_POWER);
+            share /= fs_pow(g.voltage / TOD_V_MARGIN + TOD_EXTRA, TOD_V_POWER);
         if (g.current > 1)
             current /= fs_pow(g.current + TOD_EXTRA, TOD_POWER);
         if (g.speed > 1)

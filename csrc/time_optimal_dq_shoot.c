@@ -7,7 +7,7 @@
 struct model {
     const struct motor_params *m;
     fs_real R, L, Km, J, B, Nr;
-    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rho, rate, end_rate, cap, hold, band;
+    fs_real v, i_max, h, inv_l, inv_j, lk, tc, rho, rate, end_rate, cap, hold, band, reactance;
 };
 
 // A state: theta, omega, i_d, i_q.
@@ -34,6 +34,7 @@ static bool model_init(struct model *md, const struct motor_params *m, fs_real v
     top = tod_top_speed(m, v, i_max, cap);
     md->cap = top >= cap ? cap : TOD_TOP_SHARE * top;
     md->hold = m->B * md->cap / m->Km;
+    md->reactance = m->R > 0 ? md->Nr * md->cap * m->L / m->R : (fs_real)INFINITY;  // N_r W L / R at the cap W
     den = 4 * h * m->Km;
     if (!(fs_isfinite(md->rate) && md->rate > 0 && fs_isfinite(md->cap) && md->cap > 0 && den > 0))
         return false;
@@ -85,9 +86,26 @@ static void target(const struct model *md, fs_real w, bool braking, fs_real lead
 static void next_target(const struct model *md, const struct state *s, bool braking, fs_real t[2])
 {
     fs_real alpha = (md->Km * s->iq - md->B * s->w) / md->J,
-            share = fs_min(fs_min(md->rho / TOD_RHO_FULL, (TOD_RHO_END - md->rho) / FS_C(0.1)), 1),
-            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * fs_max(share, 0);
+            share = fs_min(md->rho / TOD_RHO_FULL, 1)
+                    * fs_min(fs_max((md->reactance - TOD_X_END) / (TOD_X_FULL - TOD_X_END), 0), 1),
+            ahead = fs_min(fs_max((md->cap - s->w) / md->band, 0), 1) * TOD_AHEAD * share, n2, r2, q;
     target(md, s->w + md->h * alpha, braking, md->tc * alpha, ahead * md->tc * fs_max(alpha, 0), t);
+    if (braking) {  // a current beyond TOD_PULL_FROM i_max pulls its target in
+        n2 = s->id * s->id + s->iq * s->iq;
+        r2 = (TOD_PULL_FROM * md->i_max) * (TOD_PULL_FROM * md->i_max);
+        if (n2 > r2) {
+            q = r2 / n2;
+            t[0] = t[0] * q * q, t[1] = t[1] * q * q;
+        }
+    }
+}
+
+// Writes the speeding-up target at the end of the step from s into t, its d part within TOD_D_SLEW h V / L of tg's.
+static void next_speed_up(const struct model *md, const struct state *s, const fs_real tg[2], fs_real t[2])
+{
+    fs_real slew = TOD_D_SLEW * md->h * md->v * md->inv_l;
+    next_target(md, s, false, t);
+    t[0] = fs_min(fs_max(t[0], tg[0] - slew), tg[0] + slew);
 }
 
 // Returns the state RK4 takes s to over f h, the target moving from t0 towards t1 (reached at a full step).
@@ -137,7 +155,7 @@ static bool speed_up(const struct model *md, fs_real d, const struct tod_phase *
             return true;
         }
         if (k < TOD_MAX_STEPS) {
-            next_target(md, &s, false, nxt);
+            next_speed_up(md, &s, tg, nxt);
             s = step(md, &s, tg, nxt, 1);
             tg[0] = nxt[0], tg[1] = nxt[1];
         }
@@ -244,7 +262,7 @@ static struct state switch_state(const struct model *md, const struct tod_phase 
     if (k + 1 < n_acc)
         t1[0] = a->t_d[k + 1], t1[1] = a->t_q[k + 1];
     else
-        next_target(md, &s, false, t1);
+        next_speed_up(md, &s, t0, t1);
     f = (t_s - (fs_real)k * h) / h;
     tg[0] = t0[0] + f * (t1[0] - t0[0]), tg[1] = t0[1] + f * (t1[1] - t0[1]);
     return step(md, &s, t0, t1, f);
@@ -313,13 +331,13 @@ struct bracket {
 // Returns true and writes a bracket from the guessed switch time and a probe one step from it towards the distance
 // (false: it does not bracket; time_optimal_dq_shoot._guess).
 static bool guess_bracket(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
-                          fs_real guess, fs_real top, struct tod_end *end, struct bracket *b)
+                          fs_real guess, fs_real top, const struct tod_phase *out, struct tod_end *end, size_t *n_b,
+                          struct bracket *b)
 {
     fs_real f_g, probe, f;
-    size_t n_b;
     if (!(guess > 0 && guess < top))
         return false;
-    if (!brake(md, a, n_acc, cruise, guess, NULL, end, &n_b))
+    if (!brake(md, a, n_acc, cruise, guess, out, end, n_b))
         return false;
     f_g = end->theta1 + end->omega1 * end->tau / 3 - d;
     if (!fs_isfinite(f_g))
@@ -331,7 +349,7 @@ static bool guess_bracket(const struct model *md, const struct tod_phase *a, siz
     probe = f_g < 0 ? guess + md->h : guess - md->h;
     if (!(probe > 0 && probe < top))
         return false;
-    if (!brake(md, a, n_acc, cruise, probe, NULL, end, &n_b))
+    if (!brake(md, a, n_acc, cruise, probe, out, end, n_b))
         return false;
     f = end->theta1 + end->omega1 * end->tau / 3 - d;
     if (!fs_isfinite(f) || (f < 0) == (f_g < 0))
@@ -344,27 +362,60 @@ static bool guess_bracket(const struct model *md, const struct tod_phase *a, siz
     return true;
 }
 
-// Returns true and writes the switch time that lands the move on d and its end, the root finder started from the
-// bracket of guess where it brackets (guess not finite: none; time_optimal_dq_shoot._land).
-static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d, fs_real guess,
-                 fs_real *t_s_out, struct tod_end *end)
+// Returns a first switch time: where the braking distance from top (over beyond d), scaled by the square of the
+// speed, lands on d (NAN: none); from a cruise, exact (the braking from any switch on it is the same, shifted).
+static fs_real estimate(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d,
+                        fs_real top, fs_real over)
 {
-    fs_real last = (fs_real)(n_acc - 1) * md->h, top, t_s, hi, lo, f_lo, f_hi, f;
+    size_t k = n_acc - 1, j;
+    fs_real t, b, c, g, g0 = -d;
+    if (!(a->omega[k] > 0))
+        return (fs_real)NAN;
+    if (cruise) {
+        t = top - over / a->omega[k];
+        if (t >= (fs_real)k * md->h)
+            return t;
+        b = over;
+    } else {
+        b = over + d - a->theta[k];
+    }
+    c = a->omega[k] * a->omega[k];
+    if (!(c > 0))  // the speed's square underflows: no estimate
+        return (fs_real)NAN;
+    c = b / c;
+    if (!(fs_isfinite(c) && c > 0))
+        return (fs_real)NAN;
+    for (j = 1; j < n_acc; j++) {
+        g = a->theta[j] + c * a->omega[j] * a->omega[j] - d;
+        if (g >= 0)
+            return ((fs_real)(j - 1) + g0 / (g0 - g)) * md->h;
+        g0 = g;
+    }
+    return (fs_real)NAN;
+}
+
+// Returns true and writes the switch time that lands the move on d and its end, the root finder started from the
+// bracket of guess where it brackets (guess not finite: none; time_optimal_dq_shoot._land); every braking phase
+// it tries writes its samples into out and their count into n_b, so the last (at the switch time) is the shot's.
+static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc, bool cruise, fs_real d, fs_real guess,
+                 const struct tod_phase *out, fs_real *t_s_out, struct tod_end *end, size_t *n_b)
+{
+    fs_real last = (fs_real)(n_acc - 1) * md->h, top, t_s, hi, lo, f_lo, f_hi, f, est = (fs_real)NAN;
     struct bracket b;
-    size_t n_b;
     int it, side = 0;
     if (cruise && !(a->omega[n_acc - 1] > 0))  // a cruise at no speed: the cap is 0 in fs_real
         return false;
     top = cruise ? last + (d - a->theta[n_acc - 1]) / a->omega[n_acc - 1] : last;
-    if (fs_isfinite(guess) && guess_bracket(md, a, n_acc, cruise, d, guess, top, end, &b)) {
+    if (fs_isfinite(guess) && guess_bracket(md, a, n_acc, cruise, d, guess, top, out, end, n_b, &b)) {
         lo = b.lo, f_lo = b.f_lo, hi = b.hi, f_hi = b.f_hi, t_s = b.t_s, f = b.f;
     } else {
         t_s = hi = top, lo = 0, f_lo = -d;
-        if (!brake(md, a, n_acc, cruise, hi, NULL, end, &n_b))
+        if (!brake(md, a, n_acc, cruise, hi, out, end, n_b))
             return false;
         f_hi = f = end->theta1 + end->omega1 * end->tau / 3 - d;
         if (!fs_isfinite(f) || !(t_s >= 0) || f < 0)  // the bracket's top must not fall short
             return false;
+        est = estimate(md, a, n_acc, cruise, d, top, f);
     }
     for (it = 0; it < TOD_ROOT; it++) {
         if (fs_fabs(f) <= TOD_ROOT_TOL * d || !(hi - lo > TOD_BRACKET_TOL * hi))
@@ -372,7 +423,10 @@ static bool land(const struct model *md, const struct tod_phase *a, size_t n_acc
         if (!(f_hi - f_lo > 0))
             break;
         t_s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
-        if (!brake(md, a, n_acc, cruise, t_s, NULL, end, &n_b))
+        if (lo < est && est < hi)  // the first try: the estimate from the top's braking distance
+            t_s = est;
+        est = (fs_real)NAN;
+        if (!brake(md, a, n_acc, cruise, t_s, out, end, n_b))
             return false;
         f = end->theta1 + end->omega1 * end->tau / 3 - d;
         if (!fs_isfinite(f))
@@ -410,7 +464,7 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
         prev = e_prev = excess = (fs_real)NAN, guess = switch_time;
         if (speed_up(&md, d, &shot->acc, &n_acc, &cruise)) {
             for (tries = 0; tries <= TOD_RAMP_TRIES; tries++) {
-                landed = land(&md, &shot->acc, n_acc, cruise, d, guess, &t_s, &shot->end);
+                landed = land(&md, &shot->acc, n_acc, cruise, d, guess, &shot->brk, &t_s, &shot->end, &n_b);
                 if (!landed)
                     break;
                 guess = t_s;
@@ -429,10 +483,10 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
             }
             if (kept && (!landed || !(excess <= 1))) {
                 md.end_rate = kept_rate;  // the raise left the bus: back to the rate within it
-                landed = land(&md, &shot->acc, n_acc, cruise, d, kept_switch, &t_s, &shot->end);
+                landed = land(&md, &shot->acc, n_acc, cruise, d, kept_switch, &shot->brk, &t_s, &shot->end, &n_b);
             }
         }
-        if (!landed || !brake(&md, &shot->acc, n_acc, cruise, t_s, &shot->brk, &shot->end, &n_b))
+        if (!landed)  // (the landing's last braking phase is at t_s: its samples are the shot's)
             continue;
         excess = shot->end.theta1 + shot->end.omega1 * shot->end.tau / 3 - d;
         if (!(fs_fabs(excess) <= TOD_LAND_TOL * d))  // the root finder stopped short of the distance

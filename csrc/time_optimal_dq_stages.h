@@ -28,7 +28,11 @@
 #define TOD_BRIDGE FS_C(0.05)      // of a step, the bridge from the braking rates to the ramp's
 #define TOD_AHEAD FS_C(3.0)        // speeding up, the d target looks this many time constants T_c ahead
 #define TOD_RHO_FULL FS_C(0.4)     // the resistive share R i_max / V from which the look-ahead is in full
-#define TOD_RHO_END FS_C(0.6)      // ... and above which it is not (falling linearly over the last 0.1 before it)
+#define TOD_X_END FS_C(3.0)        // ... where the reactance N_r W L at the cap W is above this many R (none below)
+#define TOD_X_FULL FS_C(5.0)       // ... and in full from this many (linear between)
+#define TOD_D_SLEW FS_C(2.0)       // speeding up, the d target moves by at most this many h V / L a step
+#define TOD_PULL_FROM FS_C(0.995)  // braking, a current beyond this share of i_max pulls its target in by q^2,
+                                   // q = (share i_max / |i|)^2
 #define TOD_BRAKE_REACH FS_C(0.5)  // braking, the target's bus disc scaled by at most 1 + this
 #define TOD_REACH_FROM FS_C(0.2)   // ... and by 1 + 2 (R i_max / V - this) below
 

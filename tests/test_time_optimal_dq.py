@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,7 +18,19 @@ from flatstep.plan.time_optimal_dq import plan_dq_move, speed_cap, time_optimal_
 from flatstep.plan.time_optimal_dq_c import plan_raw
 from flatstep.plan.time_optimal_dq_envelope import best_currents, dq_envelope
 from flatstep.plan.time_optimal_dq_profile import dq_fit
-from flatstep.plan.time_optimal_dq_shoot import RAMP_LOW, _Model, ramp_ends, ramp_voltage, shoot
+from flatstep.plan.time_optimal_dq_shoot import (
+    D_SLEW,
+    RAMP_LOW,
+    X_END,
+    _brake,
+    _land,
+    _Model,
+    _speed_up,
+    estimate,
+    ramp_ends,
+    ramp_voltage,
+    shoot,
+)
 from flatstep.studies.verify import drive_loop
 
 NEMA17 = MotorParams.preset("nema17")
@@ -118,6 +131,79 @@ def test_speeding_up_weakens_ahead_of_the_steady_envelope_at_12_v() -> None:
     ahead = a.t_d[:shot.n_acc] - steady
     assert np.all(ahead <= 1e-12)  # never less weakening than the envelope's
     assert np.min(ahead) < -0.3  # and well ahead of it where the envelope's d current starts to fall
+
+
+@pytest.mark.parametrize("resistance,weakens", [(6.0, True), (14.0, False)])
+def test_look_ahead_follows_the_reactance_at_the_cruise_not_the_resistive_share(resistance: float,
+                                                                               weakens: bool) -> None:
+    # R 6: R i_max / V 0.72 (a rule on the resistive share alone took the look-ahead from it), N_r W L / R 7;
+    # R 14: N_r W L / R below 3, where the d current's own drop eats what it saves
+    m = replace(NEMA17, R=resistance)
+    lim = limits(12.0)
+    v = 0.98 * lim.v_use * lim.v_bus
+    md = _Model(m, v, 0.995, 0.995 * speed_cap(m, lim, 20000.0), 1e-5)
+    assert (md.reactance > 5.0) == weakens and (md.reactance < X_END) != weakens
+    w = 0.2 * md.cap
+    alpha = (m.Km * 0.5 - m.B * w) / m.J
+    t_d, _ = md.next_target((0.0, w, 0.0, 0.5), False)
+    plain, _ = md.target(w + md.h * alpha, False)
+    if weakens:
+        assert t_d < plain - 0.05
+    else:
+        assert t_d == plain
+
+
+def test_speeding_up_d_target_moves_within_the_bus_rate() -> None:
+    from flatstep.bench.field_weakening import motor
+
+    m, i_max = motor("trinamic-qsh5718-51-28-101", Path(__file__).resolve().parent.parent / "examples" / "motors")
+    lim = MotorLimits(v_bus=12.0, i_max=i_max, i_hold=0.01 * i_max, v_use=0.84)
+    v = 0.98 * lim.v_use * lim.v_bus
+    shot = shoot(0.3, m, v, 0.995 * i_max, 0.995 * speed_cap(m, lim, 20000.0))
+    assert shot is not None
+    step = np.abs(np.diff(shot.accel.t_d[:shot.n_acc]))
+    assert np.max(step) <= D_SLEW * shot.h * v / m.L * (1 + 1e-9)
+    # the d target no longer jumps at the look-ahead's knee: the fitted table keeps the bus on the first shot
+    for d in (0.3, 1.0, 5.0):
+        _, out = plan_raw(d, m, lim, 20000.0)
+        assert out.tables == 1
+
+
+def test_braking_current_held_to_the_current_limit_on_the_bus() -> None:
+    from flatstep.bench.field_weakening import motor
+
+    m, i_max = motor("trinamic-qsh5718-51-28-101", Path(__file__).resolve().parent.parent / "examples" / "motors")
+    lim = MotorLimits(v_bus=24.0, i_max=i_max, i_hold=0.01 * i_max, v_use=0.84)
+    v = 0.98 * lim.v_use * lim.v_bus
+    shot = shoot(0.3, m, v, 0.995 * i_max, 0.995 * speed_cap(m, lim, 20000.0))
+    assert shot is not None
+    b = shot.brake
+    current = np.hypot(b.i_d[:shot.n_brake], b.i_q[:shot.n_brake])
+    assert np.max(current) <= 0.995 * i_max * 1.005  # (without the pull: 1.4 % beyond, and a second shot)
+    assert np.max(current) >= 0.98 * 0.995 * i_max  # still braking on the limit
+    _, out = plan_raw(0.3, m, lim, 20000.0)
+    assert out.tables == 1
+
+
+@pytest.mark.parametrize("distance,exact", [(5.0, True), (0.3, False)])
+def test_root_finders_first_try_from_the_braking_distance(distance: float, exact: bool) -> None:
+    lim = limits(24.0)
+    v = 0.98 * lim.v_use * lim.v_bus
+    md = _Model(NEMA17, v, 0.995, 0.995 * speed_cap(NEMA17, lim, 20000.0), NEMA17.L * 0.995 / v / 10)
+    up = _speed_up(md, distance)
+    assert up is not None
+    acc, n_acc, cruise = up
+    assert cruise == exact
+    landed = _land(md, acc, n_acc, cruise, distance)
+    assert landed is not None
+    last = (n_acc - 1) * md.h
+    top = last + (distance - acc[0][n_acc - 1]) / acc[1][n_acc - 1] if cruise else last
+    top_end = _land(md, acc, n_acc, cruise, distance, top)  # a far guess: the whole bracket again
+    assert top_end is not None and top_end[0] == pytest.approx(landed[0], rel=1e-6)
+    end, _ = _brake(md, acc, n_acc, cruise, top, None)
+    assert end is not None
+    est = estimate(md, acc, n_acc, cruise, distance, top, end.angle - distance)
+    assert est == pytest.approx(landed[0], rel=1e-9 if exact else 0.1)
 
 
 def test_the_switch_guess_lands_where_the_whole_bracket_does() -> None:

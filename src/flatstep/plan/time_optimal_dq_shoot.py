@@ -16,9 +16,13 @@ discs while speeding up, the bottom while braking. Where the bus limits the whol
 :math:`\rho = R i_{max}/V` large), the currents go beyond the steady envelope on the inductance's transient, as the
 optimum's do (the collocation yardstick, :mod:`flatstep.bench.collocation`): speeding up, the d target is the
 envelope's at the speed :data:`AHEAD` :math:`T_c` ahead (the field weakened before the speed needs it; in full
-for :math:`\rho` from :data:`RHO_FULL` to 0.5, in proportion below, none from :data:`RHO_END`); braking, the
+for :math:`\rho` from :data:`RHO_FULL`, in proportion below, and only where the reactance at the cruise
+:math:`N_rWL` is several times R: :data:`X_END`, :data:`X_FULL`), its moves slew-limited to :data:`D_SLEW` times
+the bus's current rate (a d target that jumps within a step bends the d current's rate there, and the fitted
+table crosses the bus between knots); braking, the
 envelope's bus disc is scaled by up to :math:`1 +` :data:`BRAKE_REACH` (from :math:`\rho` = :data:`REACH_FROM`
-on), so that the voltage stays on the bus. Speeding up, the torque current is held to
+on), so that the voltage stays on the bus, and pulled in where the current passes the current limit
+(:data:`PULL_FROM`). Speeding up, the torque current is held to
 :math:`i_q^* \le B W/K_m + g(W - \omega)` so that the speed meets the cap :math:`W` at the current's rate
 :data:`Q_RATE` :math:`V/L` (:math:`g` the square root of the time-optimal approach, linear within a small band so
 that the cruise settles).
@@ -37,8 +41,9 @@ end), its rate falls, and a rate that fell far within it is raised once (:func:`
 The speeding-up phase is integrated once, until it settles at the cap (a cruise: the state then constant but the
 angle) or passes the distance. The braking phase starts from it at the switch time :math:`t_s`; its end angle rises
 with :math:`t_s`, and the Illinois variant of regula falsi finds the :math:`t_s` that lands on the distance in at
-most :data:`ROOT` braking phases. A phase that needs more than :data:`MAX_STEPS` steps doubles the step (at most
-:data:`DOUBLINGS` times).
+most :data:`ROOT` braking phases; its first try is :func:`estimate` (the braking distance from the bracket's top,
+scaled by the square of the speed; exact on a cruise). A phase that needs more than :data:`MAX_STEPS` steps
+doubles the step (at most :data:`DOUBLINGS` times).
 
 This module is the reference of csrc/time_optimal_dq_shoot.c, operation for operation; its loops run over time
 steps in Python (the default engine is the C one).
@@ -67,12 +72,26 @@ SWITCH = 4
 #: Speeding up, the d target is the envelope's at the speed the acceleration adds over this many time constants
 #: T_c ahead, where that weakens more (the d current takes about that long to get there), in full where the
 #: resistive share of the bus :math:`\rho = R i_{max}/V` is at least :data:`RHO_FULL` (less in proportion below),
-#: and not where it is above :data:`RHO_END` (the d current's own resistive drop then eats the voltage it saves:
-#: measured on the Sanyo 103H5208, :math:`\rho` 0.67 and 1.33, 0.1-1.9 % slower with it), falling linearly over
-#: the last 0.1 before it.
+#: and where the reactance at the cruise, :math:`N_r W L`, is at least :data:`X_FULL` times R; none where it is
+#: below :data:`X_END` times R, linear between. Each ampere of d current takes :math:`N_r\omega L` off the back
+#: EMF's voltage and costs R of its own: where the reactance at the move's speeds is not well above R the d
+#: current's resistive drop eats the voltage it saves (the Sanyo 103H5208, :math:`N_r W L/R` 1.1 and 1.9, is
+#: 0.1-1.9 % slower with it; the motors from 0.6 to 20 gain, the JK42HS34 and the 14HS13 at 12 V among them,
+#: whose resistive share 0.69 and 0.78 a rule on :math:`\rho` alone took the look-ahead from).
 AHEAD = 3.0
 RHO_FULL = 0.4
-RHO_END = 0.6
+X_END = 3.0
+X_FULL = 5.0
+#: Speeding up, the d target moves by at most this many times the bus's current rate V / L (a target that jumps
+#: within a step turns the d current's rate sharply there, and the fitted table overshoots the bus between knots:
+#: the QSH5718-51 at 12 V, 1.36 A in one step, 3.4 times V / L h; at 1 V / L h the NEMA 17 preset at 12 V, 0.3 rad,
+#: was 0.4 % slower).
+D_SLEW = 2.0
+#: Braking, where the current is beyond this share of i_max, its target is scaled by :math:`q^2`,
+#: :math:`q = (s\,i_{max}/|i|)^2`: the bus-saturated voltage, scaled back along its own direction, bends the current
+#: out of the current disc while the target moves along the disc's edge (the QSH5718-51 at 24 V: 1.4 % beyond the
+#: shot's i_max, and its fitted table 1 % beyond the limit: a second shot).
+PULL_FROM = 0.995
 #: Braking, the target is the bottom of the envelope with its bus disc scaled by
 #: :math:`1 + \min(\max(2(\rho - \rho_0), 0), r)`, :math:`\rho_0` = :data:`REACH_FROM`, r = :data:`BRAKE_REACH`:
 #: beyond the steady envelope, so that the voltage stays on the bus while the current's transient carries it there,
@@ -195,6 +214,7 @@ class _Model:
         top = top_speed(m, v, i_max, cap)
         self.cap = cap if top >= cap else TOP_SHARE * top
         self.hold = m.B * self.cap / m.Km
+        self.reactance = m.Nr * self.cap * m.L / m.R if m.R > 0 else math.inf  # N_r W L / R at the cap W
         den = 4.0 * h * m.Km
         if not (math.isfinite(self.rate) and self.rate > 0 and math.isfinite(self.cap) and self.cap > 0 and den > 0):
             return False
@@ -250,9 +270,25 @@ class _Model:
         speeding up, the d target looks :data:`AHEAD` T_c ahead.
         """
         alpha = (self.Km * s[3] - self.B * s[1]) / self.J
-        share = min(self.rho / RHO_FULL, (RHO_END - self.rho) / 0.1, 1.0)
-        ahead = min(max((self.cap - s[1]) / self.band, 0.0), 1.0) * AHEAD * max(share, 0.0)
-        return self.target(s[1] + self.h * alpha, braking, self.tc * alpha, ahead * self.tc * max(alpha, 0.0))
+        share = min(self.rho / RHO_FULL, 1.0) * min(max((self.reactance - X_END) / (X_FULL - X_END), 0.0), 1.0)
+        ahead = min(max((self.cap - s[1]) / self.band, 0.0), 1.0) * AHEAD * share
+        t = self.target(s[1] + self.h * alpha, braking, self.tc * alpha, ahead * self.tc * max(alpha, 0.0))
+        if braking:  # a current beyond PULL_FROM i_max pulls its target in (PULL_FROM)
+            n2 = s[2] * s[2] + s[3] * s[3]
+            r2 = (PULL_FROM * self.i_max) * (PULL_FROM * self.i_max)
+            if n2 > r2:
+                q = r2 / n2
+                t = (t[0] * q * q, t[1] * q * q)
+        return t
+
+    def next_speed_up(self, s: State, tg: tuple[float, float]) -> tuple[float, float]:
+        """The speeding-up target at the end of the step from ``s``, its d part slew-limited (:data:`D_SLEW`).
+
+        Within :data:`D_SLEW` ``h V / L`` of ``tg``'s, the target at the step's start.
+        """
+        t_d, t_q = self.next_target(s, False)
+        slew = D_SLEW * self.h * self.v * self.inv_l
+        return min(max(t_d, tg[0] - slew), tg[0] + slew), t_q
 
     def step(self, s: State, t0: tuple[float, float], t1: tuple[float, float], f: float = 1.0) -> State:
         """RK4 over ``f h`` from ``s``, the target moving from ``t0`` towards ``t1`` (reached at a full step)."""
@@ -294,7 +330,7 @@ def _speed_up(md: _Model, d: float) -> Optional[tuple[list[Array], int, bool]]:
             w[k], i_d[k], i_q[k] = md.cap, tg[0], tg[1]  # settled: the cruise's steady state
             return a, k + 1, True
         if k < MAX_STEPS:
-            nxt = md.next_target(s, False)
+            nxt = md.next_speed_up(s, tg)
             s, tg = md.step(s, tg, nxt), nxt
     return None
 
@@ -390,7 +426,7 @@ def switch_state(md: _Model, acc: list[Array], n_acc: int, cruise: bool,
     t0 = (float(t_d[k]), float(t_q[k]))
     if not t_s > k * h:
         return s, t0
-    t1 = (float(t_d[k + 1]), float(t_q[k + 1])) if k + 1 < n_acc else md.next_target(s, False)
+    t1 = (float(t_d[k + 1]), float(t_q[k + 1])) if k + 1 < n_acc else md.next_speed_up(s, t0)
     f = (t_s - k * h) / h
     return md.step(s, t0, t1, f), (t0[0] + f * (t1[0] - t0[0]), t0[1] + f * (t1[1] - t0[1]))
 
@@ -458,6 +494,38 @@ def _guess(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float, gue
     return (guess, f_g, probe, f, probe, f, end) if f_g < 0 else (probe, f, guess, f_g, probe, f, end)
 
 
+def estimate(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float, top: float, over: float) -> float:
+    """A first switch time for the root finder (NaN: none).
+
+    Where the braking distance from ``top`` (``over`` beyond ``d``), scaled by the square of the speed, lands on
+    ``d``. From a cruise, the braking from any switch on it is the same move shifted in time: exact there.
+    """
+    k = n_acc - 1
+    th, w = acc[0], acc[1]
+    if not w[k] > 0:
+        return math.nan
+    if cruise:
+        t = top - over / w[k]
+        if t >= k * md.h:
+            return t
+        b = over
+    else:
+        b = over + d - th[k]
+    c = w[k] * w[k]
+    if not c > 0:  # the speed's square underflows: no estimate
+        return math.nan
+    c = b / c
+    if not (math.isfinite(c) and c > 0):
+        return math.nan
+    g0 = -d
+    for j in range(1, n_acc):
+        g = th[j] + c * w[j] * w[j] - d
+        if g >= 0:
+            return (j - 1 + g0 / (g0 - g)) * md.h
+        g0 = g
+    return math.nan
+
+
 def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float,
           guess: float = math.nan) -> Optional[tuple[float, End]]:
     """The switch time that lands the move on ``d`` and its end (None: a braking phase too long).
@@ -471,6 +539,7 @@ def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float,
     top = last + (d - acc[0][n_acc - 1]) / acc[1][n_acc - 1] if cruise else last
     near = _guess(md, acc, n_acc, cruise, d, guess, top) if math.isfinite(guess) else None
     end: Optional[End]
+    est = math.nan
     if near is not None:
         lo, f_lo, hi, f_hi, t_s, f, end = near
     else:
@@ -482,6 +551,7 @@ def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float,
         f_hi = f = end.angle - d
         if not (math.isfinite(f) and t_s >= 0) or f < 0:  # the bracket's top must not fall short
             return None
+        est = estimate(md, acc, n_acc, cruise, d, top, f)
     side = 0
     for _ in range(ROOT):
         if abs(f) <= ROOT_TOL * d or not hi - lo > 1e-15 * hi:
@@ -489,6 +559,9 @@ def _land(md: _Model, acc: list[Array], n_acc: int, cruise: bool, d: float,
         if not f_hi - f_lo > 0:
             break
         t_s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        if lo < est < hi:  # the first try: the estimate from the top's braking distance
+            t_s = est
+        est = math.nan
         end, _ = _brake(md, acc, n_acc, cruise, t_s, None)
         if end is None:
             return None
