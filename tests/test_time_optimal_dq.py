@@ -153,14 +153,20 @@ def test_look_ahead_follows_the_reactance_at_the_cruise_not_the_resistive_share(
         assert t_d == plain
 
 
-def test_speeding_up_d_target_moves_within_the_bus_rate() -> None:
+def _qsh5718_shot(v_bus: float) -> tuple:
+    """The QSH5718-51 (a NEMA 23 at 2.83 A) at ``v_bus``: motor, i_max, limits, the shot's bus and its 0.3 rad shot."""
     from flatstep.bench.field_weakening import motor
 
     m, i_max = motor("trinamic-qsh5718-51-28-101", Path(__file__).resolve().parent.parent / "examples" / "motors")
-    lim = MotorLimits(v_bus=12.0, i_max=i_max, i_hold=0.01 * i_max, v_use=0.84)
+    lim = MotorLimits(v_bus=v_bus, i_max=i_max, i_hold=0.01 * i_max, v_use=0.84)
     v = 0.98 * lim.v_use * lim.v_bus
     shot = shoot(0.3, m, v, 0.995 * i_max, 0.995 * speed_cap(m, lim, 20000.0))
     assert shot is not None
+    return m, i_max, lim, v, shot
+
+
+def test_speeding_up_d_target_moves_within_the_bus_rate() -> None:
+    m, i_max, lim, v, shot = _qsh5718_shot(12.0)
     step = np.abs(np.diff(shot.accel.t_d[:shot.n_acc]))
     assert np.max(step) <= D_SLEW * shot.h * v / m.L * (1 + 1e-9)
     # the d target no longer jumps at the look-ahead's knee: the fitted table keeps the bus on the first shot
@@ -170,13 +176,7 @@ def test_speeding_up_d_target_moves_within_the_bus_rate() -> None:
 
 
 def test_braking_current_held_to_the_current_limit_on_the_bus() -> None:
-    from flatstep.bench.field_weakening import motor
-
-    m, i_max = motor("trinamic-qsh5718-51-28-101", Path(__file__).resolve().parent.parent / "examples" / "motors")
-    lim = MotorLimits(v_bus=24.0, i_max=i_max, i_hold=0.01 * i_max, v_use=0.84)
-    v = 0.98 * lim.v_use * lim.v_bus
-    shot = shoot(0.3, m, v, 0.995 * i_max, 0.995 * speed_cap(m, lim, 20000.0))
-    assert shot is not None
+    m, i_max, lim, _, shot = _qsh5718_shot(24.0)
     b = shot.brake
     current = np.hypot(b.i_d[:shot.n_brake], b.i_q[:shot.n_brake])
     assert np.max(current) <= 0.995 * i_max * 1.005  # (without the pull: 1.4 % beyond, and a second shot)
