@@ -18,6 +18,7 @@ from flatstep.plan.time_optimal_dq import plan_dq_move, speed_cap, time_optimal_
 from flatstep.plan.time_optimal_dq_c import plan_raw
 from flatstep.plan.time_optimal_dq_envelope import best_currents, dq_envelope
 from flatstep.plan.time_optimal_dq_profile import dq_fit
+from flatstep.plan.time_optimal_dq_ramp import ramp_ends, ramp_voltage
 from flatstep.plan.time_optimal_dq_shoot import (
     D_SLEW,
     RAMP_LOW,
@@ -27,8 +28,6 @@ from flatstep.plan.time_optimal_dq_shoot import (
     _Model,
     _speed_up,
     estimate,
-    ramp_ends,
-    ramp_voltage,
     shoot,
 )
 from flatstep.studies.verify import drive_loop
@@ -74,12 +73,19 @@ def test_shot_lands_on_the_distance_at_rest_and_the_table_follows_it() -> None:
     assert np.max(v_mag) >= 0.95 * lim.v_use * lim.v_bus
 
 
-def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
-    lim = limits(12.0)  # R i_max is 41 % of the bus: the ramp's start would leave it at the full rate
+def _nema17_12v_shot() -> tuple:
+    """The NEMA 17 preset at 12 V (R i_max 41 % of the bus): the shot's bus, its speed cap and its 0.3 rad shot."""
+    lim = limits(12.0)
     v = 0.98 * lim.v_use * lim.v_bus
     cap = 0.995 * speed_cap(NEMA17, lim, 20000.0)
     shot = shoot(0.3, NEMA17, v, 0.995, cap)
-    assert shot is not None and shot.ramp < 1.0
+    assert shot is not None
+    return v, cap, shot
+
+
+def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
+    v, cap, shot = _nema17_12v_shot()  # the ramp's start would leave the bus at the full rate
+    assert shot.ramp < 1.0
     md = _Model(NEMA17, v, 0.995, cap, shot.h)
     md.end_rate = shot.ramp * md.rate
     assert ramp_voltage(md, shot.end) <= 1.0
@@ -89,11 +95,7 @@ def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
 
 
 def test_terminal_ramp_ends_near_the_bus_with_its_d_share_balancing_start_and_end() -> None:
-    lim = limits(12.0)
-    v = 0.98 * lim.v_use * lim.v_bus
-    cap = 0.995 * speed_cap(NEMA17, lim, 20000.0)
-    shot = shoot(0.3, NEMA17, v, 0.995, cap)
-    assert shot is not None
+    v, cap, shot = _nema17_12v_shot()
     md = _Model(NEMA17, v, 0.995, cap, shot.h)
     md.end_rate = shot.ramp * md.rate
     assert RAMP_LOW <= ramp_voltage(md, shot.end) <= 1.0  # the fallen rate raised once, within the bus
@@ -207,11 +209,7 @@ def test_root_finders_first_try_from_the_braking_distance(distance: float, exact
 
 
 def test_the_switch_guess_lands_where_the_whole_bracket_does() -> None:
-    lim = limits(12.0)
-    v = 0.98 * lim.v_use * lim.v_bus
-    cap = 0.995 * speed_cap(NEMA17, lim, 20000.0)
-    first = shoot(0.3, NEMA17, v, 0.995, cap)
-    assert first is not None
+    v, cap, first = _nema17_12v_shot()
     for guess in (first.t_s, 0.9 * first.t_s, 1.2 * first.t_s, -1.0, 1.0):  # near, far and out of the phase
         again = shoot(0.3, NEMA17, v, 0.995, cap, 1.0, guess)
         assert again is not None and again.ramp == pytest.approx(first.ramp, rel=1e-6)

@@ -53,7 +53,7 @@ INTERNAL = {
     "model.datasheet_math",
     "plan.arguments", "plan.time_optimal_c", "plan.envelope", "plan.margins", "plan.segments", "plan.smoothing",
     "plan.table_checks", "plan.time_optimal_dq_c", "plan.time_optimal_dq_envelope", "plan.time_optimal_dq_profile",
-    "plan.time_optimal_dq_shoot",
+    "plan.time_optimal_dq_shoot", "plan.time_optimal_dq_ramp",
     "control.cascade", "control.dq_smc", "control.exact_linearization", "control.loops", "control.microstep",
     "control.protocol", "control.smc", "control.spec", "control.tuning",
     "studies.batch_file", "studies.calibrate_accuracy", "studies.file_values", "studies.fingerprint",
