@@ -101,23 +101,27 @@ def test_the_default_follows_the_plan_frame_rule(tmp_path):
     assert g.k_omega == pytest.approx(r["k_omega_ts"] / Ts)  # no encoder in the file: the sampling's bound alone
     spring = math.sqrt(m.Km * r["d_hold"] * 1.0 * m.Nr / m.J)
     text = path.read_text()
-    for rate in (8000.0, 5000.0):
+    for rate in (10000.0, 5000.0):
         slow = load_scenario(path.write_text(text.replace("20000.0", str(rate))) and path)[0]
         gs = slow.controller().gains
         assert gs.k_omega == pytest.approx(r["k_omega_ts"] * rate)  # capped by Ts
         # the sampling caps the loop below the spring: the spring takes over (more held), the integral slows
         cap = r["w_ts"] * rate
         short = cap / spring
-        assert short < 1.0 and gs.ki_omega == pytest.approx(r["ki_omega"] * (short * cap) ** 2)
-        assert r["d_hold"] < gs.d_hold <= min(1.0, r["d_hold"] / short**2)
-        # and the current loops and the position gain follow the spring: by 1/r, at most 1/r_min
-        follow = 1.0 / max(short, r["r_min"])
-        assert gs.current_bandwidth == pytest.approx(r["lambda_ts"] * rate * follow)
-        assert gs.k_theta == pytest.approx(r["k_theta"] * cap * follow)
-        if rate == 8000.0:  # r = 0.61: the position gain is the spring's frequency's, not the sampling cap's
-            assert short > r["r_min"] and gs.k_theta == pytest.approx(r["k_theta"] * spring)
-        else:  # r = 0.38: the floor holds the current loop's discrete pole inside the unit circle
-            assert short < r["r_min"] and gs.current_bandwidth / rate == pytest.approx(r["lambda_ts"] / r["r_min"])
+        assert short < 1.0
+        assert r["d_hold"] < gs.d_hold <= min(1.0, r["d_hold"] / short**2) * (1 + 1e-12)
+        # the current loops and the position gain follow the spring, the integral falls: by powers of r, floored
+        rbar = max(short, r["r_min"])
+        assert gs.ki_omega == pytest.approx(r["ki_omega"] * cap**2 * rbar ** r["integral_fall"])
+        assert gs.k_theta == pytest.approx(r["k_theta"] * cap / rbar ** r["follow_position"])
+        lam = min(r["lambda_ts"] / rbar ** r["follow_current"], r["lambda_ts_max"])
+        assert gs.current_bandwidth == pytest.approx(lam * rate)
+        if rate == 10000.0:  # r = 0.77: the current loops by 1/r^2, under their fastest
+            assert short > r["r_min"] and lam < r["lambda_ts_max"]
+            assert gs.k_theta > r["k_theta"] * spring  # above the spring's frequency's gain
+        else:  # r = 0.38: the fastest current loop, its discrete pole inside the unit circle
+            assert short < r["r_min"] and gs.current_bandwidth / rate == pytest.approx(r["lambda_ts_max"])
+        assert 0.0 < gs.current_bandwidth / rate < 2.0  # a discrete pole 1 - lambda Ts inside the unit circle
 
 
 @pytest.mark.parametrize("counts, rho", [(16384, 1.0), (16384, 0.3), (4000, 1.0), (4000, 0.3)])

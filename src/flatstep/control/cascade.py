@@ -64,9 +64,12 @@ if TYPE_CHECKING:
 #: :math:`\lambda T_s`, the outer bandwidth's cap :math:`w T_s`, the position and integral gains over that bandwidth
 #: (:math:`k_\theta/w`, :math:`k_{i\omega}/w^2`), the velocity gain's two bounds (:math:`k_\omega T_s`, and the
 #: current one count per period of speed error may ask, in shares of :math:`\rho^*`), the share of
-#: :math:`\rho^*` held on d, and the least sampling cap ratio :math:`r` the loops' take-over follows.
+#: :math:`\rho^*` held on d, the least sampling cap ratio :math:`r` the loops' take-over follows, the powers of
+#: :math:`1/r` by which the current loops' speed and the position gain rise and of :math:`r` by which the velocity
+#: integral falls there, and the current loops' fastest :math:`\lambda T_s`.
 PLAN_FRAME_RULE = dict(lambda_ts=0.895, w_ts=0.0871, k_omega_ts=0.5, k_omega_count=2.0, k_theta=1.28, ki_omega=1.60,
-                       d_hold=0.535, r_min=0.5)
+                       d_hold=0.535, r_min=0.5, follow_current=2.0, follow_position=1.5, integral_fall=6.0,
+                       lambda_ts_max=1.79)
 #: The share of the bus the plan-frame rule's feedforward may take with its held current (:func:`plan_frame_rule`).
 HOLD_VOLTAGE_SHARE = 0.75
 
@@ -253,14 +256,14 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
               \omega_s = \sqrt{\frac{K_m h \rho^*_{max} N_r}{J}},
 
     the held current's spring frequency (its stiffness over the inertia) capped by what the sampling allows:
-    :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60(rw)^2`. Where the sampling caps the loop below the spring,
+    :math:`k_\theta = 1.28w`, :math:`k_{i\omega} = 1.60w^2`. Where the sampling caps the loop below the spring,
     :math:`r = 0.0871/(T_s\omega_s) < 1` (else :math:`r = 1`), the spring takes over what the loop loses: the held
     share rises to :math:`h/r^2` (at most 1: the spring's frequency rises by :math:`1/r`), the velocity
-    integral's bandwidth falls by :math:`r`, and the loops that act through the spring follow it, the current
-    loops' speed (``lambda_ts``'s too) and the position gain rising by :math:`1/\max(r, 0.5)`:
-    :math:`\lambda = 0.895/(T_s r)` and
-    :math:`k_\theta = 1.28 w / r = 1.28\,\omega_s` while :math:`r \ge 0.5` (the floor ``r_min`` keeps
-    :math:`\lambda T_s \le 1.79`, the current loop's discrete pole inside the unit circle, on longer periods).
+    integral falls to :math:`k_{i\omega} = 1.60\,w^2 \bar r^6` with :math:`\bar r = \max(r, 0.5)` (the floor
+    ``r_min``), and the loops that act through the spring follow it, the current loops' speed (``lambda_ts``'s too)
+    rising by :math:`1/\bar r^2` and the position gain by :math:`1/\bar r^{1.5}`:
+    :math:`\lambda = \min(0.895/\bar r^2,\ 1.79)/T_s` (1.79: the current loop's discrete pole, about
+    :math:`1 - \lambda T_s`, kept inside the unit circle) and :math:`k_\theta = 1.28\,w/\bar r^{1.5}`.
     The velocity gain has its own bounds,
 
     .. math:: k_\omega = \min\left(\frac{0.5}{T_s},\ 2\,\frac{K_m\rho^*_{max}}{J}\,\frac{T_s}{q}\right),
@@ -276,15 +279,17 @@ def plan_frame_rule(context: BuildContext) -> dict[str, float]:
     rho = float(np.max(np.abs(context.plan.flag(np.array([context.plan.t0, context.plan.tf])).rho)))
     spring = math.sqrt(m.Km * r["d_hold"] * max(rho, 1e-12) * m.Nr / m.J)
     short = min(1.0, r["w_ts"] / Ts / spring)  # < 1 where the sampling caps the loop below the spring
-    follow = 1.0 / max(short, r["r_min"])  # the current loops and the position gain follow the spring
-    lam = follow * (context.lambda_ts if context.lambda_ts is not None else r["lambda_ts"]) / Ts
+    capped = max(short, r["r_min"])  # the current loops and the position gain follow the spring, the integral falls
+    lam_ts = context.lambda_ts if context.lambda_ts is not None else r["lambda_ts"]
+    lam = min(lam_ts / capped ** r["follow_current"], max(lam_ts, r["lambda_ts_max"])) / Ts
     hold = held_share(context, rho, min(1.0, r["d_hold"] / short**2))
     w = scale * min(r["w_ts"] / Ts, spring)
     k_omega = r["k_omega_ts"] / Ts
     if context.angle_step > 0.0:  # one count per period of speed error asks at most k_omega_count rho* of current
         k_omega = min(k_omega, r["k_omega_count"] * m.Km * max(rho, 1e-12) * Ts / (m.J * context.angle_step))
     return dict(current_bandwidth=scale * lam, position_bandwidth=w, k_omega=scale * k_omega,
-                k_theta=r["k_theta"] * follow * w, ki_omega=r["ki_omega"] * (short * w) ** 2, d_hold=hold)
+                k_theta=r["k_theta"] * w / capped ** r["follow_position"],
+                ki_omega=r["ki_omega"] * w ** 2 * capped ** r["integral_fall"], d_hold=hold)
 
 
 def held_share(context: BuildContext, rho: float, h0: Optional[float] = None) -> float:
