@@ -1,6 +1,7 @@
 // The stages of the field-weakening planner (csrc/time_optimal_dq.c): the envelope's best currents
 // (time_optimal_dq_envelope.c, flatstep.plan.time_optimal_dq_envelope) and the shot move
-// (time_optimal_dq_shoot.c, flatstep.plan.time_optimal_dq_shoot). Internal: not bound by Python.
+// (time_optimal_dq_shoot.c and its parts, time_optimal_dq_shot.h; flatstep.plan.time_optimal_dq_shoot). Internal: not
+// bound by Python.
 #ifndef FS_TIME_OPTIMAL_DQ_STAGES_H
 #define FS_TIME_OPTIMAL_DQ_STAGES_H
 

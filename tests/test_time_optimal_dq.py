@@ -17,19 +17,11 @@ from flatstep.plan.limits import MotorLimits
 from flatstep.plan.time_optimal_dq import plan_dq_move, speed_cap, time_optimal_dq
 from flatstep.plan.time_optimal_dq_c import plan_raw
 from flatstep.plan.time_optimal_dq_envelope import best_currents, dq_envelope
+from flatstep.plan.time_optimal_dq_phases import _brake, _speed_up
+from flatstep.plan.time_optimal_dq_policy import D_SLEW, X_END, _Model
 from flatstep.plan.time_optimal_dq_profile import dq_fit
 from flatstep.plan.time_optimal_dq_ramp import ramp_ends, ramp_voltage
-from flatstep.plan.time_optimal_dq_shoot import (
-    D_SLEW,
-    RAMP_LOW,
-    X_END,
-    _brake,
-    _land,
-    _Model,
-    _speed_up,
-    estimate,
-    shoot,
-)
+from flatstep.plan.time_optimal_dq_shoot import RAMP_LOW, _land, estimate, shoot
 from flatstep.studies.verify import drive_loop
 
 NEMA17 = MotorParams.preset("nema17")

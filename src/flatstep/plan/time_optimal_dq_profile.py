@@ -22,7 +22,8 @@ from ..model.motor import MotorParams
 from .d_current import hermite_cubic
 from .piecewise import horner_rows
 from .segments import hermite_rows
-from .time_optimal_dq_shoot import SWITCH, Shot
+from .time_optimal_dq_phases import SWITCH
+from .time_optimal_dq_shoot import Shot
 
 Array = NDArray[np.float64]
 #: Samples per segment of the margin check (tau = j / CHECK, and the end).

@@ -1,10 +1,12 @@
 r"""The terminal ramp of a field-weakening shot: the bridge from the braking phase, the ramp to rest, its voltage.
 
-Part of :mod:`flatstep.plan.time_optimal_dq_shoot` (whose module docstring gives the policy): once the braking
-current meets the switching curve, a short bridge takes the jerk and the d current's rate linearly to the ramp's,
-then the acceleration falls linearly to 0 as the speed does, and :math:`i_d` to 0 as a quadratic whose start rate is
-the share :math:`c` of the linear one (:func:`ramp_share`). The reference of the ramp's part of
-csrc/time_optimal_dq_shoot.c, operation for operation.
+Part of :mod:`flatstep.plan.time_optimal_dq_shoot` (the policy: :mod:`flatstep.plan.time_optimal_dq_policy`): once
+the braking current meets the switching curve, a short bridge takes the jerk and the d current's rate linearly to
+the ramp's (so that the voltage passes between the two sides', within the bus), then the acceleration falls
+linearly to 0 over :math:`\tau = -2\omega/\dot\omega` and the speed with it, to rest, and :math:`i_d` to 0 as a
+quadratic whose start rate is the share :math:`c` of the linear one (:func:`ramp_share`: 1 unless the start's
+voltage is above the end's; then the two are balanced, so that a braking current beyond the envelope leaves its d
+current later). The reference of csrc/time_optimal_dq_ramp.c, operation for operation.
 """
 from __future__ import annotations
 
@@ -12,9 +14,8 @@ import math
 from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
-    from .time_optimal_dq_shoot import _Model
+    from .time_optimal_dq_policy import State, _Model
 
-State = tuple[float, float, float, float]  # theta, omega, i_d, i_q
 #: Of a step, the bridge from the braking rates to the terminal ramp's.
 BRIDGE = 0.05
 #: Halvings of the bisection on the terminal ramp's d rate share.
