@@ -17,6 +17,9 @@ def plot_frontier(frontiers: dict[str, Frontier], count: Optional[float], *, tit
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import FuncFormatter
+
+    plain = FuncFormatter(lambda v, _: f"{v:.2g}")  # the errors span about a decade: plain numbers, not 1.9x10^0
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
     scale = 1.0 / count if count else 1.0
@@ -34,8 +37,12 @@ def plot_frontier(frontiers: dict[str, Frontier], count: Optional[float], *, tit
     for ax in (left, right):
         ax.set_yscale("log")
         ax.grid(True, which="both", alpha=0.3)
-    left.legend(fontsize=8)
+    left.yaxis.set_major_formatter(plain)
+    left.yaxis.set_minor_formatter(plain)
+    right.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    handles, labels = left.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=max(1, len(handles)), fontsize=8, frameon=False)
     fig.suptitle(title)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.06, 1.0, 1.0))  # room for the legend under the panels, clear of the points
     fig.savefig(path, dpi=110)
     plt.close(fig)
