@@ -3,8 +3,11 @@
 // documented status or runs to finite outputs, and keeps the contracts of sampled.h, drive.h and sensors.h.
 //
 // Input: a header byte (law, its options), a 32-bit mask of the groups decoded hostile (the others take the
-// nominal: the paper's motor and move at Ts = 200 us), then the groups' values (fuzz/decode.h).
-// Each input runs at most FZ_WORK RK4 steps, twice (the second run must repeat the first bit for bit).
+// nominal: the paper's motor and move at Ts = 200 us), then the groups' values (fuzz/decode.h), and last an options
+// byte (0 when exhausted, so shorter inputs run without the options): 1 the encoder's edge timing, 2 the observer's
+// torque ramp (flatstep's Bf for the nominal observer), 4 Bf decoded around that (4 values after the byte).
+// Each input runs at most FZ_WORK RK4 steps, twice (the second run must repeat the first bit for bit); with an
+// option on, a third run without the options must agree with it up to the first period the options may change.
 #include <stdio.h>
 #include <stdlib.h>
 #include "laws.h"
@@ -43,6 +46,19 @@ static void decode_observer(struct fz_reader *r, bool hostile, struct observer_p
     }
 }
 
+// Returns the options byte, decoded after everything else (0 when exhausted); sets the encoder's edge timing (1)
+// and the observer's torque ramp (2: flatstep's Bf for the nominal observer, 4: Bf decoded around it).
+static uint8_t decode_options(struct fz_reader *r, struct sampled_params *p)
+{
+    static const double Bf[4] = {0.0018492826905430052, 27.72640881415158, 1.3552527156068805e-16, 0.0};
+    uint8_t opts = fz_byte(r, 0);
+    int i;
+    p->sensors.edge_timing = opts & 1;
+    for (i = 0; i < OBSERVER_MAX_ORDER; i++)
+        p->observer.Bf[i] = opts & 4 ? fz_value(r, Bf[i]) : (opts & 2 ? Bf[i] : 0);
+    return opts;
+}
+
 // Returns nothing; decodes the drive: bus, PWM and dead time (mask bits: 1 delay, 2 switched, 4 hostile,
 // 8 unlimited bus).
 static void decode_drive(struct fz_reader *r, uint8_t bits, struct drive_params *p)
@@ -70,7 +86,7 @@ static bool params_ok(const struct sampled_params *p, uint32_t pwm_periods)
     if (p->observed && (o->order < 2 || o->order > OBSERVER_MAX_ORDER))
         return false;
     for (i = 0; p->observed && i < o->order; i++) {
-        if (!isfinite(o->Bd[i]) || !isfinite(o->Lc[i]))
+        if (!isfinite(o->Bd[i]) || !isfinite(o->Lc[i]) || !isfinite(o->Bf[i]))
             return false;
         for (j = 0; j < o->order; j++)
             if (!isfinite(o->Ad[i][j]))
@@ -92,9 +108,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     static struct fz_law law;
     static struct fz_run run;
+    static struct sampled loop, plain;
     struct fz_reader r = {data, size};
     struct sampled_params p = {0};
-    struct sampled loop;
     uint8_t head = fz_byte(&r, 0);
     uint32_t mask = fz_u32(&r, 0), periods;
     double work;
@@ -132,6 +148,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         law.cancel = &cancel;
         law.cancel_at = 1 + fz_byte(&r, 100);
     }
+    if (!(decode_options(&r, &p) & 7)) {
+        fz_check_run(&loop, &p, &law, &run, &cancel);
+        return 0;
+    }
+    plain = loop;  // initialised without the options
+    rc = sampled_init(&loop, &p);
+    if ((rc == SIM_OK) != params_ok(&p, periods) || (rc != SIM_OK && rc != SIM_EARGS))
+        FZ_FAIL("sampled_init with the options returned %d on %s parameters", rc,
+                params_ok(&p, periods) ? "valid" : "invalid");
+    if (rc != SIM_OK)
+        return 0;
     fz_check_run(&loop, &p, &law, &run, &cancel);
+    fz_check_options(&plain, &p, &law, &run, &cancel);
     return 0;
 }

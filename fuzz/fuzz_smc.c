@@ -13,12 +13,13 @@
 #include "smc.h"
 
 // Prints the broken guarantee with the step's inputs and outputs, then aborts (libFuzzer saves the input).
-#define FAIL(what)                                                                                       \
-    do {                                                                                                 \
-        fprintf(stderr, "smc_step: %s\n  meas %d t %.17g y %.17g %.17g %.17g %.17g %.17g\n  -> status %u "  \
-                "v %.17g %.17g (v_limit %.17g)\n", what, p.measurement, t, y[0], y[1], y[2], y[3], y[4],   \
-                (unsigned)st, v[0], v[1], s.p.v_limit);                                                   \
-        abort();                                                                                         \
+#define FAIL(what)                                                                                            \
+    do {                                                                                                      \
+        fprintf(stderr,                                                                                       \
+                "smc_step: %s\n  meas %d t %.17g y %.17g %.17g %.17g %.17g %.17g\n  -> status %u "            \
+                "v %.17g %.17g (v_limit %.17g)\n",                                                            \
+                what, p.measurement, t, y[0], y[1], y[2], y[3], y[4], (unsigned)st, v[0], v[1], s.p.v_limit); \
+        abort();                                                                                              \
     } while (0)
 
 // Returns 0 (libFuzzer's convention); aborts when an smc_step guarantee is broken.
@@ -50,8 +51,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     if (head & 4)
         p.measurement = (int)(head >> 3);  // mostly invalid modes: smc_init must refuse them
-    else if (head & 8)  // the detent hold from tf on
-        p.gains.hold_damping = head & 2 ? fz_value(&r, 0.7) : 0.7;
+    else if (head & 8)
+        p.gains.hold_damping = head & 2 ? fz_value(&r, 0.7) : 0.7;  // the detent hold from tf on
     if (smc_init(&s, &p) != SMC_PARAMS_OK)
         return 0;
     t = fz_value(&r, 0.03);

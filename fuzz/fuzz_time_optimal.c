@@ -119,7 +119,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     struct motor_params m = nema17;
     struct to_limits l;
     double d, widths[WIDTHS_MAX], *work;
-    uint8_t head = fz_byte(&r, 0), b;
+    uint8_t head = fz_byte(&r, 0);
     uint32_t mask = fz_u32(&r, 0);
     size_t nw = 0, len = time_optimal_work_len(), i, k;
     bool args_ok;
@@ -132,12 +132,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     if (head & 4)
         len -= 1 + fz_byte(&r, 0);
-    if (mask & 1) {
-        m.R = fz_value(&r, m.R), m.L = fz_value(&r, m.L), m.Km = fz_value(&r, m.Km);
-        m.J = fz_value(&r, m.J), m.B = fz_value(&r, m.B);
-        b = fz_byte(&r, 50);
-        m.Nr = b & 0x80 ? (int)fz_u32(&r, 50) : b;
-    }
+    if (mask & 1)
+        fz_motor_fields(&r, true, &m);
     decode_limits(&r, mask, &l);
     args_ok =
         motor_ok(&m) && limits_ok(&l) && isfinite(d) && d != 0 && (!(head & 1) || (nw >= 1 && nw <= TO_MAX_WIDTHS));

@@ -31,18 +31,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     struct motor_params m = nema17;
     struct tod_limits l = {24.0, 0.84, 1.0, 0, 20000.0};
     double d, *f[5] = {&l.v_bus, &l.v_use, &l.i_max, &l.speed_max, &l.control_rate}, *work;
-    uint8_t head = fz_byte(&r, 0), mask = fz_byte(&r, 0), b;
+    uint8_t head = fz_byte(&r, 0), mask = fz_byte(&r, 0);
     size_t len = time_optimal_dq_work_len(), i;
     int rc, k;
     d = fz_value(&r, 1.0);
     if (head & 4)
         len -= 1 + fz_byte(&r, 0);
-    if (mask & 1) {
-        m.R = fz_value(&r, m.R), m.L = fz_value(&r, m.L), m.Km = fz_value(&r, m.Km);
-        m.J = fz_value(&r, m.J), m.B = fz_value(&r, m.B);
-        b = fz_byte(&r, 50);
-        m.Nr = b;
-    }
+    if (mask & 1)
+        fz_motor_fields(&r, false, &m);  // Nr 0..255
     for (k = 0; k < 5; k++)
         if (mask & (2u << k))
             *f[k] = fz_value(&r, *f[k]);

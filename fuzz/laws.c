@@ -24,14 +24,9 @@ static bool plan_ok(const struct plan *p)
 void fz_motor(struct fz_reader *r, bool hostile, struct motor_params *m)
 {
     const struct motor_params paper = {8.4, 0.010, 0.05, 3.6e-6, 1e-4, 50};
-    uint8_t b;
     *m = paper;
-    if (!hostile)
-        return;
-    m->R = fz_value(r, m->R), m->L = fz_value(r, m->L), m->Km = fz_value(r, m->Km);
-    m->J = fz_value(r, m->J), m->B = fz_value(r, m->B);
-    b = fz_byte(r, 50);
-    m->Nr = b & 0x80 ? (int)fz_u32(r, 50) : b;  // any int, or 0..127
+    if (hostile)
+        fz_motor_fields(r, true, m);  // any Nr, or 0..127
 }
 
 // Returns nothing; decodes a plan around the nominal one (t0 .. tf) when hostile.

@@ -46,6 +46,17 @@ struct fz_law {
     uint32_t status[FZ_RECORD];
 };
 
+// Returns nothing; decodes the motor's fields around m's own, in place: R, L, Km, J, B, then Nr from a byte (default 50):
+// with wide_nr a byte of bit 7 set is followed by Nr as any 32-bit int (else 0..127), without Nr is the byte.
+static inline void fz_motor_fields(struct fz_reader *r, bool wide_nr, struct motor_params *m)
+{
+    uint8_t b;
+    m->R = fz_value(r, m->R), m->L = fz_value(r, m->L), m->Km = fz_value(r, m->Km);
+    m->J = fz_value(r, m->J), m->B = fz_value(r, m->B);
+    b = fz_byte(r, 50);
+    m->Nr = wide_nr && (b & 0x80) ? (int)fz_u32(r, 50) : b;
+}
+
 // Returns nothing; decodes a motor around the paper's (all fields when hostile, else the nominal).
 void fz_motor(struct fz_reader *r, bool hostile, struct motor_params *m);
 

@@ -1,4 +1,4 @@
-"""Write the seeds and regression inputs of the time_optimal, traj and flat fuzz targets.
+"""Write the seeds and regression inputs of the time_optimal, traj, flat, dq_smc, time_optimal_dq and sampled targets.
 
 Each input follows its harness's layout (fuzz/fuzz_<target>.c) in the encoding of fuzz/decode.h: a value is a tag
 byte and 8 payload bytes, tag 0 the raw IEEE bits, tag 3 with a zero payload the harness's nominal value.
@@ -113,9 +113,22 @@ def time_optimal_dq() -> None:
     write("seeds", "time_optimal_dq", "motor", bytes([0, 1]) + val(1.0) + nom() * 5 + b"\x32")
 
 
+def sampled() -> None:
+    """Seeds of fuzz_sampled with its options byte: head (law), mask, a faster plan, periods, options, Bf."""
+    # mask bits: 6 sensors, 8 observer, 15 the plan (0 .. 0.3 rad over 20 ms: the encoder's edges come within a period)
+    plan = val(0.0) + val(0.3) + nom() * 4
+    for law, name in enumerate(("smc", "microstep", "cascade", "exact")):
+        write("seeds", "sampled", f"{name}-observed-edge-ramp", bytes([law]) + u32(0x8140) + plan + bytes([250, 3]))
+    write("seeds", "sampled", "smc-observed-edge", bytes([0]) + u32(0x8140) + plan + bytes([250, 1]))
+    ramp_near = bytes([2]) + u32(0x8140) + plan + bytes([250, 6]) + nom() * 4  # Bf decoded: 4 values near flatstep's
+    write("seeds", "sampled", "cascade-observed-ramp-near", ramp_near)
+    write("seeds", "sampled", "smc-sensed-edge", bytes([0]) + u32(0x8040) + plan + bytes([250, 1]))
+
+
 if __name__ == "__main__":
     time_optimal()
     traj()
     flat()
     dq_smc()
     time_optimal_dq()
+    sampled()

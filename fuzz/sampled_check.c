@@ -86,6 +86,25 @@ static void check_sensed(const struct sensors_params *sp, const struct fz_run *r
     }
 }
 
+// Returns nothing; aborts unless sensors_edge at the plant state x of period k keeps sensors.h's contract: (0, -1)
+// without edge timing, an encoder or motion, else the count edge theta_m -+ q/2 behind the motion, which the rotor
+// passed at most one count ago (up to the reading's rounding), and its age (theta - edge) / omega, never NaN.
+static void check_edge(const struct sensors_params *sp, const double x[4], size_t k)
+{
+    double e[2], q = sp->angle_step, passed, tol = q * 1e-9 + 8 * DBL_EPSILON * fabs(x[3]);
+    sensors_edge(sp, x[3], x[2], e);
+    if (!sp->edge_timing || q == 0 || x[2] == 0) {
+        if (e[0] != 0 || e[1] != -1)
+            FZ_FAIL("period %zu: an edge %g aged %g without edge timing, an encoder or motion", k, e[0], e[1]);
+        return;
+    }
+    passed = x[2] > 0 ? x[3] - e[0] : e[0] - x[3];
+    if (e[0] != sensors_angle(sp, x[3]) - (x[2] > 0 ? 0.5 * q : -0.5 * q) || !same(e[1], (x[3] - e[0]) / x[2])
+        || isnan(e[1]) || !(passed >= -tol && passed <= q + tol))
+        FZ_FAIL("period %zu: angle %.17g at %.17g rad/s (step %g): edge %.17g aged %.17g, passed %.17g ago", k, x[3],
+                x[2], q, e[0], e[1], passed);
+}
+
 // Returns nothing; aborts unless the outputs of a finished or stopped run keep sampled.h's contract.
 static void check_outputs(const struct sampled_params *p, const struct fz_law *law, const struct fz_run *run, int pass)
 {
@@ -133,6 +152,8 @@ static void check_outputs(const struct sampled_params *p, const struct fz_law *l
                 plant_acceleration(&run->plant, &x[4 * k]));
         if (p->sensed && !p->observed)
             check_sensed(&p->sensors, run, pass, k, p->Ts);
+        if (p->sensed)
+            check_edge(&p->sensors, &x[4 * k], k);
         if (p->observed && k == 0
             && (y[CTRL_Y_OMEGA] != 0 || (!p->sensed && y[CTRL_Y_THETA] != x[3])
                 || (p->sensed
@@ -203,6 +224,54 @@ void fz_check_run(struct sampled *loop, const struct sampled_params *p, struct f
         || memcmp(run->status[1], run->status[0], sizeof run->status[0]) != 0
         || memcmp(&run->st[1], &run->st[0], sizeof run->st[0]) != 0)
         FZ_FAIL("a second run from the same start differs: sampled_run's reset is incomplete");
+}
+
+// Returns the first period whose controller input the options of p may change (sampled.h): 2 with a torque ramp (the
+// first prediction holds its torque), the period after the first reading (taken `delay` periods before) whose edge
+// age lies in [0, Ts) with edge timing, with sensors and an observer; else FZ_MAXN + 2 (none).
+static size_t first_changed(const struct sampled_params *p, const struct fz_run *run, uint32_t calls)
+{
+    const struct sensors_params *sp = &p->sensors;
+    double e[2];
+    size_t k, first = FZ_MAXN + 2;
+    uint32_t i;
+    for (i = 0; p->observed && i < p->observer.order; i++)
+        if (p->observer.Bf[i] != 0)
+            first = 2;
+    for (k = 1; p->observed && p->sensed && k < calls && k < first; k++) {
+        sensors_edge(sp, run->x[0][4 * (k >= sp->delay ? k - sp->delay : 0) + 3],
+                     run->x[0][4 * (k >= sp->delay ? k - sp->delay : 0) + 2], e);
+        if (e[1] >= 0 && e[1] < p->Ts)
+            first = k;
+    }
+    return first;
+}
+
+// Returns nothing; runs the loop without the options and compares it with the run's first pass (sampled_check.h).
+void fz_check_options(struct sampled *plain, const struct sampled_params *p, struct fz_law *law, struct fz_run *run,
+                      volatile uint32_t *cancel)
+{
+    uint32_t calls = law->calls;
+    size_t first = first_changed(p, run, calls), k, rows;
+    int rc;
+    if (run->rc[0] == SIM_EARGS)
+        return;  // refused before any period: nothing to compare
+    *cancel = 0;
+    rc = sampled_run(plain, &law->outer, &run->plant, run->x0, run->n, run->has_noise ? run->noise : NULL, run->x[1],
+                     run->v[1], run->y[1], run->status[1], &run->st[1]);
+    rows = calls < law->calls ? calls : law->calls;
+    rows = rows < first ? rows : first;
+    for (k = 0; k < rows; k++)
+        if (memcmp(&run->y[1][CTRL_Y_LEN * k], &run->y[0][CTRL_Y_LEN * k], CTRL_Y_LEN * sizeof(double)) != 0
+            || memcmp(&run->v[1][2 * k], &run->v[0][2 * k], 2 * sizeof(double)) != 0
+            || memcmp(&run->x[1][4 * k], &run->x[0][4 * k], 4 * sizeof(double)) != 0
+            || run->status[1][k] != run->status[0][k])
+            FZ_FAIL("period %zu: the edge timing or torque ramp changed the loop before period %zu (%u and %u calls)",
+                    k, first, (unsigned)calls, (unsigned)law->calls);
+    if (first >= calls
+        && (rc != run->rc[0] || law->calls != calls || memcmp(&run->st[1], &run->st[0], sizeof run->st[0]) != 0))
+        FZ_FAIL("the options never act, yet without them the run differs: status %d, not %d, %u calls, not %u", rc,
+                run->rc[0], (unsigned)law->calls, (unsigned)calls);
 }
 
 // Returns nothing; aborts unless drive_pwm_period keeps drive.h's contract on a decoded command and currents:

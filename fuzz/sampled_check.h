@@ -36,6 +36,13 @@ void fz_decode_run(struct fz_reader *r, uint32_t mask, struct fz_run *run);
 void fz_check_run(struct sampled *loop, const struct sampled_params *p, struct fz_law *law, struct fz_run *run,
                   volatile uint32_t *cancel);
 
+// Returns nothing; runs plain (the loop initialised without p's edge timing and torque ramp) once and aborts unless
+// it agrees with the run's first pass up to the first period the options may change (sampled.h): the torque ramp
+// from the second prediction on, the edge timing from the first reading after the first whose edge age lies in
+// [0, Ts), and only with sensors and an observer.
+void fz_check_options(struct sampled *plain, const struct sampled_params *p, struct fz_law *law, struct fz_run *run,
+                      volatile uint32_t *cancel);
+
 // Returns nothing; aborts unless drive_pwm_period keeps drive.h's contract on a decoded command and currents.
 void fz_check_pwm(struct fz_reader *r, const struct drive_params *d, double Tp);
 
