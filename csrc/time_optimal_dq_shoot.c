@@ -150,7 +150,8 @@ bool tod_shoot(const struct motor_params *m, fs_real d, fs_real v, fs_real i_max
                     break;
                 guess = t_s;
                 excess = tod_ramp_voltage(&md, &shot->end);
-                if (excess <= 1 && (excess >= TOD_RAMP_LOW || !(e_prev > 1) || kept))
+                // (no ramp voltage, excess 0, leaves nothing to aim the rate from: kept as it is)
+                if (excess <= 1 && (excess >= TOD_RAMP_LOW || !(e_prev > 1) || kept || excess == 0))
                     break;
                 rate = md.end_rate;
                 if (excess <= 1)  // well within the bus after a fall: raised once, between the two

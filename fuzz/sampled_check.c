@@ -252,10 +252,11 @@ void fz_check_options(struct sampled *plain, const struct sampled_params *p, str
                       volatile uint32_t *cancel)
 {
     uint32_t calls = law->calls;
-    size_t first = first_changed(p, run, calls), k, rows;
+    size_t first, k, rows;
     int rc;
     if (run->rc[0] == SIM_EARGS)
         return;  // refused before any period: nothing to compare
+    first = first_changed(p, run, calls);
     *cancel = 0;
     rc = sampled_run(plain, &law->outer, &run->plant, run->x0, run->n, run->has_noise ? run->noise : NULL, run->x[1],
                      run->v[1], run->y[1], run->status[1], &run->st[1]);

@@ -99,9 +99,22 @@ static int float_table_checks(void)
     return 0;
 }
 
+// Returns 0; a terminal ramp whose voltage overflows aims the next rate at 0, whose ramp has no voltage: that landing
+// is kept (its voltage once divided the rate's share by 0), and the plan is a valid table within its limits.
+static int ramp_voltage_overflow(void)
+{
+    const struct motor_params huge = {4.1, 1e156, 1e156, 1e156, 1e-4, 96};
+    const struct tod_limits l = {1e156, 0.84, 1.0, 1e156, 20000};
+    int rc = time_optimal_dq_plan(&huge, &l, 1.0, work, sizeof work / sizeof *work, &out);
+    CHECK(rc == TOD_OK && out.margins.worst <= 0 && fabs(theta_at(&out, out.n - 1, 1.0) - 1.0) < 1e-9,
+          "rc %d, worst %g, ends at %g", rc, out.margins.worst, rc == TOD_OK ? theta_at(&out, out.n - 1, 1.0) : 0.0);
+    return 0;
+}
+
 int test_time_optimal_dq(void)
 {
     float_table_checks();
+    ramp_voltage_overflow();
     feasible_checks();
     mirror_and_errors();
     return 0;
