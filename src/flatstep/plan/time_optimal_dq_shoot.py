@@ -207,7 +207,8 @@ def shoot(d: float, motor: MotorParams, v: float, i_max: float, cap: float, ramp
                     break
                 guess = landed[0]
                 excess = ramp_voltage(md, landed[1])
-                if excess <= 1.0 and (excess >= RAMP_LOW or not e_prev > 1.0 or kept is not None):
+                # (no ramp voltage, excess 0, leaves nothing to aim the rate from: kept as it is)
+                if excess <= 1.0 and (excess >= RAMP_LOW or not e_prev > 1.0 or kept is not None or excess == 0.0):
                     break
                 rate = md.end_rate
                 if excess <= 1.0:  # well within the bus after a fall: raised once, between the two
