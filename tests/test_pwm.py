@@ -8,6 +8,7 @@ Both compute each PWM period's breakpoints and merge them in the same order and 
 identical; the runs then differ only where NumPy and libm round differently (docs of tests/test_core_drive.py):
 measured over the runs below, max |dtheta| 3.5e-18 to 7.2e-15 rad and max |dv| 1.6e-15 to 6.9e-12 V.
 """
+import functools
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -118,14 +119,28 @@ def test_c_switched_pwm_matches_the_reference(motor, plan, name, dead_time):
         assert chopped > COUNT  # 0.96 V against each current: the uncompensated dead time moves the rotor
 
 
-@pytest.mark.parametrize("dead_time", DEAD_TIMES)
-def test_c_switched_pwm_on_the_nema17_scenario(dead_time):
-    """The NEMA 17 compare scenario (load, detent, Coulomb friction, sensors, load observer) under PWM."""
+@functools.cache
+def nema17_runs(dead_time):
+    """The NEMA 17 compare scenario under switched PWM: the C run, the Python reference and its wall time [s].
+
+    Cached: the speed-up test times the reference run the dead-time case checks (one run of several seconds, not
+    two); the tests sharing it are in one xdist group.
+    """
     scenario, _ = load_scenario(NEMA17)
     drive = Drive(v_bus=24, pwm="switched", f_pwm=40e3, dead_time=dead_time)
     switched = replace(scenario, loop=replace(scenario.loop, drive=drive))
     assert switched.loop.sensors is not None and switched.loop.observer is not None
-    c, py = switched.run(engine="c"), switched.run(engine="python")
+    c = switched.run(engine="c")
+    t0 = time.perf_counter()
+    py = switched.run(engine="python")
+    return switched, c, py, time.perf_counter() - t0
+
+
+@pytest.mark.xdist_group("pwm_nema17")
+@pytest.mark.parametrize("dead_time", DEAD_TIMES)
+def test_c_switched_pwm_on_the_nema17_scenario(dead_time):
+    """The NEMA 17 compare scenario (load, detent, Coulomb friction, sensors, load observer) under PWM."""
+    _, c, py, _ = nema17_runs(dead_time)
     assert_parity(c, py)
     print(f"\nNEMA 17, dead time {dead_time:g} s: max |dtheta| {np.max(np.abs(c.theta - py.theta)):.2g} rad, "
           f"max |dv| {np.max(np.abs([c.va - py.va, c.vb - py.vb])):.2g} V, "
@@ -133,19 +148,15 @@ def test_c_switched_pwm_on_the_nema17_scenario(dead_time):
     assert c.summary()["max_abs_theta_error_move"] < 20 * COUNT  # 0.5 rad in 60 ms against 0.039 N m (9-10 counts)
 
 
-def test_c_switched_pwm_speed_up(motor, plan):
+@pytest.mark.xdist_group("pwm_nema17")
+def test_c_switched_pwm_speed_up():
     """The C loop against the Python reference on one 60 ms switched run (best of 3 C runs, one Python run)."""
-    scenario, _ = load_scenario(NEMA17)
-    drive = Drive(v_bus=24, pwm="switched", f_pwm=40e3, dead_time=0.5e-6)
-    switched = replace(scenario, loop=replace(scenario.loop, drive=drive))
+    switched, _, _, t_py = nema17_runs(0.5e-6)
     times = []
     for _ in range(3):
         t0 = time.perf_counter()
         switched.run(engine="c")
         times.append(time.perf_counter() - t0)
-    t0 = time.perf_counter()
-    switched.run(engine="python")
-    t_py = time.perf_counter() - t0
     ratio = t_py / min(times)
     print(f"\nswitched PWM, NEMA 17 scenario, 2000 periods: C {1e3 * min(times):.1f} ms, "
           f"Python reference {1e3 * t_py:.0f} ms, speed-up {ratio:.0f}x")
