@@ -53,8 +53,11 @@ def eq1_residuals(ia, ib, omega, theta, va, vb, effects):
 
 
 def vanishes(expr):
-    """Whether ``expr`` is identically zero: trig functions of sums expanded, sin^2(Nr q0) written 1 - cos^2(Nr q0),
-    then expanded (exact, and a hundred times faster than ``sp.simplify`` on the torque equation)."""
+    """Whether ``expr`` is identically zero.
+
+    Trig functions of sums expanded, sin^2(Nr q0) written 1 - cos^2(Nr q0), then expanded: exact, and a hundred
+    times faster than ``sp.simplify`` on the torque equation.
+    """
     s, c = sp.sin(Nr * q[0]), sp.cos(Nr * q[0])
     return sp.expand(sp.expand(sp.expand_trig(expr)).subs(s**2, 1 - c**2)) == 0
 

@@ -4,6 +4,7 @@
 a fresh clone's ``make test`` runs them). A ``$ command`` line is followed by the output it must print; ``(...)``
 there stands for text left out.
 """
+import itertools
 import os
 import re
 import shlex
@@ -63,12 +64,15 @@ def test_readme_has_the_commands_it_promises():
 def _written(command):
     """The files a command names after ``--out`` or ``--record`` (what a later command may read)."""
     argv = shlex.split(command, comments=True)
-    return {b for a, b in zip(argv, argv[1:]) if a in ("--out", "--record")}
+    return {b for a, b in itertools.pairwise(argv) if a in ("--out", "--record")}
 
 
 def shell_units():
-    """The shell commands in runs that can go apart: a command joins the run of an earlier one whose file it reads
-    (``identify nema17.csv`` after ``identify --excite ... --record nema17.csv``), else starts its own."""
+    """The shell commands in runs that can go apart.
+
+    A command joins the run of an earlier one whose file it reads (``identify nema17.csv`` after
+    ``identify --excite ... --record nema17.csv``), else starts its own.
+    """
     units: list[list[tuple[str, list[str] | None]]] = []
     for command, shown in shell_commands():
         words = set(shlex.split(command, comments=True))
