@@ -8,7 +8,6 @@ Both compute each PWM period's breakpoints and merge them in the same order and 
 identical; the runs then differ only where NumPy and libm round differently (docs of tests/test_core_drive.py):
 measured over the runs below, max |dtheta| 3.5e-18 to 7.2e-15 rad and max |dv| 1.6e-15 to 6.9e-12 V.
 """
-import functools
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -119,12 +118,12 @@ def test_c_switched_pwm_matches_the_reference(motor, plan, name, dead_time):
         assert chopped > COUNT  # 0.96 V against each current: the uncompensated dead time moves the rotor
 
 
-@functools.cache
-def nema17_runs(dead_time):
-    """The NEMA 17 compare scenario under switched PWM: the C run, the Python reference and its wall time [s].
+@pytest.mark.parametrize("dead_time", DEAD_TIMES)
+def test_c_switched_pwm_on_the_nema17_scenario(dead_time):
+    """The NEMA 17 compare scenario (load, detent, Coulomb friction, sensors, load observer) under PWM.
 
-    Cached: the speed-up test times the reference run the dead-time case checks (one run of several seconds, not
-    two); the tests sharing it are in one xdist group.
+    With dead time, also the speed-up on this 60 ms switched run: its Python reference run, timed, against the best
+    of 3 C runs (one reference run serves both checks).
     """
     scenario, _ = load_scenario(NEMA17)
     drive = Drive(v_bus=24, pwm="switched", f_pwm=40e3, dead_time=dead_time)
@@ -133,31 +132,20 @@ def nema17_runs(dead_time):
     c = switched.run(engine="c")
     t0 = time.perf_counter()
     py = switched.run(engine="python")
-    return switched, c, py, time.perf_counter() - t0
-
-
-@pytest.mark.xdist_group("pwm_nema17")
-@pytest.mark.parametrize("dead_time", DEAD_TIMES)
-def test_c_switched_pwm_on_the_nema17_scenario(dead_time):
-    """The NEMA 17 compare scenario (load, detent, Coulomb friction, sensors, load observer) under PWM."""
-    _, c, py, _ = nema17_runs(dead_time)
+    t_py = time.perf_counter() - t0
     assert_parity(c, py)
     print(f"\nNEMA 17, dead time {dead_time:g} s: max |dtheta| {np.max(np.abs(c.theta - py.theta)):.2g} rad, "
           f"max |dv| {np.max(np.abs([c.va - py.va, c.vb - py.vb])):.2g} V, "
           f"move error {c.summary()['max_abs_theta_error_move'] / COUNT:.2f} counts")
     assert c.summary()["max_abs_theta_error_move"] < 20 * COUNT  # 0.5 rad in 60 ms against 0.039 N m (9-10 counts)
-
-
-@pytest.mark.xdist_group("pwm_nema17")
-def test_c_switched_pwm_speed_up():
-    """The C loop against the Python reference on one 60 ms switched run (best of 3 C runs, one Python run)."""
-    switched, _, _, t_py = nema17_runs(0.5e-6)
+    if dead_time == 0:
+        return
     times = []
     for _ in range(3):
         t0 = time.perf_counter()
         switched.run(engine="c")
         times.append(time.perf_counter() - t0)
     ratio = t_py / min(times)
-    print(f"\nswitched PWM, NEMA 17 scenario, 2000 periods: C {1e3 * min(times):.1f} ms, "
+    print(f"switched PWM, NEMA 17 scenario, 2000 periods: C {1e3 * min(times):.1f} ms, "
           f"Python reference {1e3 * t_py:.0f} ms, speed-up {ratio:.0f}x")
     assert ratio > 20
