@@ -352,9 +352,14 @@ run_batch(killed_grid(), engine="python", workers=2, chunk_size=1, out=sys.argv[
 """
 
 
+#: The killed batch's move: the paper's 0.02 rad in 10 ms from t = 2 ms (300 periods of 15 ms a run).
+KILLED_PLAN = fs.RestToRest(0.0, 0.02, 0.4, 0.4, 0.002, 0.012)
+
+
 def killed_grid():
-    """Six sampled runs of about 0.2 s each on the Python engine."""
-    return [replace(SAMPLED, name=f"k{i}", t_end=0.045, plant=fs.Plant(MOTOR, load=i * 1e-6)) for i in range(6)]
+    """Six sampled runs of about 0.4 s each on the Python engine."""
+    return [replace(SAMPLED, name=f"k{i}", plan=KILLED_PLAN, t_end=0.015, plant=fs.Plant(MOTOR, load=i * 1e-6))
+            for i in range(6)]
 
 
 def descendants(pid):

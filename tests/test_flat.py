@@ -60,7 +60,8 @@ def test_printed_eq9_matrix_does_not_satisfy_eq1():
     c, s = sp.cos(phi), sp.sin(phi)
     X = va * s + vb * c  # recover the polar-frame voltages the paper's column vector holds
     Y = va * c - vb * s
-    M = sp.Matrix([[c, s], [-s, c]]).inv()
+    printed = sp.Matrix([[c, s], [-s, c]])
+    M = printed.adjugate() / printed.det()  # its inverse (inv() spends 1.7 s simplifying what subs evaluates)
     va_p, vb_p = M * sp.Matrix([X, Y])
     point = {R: 8.4, L: 0.01, Km: 0.05, J: 3.6e-6, B: 1e-4, Nr: 50, tau: 0,
              r[0]: 0.4, r[1]: 1.0, r[2]: 0, q[0]: 0.01, q[1]: 2.0, q[2]: 100.0, q[3]: 1e4, q[4]: 0}

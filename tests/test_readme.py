@@ -4,6 +4,7 @@
 a fresh clone's ``make test`` runs them). A ``$ command`` line is followed by the output it must print; ``(...)``
 there stands for text left out.
 """
+import itertools
 import os
 import re
 import shlex
@@ -60,9 +61,47 @@ def test_readme_has_the_commands_it_promises():
                if line.startswith("make"))
 
 
-def test_shell_commands(scratch):
+def _written(command):
+    """The files a command names after ``--out`` or ``--record`` (what a later command may read)."""
+    argv = shlex.split(command, comments=True)
+    return {b for a, b in itertools.pairwise(argv) if a in ("--out", "--record")}
+
+
+def shell_units():
+    """The shell commands in runs that can go apart.
+
+    A command joins the run of an earlier one whose file it reads (``identify nema17.csv`` after
+    ``identify --excite ... --record nema17.csv``), else starts its own.
+    """
+    units: list[list[tuple[str, list[str] | None]]] = []
+    for command, shown in shell_commands():
+        words = set(shlex.split(command, comments=True))
+        home = next((u for u in units if any(words & _written(c) for c, _ in u)), None)
+        if home is None:
+            units.append(home := [])
+        home.append((command, shown))
+    return units
+
+
+#: What a command must leave behind, besides its exit code and output.
+LEFT_BEHIND = {"flatstep robustness": lambda where: (where / "out" / "rob" / "robustness.png").stat().st_size > 10_000,
+               "flatstep identify nema17.csv": lambda where: "[motor]" in (where / "motor.toml").read_text()}
+
+
+def test_shell_units_keep_every_command_once_in_order():
+    units = shell_units()
+    flat = [c for u in units for c in u]
+    assert sorted(flat, key=shell_commands().index) == shell_commands() and len(units) >= 7
+    assert all(any(c.startswith(k) for u in units for c, _ in u) for k in LEFT_BEHIND)
+    identify = next(u for u in units if any("--record nema17.csv" in c for c, _ in u))
+    assert [c.split()[1] for c, _ in identify] == ["identify", "identify"]   # the recording, then its fit
+
+
+@pytest.mark.parametrize("unit", shell_units(), ids=lambda u: "+".join(shlex.split(c)[1] for c, _ in u))
+def test_shell_commands(scratch, unit):
+    """Each run of commands in order (the compare runs, several seconds each, go to separate workers)."""
     where, env = scratch
-    for command, shown in shell_commands():   # in order: identify reads the recording written before it
+    for command, shown in unit:
         argv = shlex.split(command, comments=True)
         if argv[0] == "flatstep":  # in this process: the same main() the entry point calls, without its start-up
             proc = run_cli(argv[1:], cwd=where)
@@ -70,14 +109,15 @@ def test_shell_commands(scratch):
             proc = subprocess.run(command, shell=True, cwd=where, env=env, capture_output=True, text=True, timeout=300)
         if shown is None:
             assert proc.returncode == 0, (command, proc.stderr)
-            continue
-        printed = (proc.stdout + proc.stderr).splitlines()
-        assert len(printed) == len(shown), (command, printed, shown)
-        for got, want in zip(printed, shown):
-            head, _, tail = want.partition("(...)")
-            assert got.startswith(head) and got.endswith(tail), (command, got, want)
-    assert (where / "out" / "rob" / "robustness.png").stat().st_size > 10_000
-    assert "[motor]" in (where / "motor.toml").read_text()
+        else:
+            printed = (proc.stdout + proc.stderr).splitlines()
+            assert len(printed) == len(shown), (command, printed, shown)
+            for got, want in zip(printed, shown):
+                head, _, tail = want.partition("(...)")
+                assert got.startswith(head) and got.endswith(tail), (command, got, want)
+        for start, check in LEFT_BEHIND.items():
+            if command.startswith(start):
+                assert check(where), command
 
 
 def test_python_blocks(scratch):
