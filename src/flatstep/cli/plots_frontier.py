@@ -17,7 +17,7 @@ def plot_frontier(frontiers: dict[str, Frontier], count: Optional[float], *, tit
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import FuncFormatter
+    from matplotlib.ticker import FuncFormatter, LogFormatter
 
     plain = FuncFormatter(lambda v, _: f"{v:.2g}")  # the errors span about a decade: plain numbers, not 1.9x10^0
 
@@ -39,7 +39,8 @@ def plot_frontier(frontiers: dict[str, Frontier], count: Optional[float], *, tit
         ax.grid(True, which="both", alpha=0.3)
     left.yaxis.set_major_formatter(plain)
     left.yaxis.set_minor_formatter(plain)
-    right.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    right.xaxis.set_major_formatter(LogFormatter())  # plain numbers on the copper axis too
+    right.xaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1.0, 0.4)))
     handles, labels = left.get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=max(1, len(handles)), fontsize=8, frameon=False)
     fig.suptitle(title)
