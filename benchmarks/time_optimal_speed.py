@@ -44,24 +44,26 @@ def main(rev=None):
     """Single moves, then the 100-waypoint sequence, with both engines (and revision ``rev``'s planner)."""
     motor, old = PRESETS["nema17"], load_old(rev) if rev else None
     for bus in (24.0, 12.0):
+        lim = limits(bus)
         for d in (0.1, 1.0, 5.0, 20.0):
-            c, py = now.time_optimal(d, motor, limits(bus)), now.time_optimal(d, motor, limits(bus), engine="python")
-            tables = plan_raw(d, motor, limits(bus))[1].tables
-            t_raw = median_ms(lambda d=d: plan_raw(d, motor, limits(bus)), 21)
-            t_c = median_ms(lambda d=d: now.time_optimal(d, motor, limits(bus)), 21)
-            t_py = median_ms(lambda d=d: now.time_optimal(d, motor, limits(bus), engine="python"))
+            c, py = now.time_optimal(d, motor, lim), now.time_optimal(d, motor, lim, engine="python")
+            tables = plan_raw(d, motor, lim)[1].tables
+            t_raw = median_ms(lambda d=d, lim=lim: plan_raw(d, motor, lim), 21)
+            t_c = median_ms(lambda d=d, lim=lim: now.time_optimal(d, motor, lim), 21)
+            t_py = median_ms(lambda d=d, lim=lim: now.time_optimal(d, motor, lim, engine="python"))
             line = (f"{bus:g} V {d:g} rad: C {1e3 * t_raw:.0f} us ({tables} tables, {1e3 * t_raw / tables:.0f} us "
                     f"each; {1e3 * t_c:.0f} us with the PiecewisePlan), Python {t_py:.1f} ms ({t_py / t_c:.0f} x), "
                     f"same duration: {abs(c.tf / py.tf - 1):.1e} ({1e3 * c.tf:.3f} ms)")
             if old:
-                t_old = median_ms(lambda d=d: old.time_optimal(d, motor, limits(bus)), 3)
-                line += f"; {rev} {t_old:.0f} ms ({1e3 * old.time_optimal(d, motor, limits(bus)).tf:.3f} ms)"
+                t_old = median_ms(lambda d=d, lim=lim: old.time_optimal(d, motor, lim), 3)
+                line += f"; {rev} {t_old:.0f} ms ({1e3 * old.time_optimal(d, motor, lim).tf:.3f} ms)"
             print(line, flush=True)
     theta = np.cumsum(np.random.default_rng(0).uniform(-3, 5, 100))
     points = [(float(x), 0.0) for x in theta]
     c = now.time_optimal_sequence(points, motor, limits(24.0))
     py = now.time_optimal_sequence(points, motor, limits(24.0), engine="python")
-    t_raw = median_ms(lambda: [plan_raw(b[0] - a[0], motor, limits(24.0)) for a, b in zip(points, points[1:])], 5)
+    steps = [b[0] - a[0] for a, b in zip(points, points[1:], strict=False)]
+    t_raw = median_ms(lambda: [plan_raw(step, motor, limits(24.0)) for step in steps], 5)
     t_c = median_ms(lambda: now.time_optimal_sequence(points, motor, limits(24.0)), 5)
     t_py = median_ms(lambda: now.time_optimal_sequence(points, motor, limits(24.0), engine="python"), 3)
     print(f"100 waypoints (99 moves, 24 V): C {t_raw:.1f} ms in time_optimal_plan, {t_c:.1f} ms with the "

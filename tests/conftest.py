@@ -82,8 +82,11 @@ def cli():
 
 @pytest.fixture(scope="session")
 def near_plan():
-    """``near_plan(plan, n, seed)``: n sorted times in the move and measurements (ia, ib, omega, theta, acceleration)
-    near the plan (the d-q law's tests: |s2| on both sides of eps2 = 50)."""
+    """``near_plan(plan, n, seed)``: n sorted times in the move and measurements near the plan.
+
+    The measurements are (ia, ib, omega, theta, acceleration); the d-q law's tests want |s2| on both sides of
+    eps2 = 50.
+    """
     def sample(plan, n, seed):
         rng = np.random.default_rng(seed)
         t = np.sort(rng.uniform(plan.t0, plan.tf, n))

@@ -39,7 +39,7 @@ def test_grid_and_order_and_values_match_single_runs():
     assert len(grid) == 4 and grid[1].control_period == 2.5e-5 and grid[2].simulated_plant.load == 2e-5
     rows = run_batch(grid, workers=2, chunk_size=1)
     assert [r["index"] for r in rows] == [0, 1, 2, 3] and all(r["error"] is None for r in rows)
-    for row, scenario in zip(rows, grid):
+    for row, scenario in zip(rows, grid, strict=False):
         assert row["theta_final"] == scenario.run().summary()["theta_final"]
     assert rows[0]["theta_final"] != rows[2]["theta_final"]  # the load changed something
 
@@ -108,9 +108,11 @@ def test_the_c_summary_condition_is_explicit(change, in_c):
 
 
 def test_the_c_batch_path_gives_the_per_run_rows(monkeypatch):
-    """Sampled runs go through one C call per chunk (runs and summaries computed in C), whatever the controller,
-    the plant effects and the loop's parts; one Scenario.run per scenario (simulate + SimResult.summary) gives
-    the same numbers, bit for bit."""
+    """Sampled runs go through one C call per chunk, and one Scenario.run per scenario gives the same numbers.
+
+    The chunk's runs and summaries are computed in C, whatever the controller, the plant effects and the loop's
+    parts; Scenario.run (simulate + SimResult.summary) matches them bit for bit.
+    """
     ideal = Scenario("ideal", loop=fs.DriveLoop(5e-5))
     drive = fs.DriveLoop(5e-5, drive=Drive(v_bus=24.0), sensors=Sensors(current_noise=1e-3, seed=3),
                          observer=fs.Observer(1500.0))
@@ -130,7 +132,7 @@ def test_the_c_batch_path_gives_the_per_run_rows(monkeypatch):
     assert sorted(calls) == [0, 3, 3, 3, 3]  # one C call per chunk of 3; the infeasible plan never reaches C
     assert fast[-1]["error"].startswith("InfeasiblePlanError")
     assert all(r["error"] is None for r in fast[:-1]) and "max_abs_theta_error_after" in fast[0]
-    for row, scenario in zip(fast[:-1], grid):
+    for row, scenario in zip(fast[:-1], grid, strict=False):
         assert {k: row[k] for k in row if k not in ("index", "name", "error")} == scenario.run().summary(), \
             scenario.name
 
@@ -166,7 +168,8 @@ def test_fingerprints_follow_the_content_not_the_object():
                     gains=fs.SMCGains(W1=150.0, W2=3e5, eps1=0.0375, eps2=75, xi=0.9, wn=400))
     assert twin is not SAMPLED and fp(twin) == fp(SAMPLED) and len(fp(SAMPLED)) == 16
     changed = [replace(SAMPLED, name="t"), replace(SAMPLED, t_end=0.06000000000000001),
-               replace(SAMPLED, plant=fs.Plant(MOTOR, load=1e-5)), replace(SAMPLED, loop=fs.DriveLoop(5e-5, substeps=3))]
+               replace(SAMPLED, plant=fs.Plant(MOTOR, load=1e-5)),
+               replace(SAMPLED, loop=fs.DriveLoop(5e-5, substeps=3))]
     prints = {fp(SAMPLED), fp(SAMPLED, engine="python"), fp(SAMPLED, keep=("t",)), fp(SAMPLED, version="2"),
               *map(fp, changed)}
     assert len(prints) == 8  # every change of content, engine, keep or version changes the fingerprint

@@ -4,8 +4,13 @@ from pathlib import Path
 
 import pytest
 
-from flatstep.control.spec import (DEFAULT_TYPE, DEFAULT_TYPE_CONTINUOUS, DEFAULT_TYPE_TORQUES, ControllerSpec,
-                                   default_type)
+from flatstep.control.spec import (
+    DEFAULT_TYPE,
+    DEFAULT_TYPE_CONTINUOUS,
+    DEFAULT_TYPE_TORQUES,
+    ControllerSpec,
+    default_type,
+)
 from flatstep.studies.scenario_file import load_scenario
 
 DRIVE = "[drive]\ncontrol_rate = 20000.0\nv_bus = 24.0\n"
@@ -61,7 +66,8 @@ def test_compare_clean_runs_a_file_whose_default_knows_the_torques(cli):
 @pytest.mark.parametrize("text, kind", [
     # options without a law are set over the default's law and options, not over the paper's law
     (DRIVE + TORQUES + "[controller]\nfeedforward = true\n", DEFAULT_TYPE_TORQUES),
-    (DRIVE + TORQUES + "[controller]\nobserver_torques = false\n", "cascade+feedforward+voltage_feedforward+plan_frame"),
+    (DRIVE + TORQUES + "[controller]\nobserver_torques = false\n",
+     "cascade+feedforward+voltage_feedforward+plan_frame"),
     (DRIVE + "[controller]\nvoltage_feedforward = false\n", "cascade+plan_frame"),
     (TORQUES + "[controller]\nfeedforward = true\n", "smc_ff"),  # no drive: the default is the paper's law
 ])
@@ -72,11 +78,12 @@ def test_options_without_a_law_follow_the_default(tmp_path, text, kind):
 
 
 def test_an_option_the_default_law_does_not_take_needs_a_law(tmp_path):
-    """integral is an option of dq_smc alone: without a law the default (the cascade) cannot take it."""
+    """Integral is an option of dq_smc alone: without a law the default (the cascade) cannot take it."""
     path = tmp_path / "s.toml"
     path.write_text(DRIVE + "[controller]\nintegral = true\n")
     with pytest.raises(ValueError, match=r"s.toml:controller.integral: the table names no law, so the controller is "
-                                         r"the default 'cascade\+voltage_feedforward\+plan_frame' \(law 'cascade'.*law = one of "
+                                         r"the default 'cascade\+voltage_feedforward\+plan_frame' "
+                                         r"\(law 'cascade'.*law = one of "
                                          r"\['dq_smc'\]"):
         load_scenario(path)
 
@@ -145,7 +152,7 @@ def test_the_default_velocity_gain_follows_the_encoder(tmp_path, counts, rho):
 
 
 def test_the_rule_without_an_angle_step_keeps_the_sampling_bound():
-    """A context that knows no encoder count (an exact angle) gives the sampling's bound alone; a negative is refused."""
+    """A context without an encoder count (an exact angle) gives the sampling's bound alone; a negative is refused."""
     from flatstep.control.build import BuildContext
     from flatstep.control.cascade import PLAN_FRAME_RULE, plan_frame_rule
     from flatstep.model.motor import PRESETS
@@ -166,7 +173,8 @@ def test_the_default_holds_less_where_the_bus_is_short(tmp_path):
     """The held share falls until the move's feedforward with it fits in 3/4 of the bus; the loop keeps its speed."""
     from flatstep.control.cascade import HOLD_VOLTAGE_SHARE, PLAN_FRAME_RULE
 
-    text = 't_end = 0.1\n[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\nt0 = 0.01\ntf = 0.07\n'
+    text = ('t_end = 0.1\n[motor]\npreset = "nema17"\n[plan]\ntheta2 = 0.5\nrho1 = 1.0\nrho2 = 1.0\n'
+            't0 = 0.01\ntf = 0.07\n')
     holds, k_omega = [], []
     for bus in (24.0, 12.0, 8.0):
         path = tmp_path / f"s{bus:g}.toml"

@@ -51,8 +51,10 @@ def test_the_ramp_is_the_models_response_to_a_torque_rising_over_the_period(moto
 
 
 def _run(motor, v_bus, distance, edge_timing, torque_ramp, engine="c"):
-    """The benchmark's run (benchmarks/field_weakening_optimum.py): the planned move, the designed gains and observer,
-    4000 counts, a 12-bit ADC over 2 A, the angle advance."""
+    """The benchmark's run (benchmarks/field_weakening_optimum.py) of the planned move.
+
+    The designed gains and observer, 4000 counts, a 12-bit ADC over 2 A, the angle advance.
+    """
     fw = time_optimal_dq(distance, motor, MotorLimits(v_bus=v_bus, i_max=1.0, i_hold=0.01, v_use=0.84),
                          control_rate=1 / TS)
     sensors = Sensors(encoder_counts=4000, current_range=2.0, edge_timing=edge_timing)
@@ -80,8 +82,10 @@ def test_the_c_drive_loop_matches_the_reference_with_both_options(nema17):
 
 
 def test_the_edges_take_the_count_out_of_the_angle_estimate(nema17):
-    """Above a count per period, where every period has an edge, through 2 counts per period (63 rad/s): the count
-    alone leaves the estimate off by up to about half a count; with the edges' times within a sixth."""
+    """From one count per period (every period has an edge) through 2 (63 rad/s), the edges' times help.
+
+    The count alone leaves the estimate off by up to about half a count; with the edges' times, within a sixth.
+    """
     err = {}
     for edge in (False, True):
         r, _ = _run(nema17, 12.0, 0.3, edge, True)
@@ -92,7 +96,9 @@ def test_the_edges_take_the_count_out_of_the_angle_estimate(nema17):
 
 @pytest.mark.parametrize("v_bus, distance", [(12.0, 1.0), (24.0, 0.1)])
 def test_within_a_milliradian_on_the_4000_count_drive(nema17, v_bus, distance):
-    """The field-weakening moves the count alone missed (1.09 mrad at 12 V, 1 rad) or barely made (0.98 mrad at
-    24 V, 0.1 rad), with the designed gains: within 0.6 mrad with both options."""
+    """The field-weakening moves the count alone missed or barely made: within 0.6 mrad with both options.
+
+    With the designed gains, the count alone gave 1.09 mrad at 12 V, 1 rad and 0.98 mrad at 24 V, 0.1 rad.
+    """
     r, during = _run(nema17, v_bus, distance, True, True)
     assert r.status == "ok" and np.max(np.abs(r.theta_error[during])) < 0.6e-3

@@ -15,7 +15,7 @@ R, L, Km, J, B, Nr, tau = sp.symbols("R L K_m J B N_r tau", positive=True)
 
 def D(expr):
     """Total time derivative along the flat flag (tau constant)."""
-    return sum(sp.diff(expr, s) * ds for s, ds in zip(r[:-1] + q[:-1], r[1:] + q[1:]))
+    return sum(sp.diff(expr, s) * ds for s, ds in zip(r[:-1] + q[:-1], r[1:] + q[1:], strict=False))
 
 
 def parameterization():
@@ -54,8 +54,10 @@ def test_parameterization_satisfies_eq1_identically():
 
 
 def test_printed_eq9_matrix_does_not_satisfy_eq1():
-    """The printed matrix [[cos, sin], [-sin, cos]]^-1 (eq. 9, eq. 13) is a misprint: at a generic point the
-    residual of eq. (1) is nonzero, while the corrected map gives zero."""
+    """The printed matrix [[cos, sin], [-sin, cos]]^-1 (eq. 9, eq. 13) is a misprint.
+
+    At a generic point the residual of eq. (1) is nonzero, while the corrected map gives zero.
+    """
     phi, ia, ib, omega, theta, va, vb = parameterization()
     c, s = sp.cos(phi), sp.sin(phi)
     X = va * s + vb * c  # recover the polar-frame voltages the paper's column vector holds
@@ -101,7 +103,7 @@ def test_round_trip_flag_state_flag(motor, plan, load):
     flag = plan.flag(t)
     x, v = fs.flat_to_state(flag, motor, load)
     back = fs.state_to_flat(x, v, motor, load)
-    for a, b in zip(back, flag):
+    for a, b in zip(back, flag, strict=False):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.max(np.abs(b))))
 
 

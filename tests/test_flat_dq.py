@@ -138,8 +138,10 @@ def test_no_singularity_where_the_polar_map_has_one(motor):
 
 @pytest.mark.parametrize("with_effects", [False, True])
 def test_feedforward_open_loop_reproduces_the_plan(motor, plan, with_effects):
-    """The feedforward voltages of the map, fed into eq. (1) with the plant's effects (which the torque model
-    knows exactly), follow the plan; without the torque model the effects throw the rotor off it."""
+    """The feedforward voltages of the map, fed into eq. (1) with the plant's effects, follow the plan.
+
+    The torque model knows the effects exactly; without it the effects throw the rotor off the plan.
+    """
     effects = PlantEffects(detent_torque=1e-3, coulomb_torque=2e-4, coulomb_speed=0.5) if with_effects else None
     plant = Plant(motor, effects=effects, load=1e-5)
     known = TorqueModel.of_plant(plant)

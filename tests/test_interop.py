@@ -46,7 +46,7 @@ def test_dq_forward_inverts_reverse(name):
     flag = dq_flag(t)
     x, v = interop.dq_flag_to_state(flag, motor, tau)
     back = interop.dq_state_to_flag(x, v, motor, tau)
-    for want, got in zip(flag, back):
+    for want, got in zip(flag, back, strict=False):
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
     d, q = interop.park(x[0], x[1], x[3], motor.Nr)
     np.testing.assert_allclose(motor.Km * q, fs.model.motor.torque(x, motor), rtol=1e-12, atol=1e-15)
@@ -88,8 +88,11 @@ def test_point_to_point_with_psi_basis_is_flatsteps_plan(motor, plan, outputs):
 
 @pytest.mark.parametrize("outputs", ["rho_theta", "theta_id"])
 def test_point_to_point_feedforward_drives_our_nlsys_along_the_move(motor, plan, outputs):
-    """python-control's own polynomial point_to_point, its voltages fed to our nlsys in input_output_response,
-    moves the motor from the plan's start equilibrium to its end one along the planned states."""
+    """python-control's own polynomial point_to_point moves the motor along the planned states.
+
+    Its voltages, fed to our nlsys in input_output_response, take the motor from the plan's start equilibrium to
+    its end one.
+    """
     sys = interop.flatsys(motor, outputs)
     t = np.linspace(plan.t0, plan.tf, 1001)
     traj = control.flatsys.point_to_point(sys, t, *rest(motor, plan, 0), *rest(motor, plan, 1),

@@ -2,7 +2,8 @@ r"""The held-out check of tuned gains: each law re-run on plants and moves its s
 
 The tuner (:mod:`flatstep.studies.tune`) keeps the least of about a hundred evaluations of a rough objective: the
 worst of the plants' max errors, in encoder counts, moves by several percent when a gain moves in its third digit,
-so the least of many draws is partly luck, and the luckier the more draws. :func:`held_out` re-runs fixed gains,
+so the least of many draws is partly the seed's luck and partly gains fit to those exact runs (docs/comparison.md:
+other seeds, and the runs below). :func:`held_out` re-runs fixed gains,
 unchanged, on runs none of them was chosen on, and takes each law's mean over those runs as its yardstick:
 
 * ``32 random plants``: a seeded uniform sample of plants in the study's box (:data:`RANDOM_PLANTS`, the study's
