@@ -1,3 +1,4 @@
+"""Fixtures the tests share: the paper's motor and move, the in-process command line, samples near a plan."""
 import contextlib
 import io
 from dataclasses import dataclass
@@ -39,11 +40,13 @@ parameters = ["R"]
 
 @pytest.fixture(scope="session")
 def motor():
+    """The paper's motor, the ``paper`` preset."""
     return fs.MotorParams.preset("paper")
 
 
 @pytest.fixture(scope="session")
 def plan():
+    """The paper's move, :data:`flatstep.PAPER_PLAN`: 0.02 rad at 0.4 A from t = 20 ms to 40 ms."""
     return fs.PAPER_PLAN
 
 

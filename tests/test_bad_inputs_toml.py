@@ -98,6 +98,7 @@ def _text(table: str, key: str, value: str) -> str:
 
 @pytest.mark.parametrize("table, key, value", CASES, ids=[f"{t}.{k}={v}"[:50] for t, k, v in CASES])
 def test_a_bad_value_names_the_file_table_key_and_value(tmp_path, table, key, value):
+    """Each bad value is refused with a ValueError naming the file, the table.key and the value as written."""
     path = tmp_path / "bad.toml"
     path.write_text(_text(table, key, value))
     with pytest.raises(ValueError) as err:
@@ -124,6 +125,7 @@ def test_a_bad_value_names_the_file_table_key_and_value(tmp_path, table, key, va
 
 
 def test_the_table_is_large():
+    """The table of bad values holds 300 cases or more."""
     assert len(CASES) >= 300
 
 

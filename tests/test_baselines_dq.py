@@ -36,6 +36,7 @@ def _flat_map_peaks(plan, d_current, n=20000):
 
 
 def test_the_ruckig_check_is_the_flat_maps_on_the_ruckig_plan():
+    """The Ruckig check's duration is Ruckig's, and its margins are the flat maps' peaks on that plan."""
     caps = (60.0, 30000.0, 2e7)
     duration, margins = ruckig_margins(1.0, NEMA17, LIMITS24, *caps)
     assert duration == pytest.approx(ruckig_duration(1.0, *caps), rel=1e-9)
@@ -46,6 +47,7 @@ def test_the_ruckig_check_is_the_flat_maps_on_the_ruckig_plan():
 
 
 def test_the_trapezoid_check_is_the_flat_maps_inside_its_segments():
+    """The trapezoid check's margins are the flat maps' peaks inside its segments, the weakening included."""
     dc = DCurrentPlan(0.0, 0.0, 0.0, 1.0, weakening=0.004, weakening_speed=20.0)
     duration, margins = trapezoid_margins(5.0, NEMA17, LIMITS24, 140.0, 9000.0, dc)
     plan = dq_plan(*trapezoid_rows(5.0, 140.0, 9000.0), 5.0, LIMITS24)
@@ -58,6 +60,7 @@ def test_the_trapezoid_check_is_the_flat_maps_inside_its_segments():
 
 
 def test_the_weakening_current_minimises_the_steady_voltage():
+    """The weakening current is the d current of least steady voltage at each speed (against a dense grid)."""
     for omega in (30.0, 100.0, 300.0):
         i_d = np.linspace(-2.0, 0.5, 250001)
         v = np.hypot(NEMA17.R * i_d, NEMA17.Nr * omega * NEMA17.L * i_d + NEMA17.Km * omega)
@@ -65,6 +68,7 @@ def test_the_weakening_current_minimises_the_steady_voltage():
 
 
 def test_best_ruckig_keeps_the_limits_and_leaves_no_slack():
+    """The best Ruckig plan keeps the limits with the bus binding: caps 5 % higher break the bus."""
     b = best_ruckig(1.0, NEMA17, LIMITS24, n=10)
     assert b.margins["voltage"] <= 1.0 and b.margins["current"] <= 1.0
     assert b.margins["voltage"] > 0.97  # the bus binds
@@ -74,6 +78,7 @@ def test_best_ruckig_keeps_the_limits_and_leaves_no_slack():
 
 
 def test_best_trapezoid_weakens_the_field_and_beats_ruckig_on_a_long_move():
+    """The best trapezoid keeps the limits, weakens the field, and takes under 0.8 of Ruckig's time on 5 rad."""
     trap, ruckig = best_trapezoid(5.0, NEMA17, LIMITS24, n=12), best_ruckig(5.0, NEMA17, LIMITS24, n=10)
     assert trap.margins["voltage"] <= 1.0 and trap.margins["current"] <= 1.0
     assert trap.margins["i_d_min"] < -0.3 and trap.margins["speed_peak"] > 100.0
@@ -81,6 +86,7 @@ def test_best_trapezoid_weakens_the_field_and_beats_ruckig_on_a_long_move():
 
 
 def test_both_searches_keep_a_speed_cap():
+    """A speed cap binds both searches: their plans keep under it and take longer than without it."""
     capped = replace(LIMITS24, speed_max=40.0)
     free = best_ruckig(5.0, NEMA17, LIMITS24, n=8)
     assert free.caps["v_max"] > 40.0  # the cap binds
@@ -91,6 +97,7 @@ def test_both_searches_keep_a_speed_cap():
 
 
 def test_the_d_q_law_tracks_the_ruckig_baseline_on_the_drive():
+    """The d-q law tracks the best Ruckig plan on the drive within 1 mrad, with no fault."""
     b = best_ruckig(1.0, NEMA17, LIMITS24, n=8)
     out = track(b.plan, NEMA17, 24.0, b.d_current)
     assert out["status"] == "ok" and out["faults"] == 0
@@ -98,6 +105,7 @@ def test_the_d_q_law_tracks_the_ruckig_baseline_on_the_drive():
 
 
 def test_a_move_of_zero_is_refused():
+    """A move of zero distance is refused by both searches."""
     with pytest.raises(ValueError, match="distance"):
         best_ruckig(0.0, NEMA17, LIMITS24)
     with pytest.raises(ValueError, match="distance"):

@@ -1,3 +1,4 @@
+"""Batches of scenarios: rows equal to single runs, the C path, batch files, resume, locks, kill -9, a full disk."""
 import errno
 import itertools
 import json
@@ -27,14 +28,17 @@ MOTOR = SAMPLED.motor
 
 
 def loads(*taus):
+    """A plant of the sampled scenario's motor for each load torque of ``taus``."""
     return [fs.Plant(MOTOR, load=tau) for tau in taus]
 
 
 def loops(*periods, substeps=4):
+    """A drive loop for each control period of ``periods``, with ``substeps`` plant steps a period."""
     return [fs.DriveLoop(Ts, substeps=substeps) for Ts in periods]
 
 
 def test_grid_and_order_and_values_match_single_runs():
+    """The grid's order and the rows follow the input, and each row's values are those of a single run."""
     grid = scenario_grid(SAMPLED, plant=loads(0.0, 2e-5), loop=loops(5e-5, 2.5e-5))
     assert len(grid) == 4 and grid[1].control_period == 2.5e-5 and grid[2].simulated_plant.load == 2e-5
     rows = run_batch(grid, workers=2, chunk_size=1)
@@ -45,6 +49,7 @@ def test_grid_and_order_and_values_match_single_runs():
 
 
 def test_any_executor_and_failures_are_rows():
+    """The batch runs on a caller's executor, and a run that fails is a row with its error, not an exception."""
     bad = Scenario("fast", plan=fs.RestToRest(0.0, 0.05, 0.4, 0.4, 0.02, 0.022))
     with ThreadPoolExecutor(2) as ex:
         rows = run_batch([SAMPLED, bad], executor=ex)
@@ -53,6 +58,7 @@ def test_any_executor_and_failures_are_rows():
 
 
 def test_results_are_written_as_they_go_and_a_rerun_resumes(tmp_path):
+    """Rows are written as they finish; a rerun drops a cut last line and runs only the missing scenario."""
     out = tmp_path / "rows.jsonl"
     grid = scenario_grid(SAMPLED, plant=loads(0.0, 1e-5, 2e-5))
     run_batch(grid[:2], out=out, workers=1)
@@ -67,6 +73,7 @@ def test_results_are_written_as_they_go_and_a_rerun_resumes(tmp_path):
 
 
 def test_progress_bar_goes_to_stderr_once_the_work_takes_2_s(capsys, monkeypatch):
+    """The progress bar goes to stderr once the work takes 2 s, never for short work or with progress=False."""
     import flatstep.studies.batch as batch
 
     run_batch([SAMPLED] * 3, workers=1)
@@ -83,6 +90,7 @@ def test_progress_bar_goes_to_stderr_once_the_work_takes_2_s(capsys, monkeypatch
     (dict(workers=0), "workers=0"), (dict(chunk_size=-1), "chunk_size=-1"),
 ])
 def test_bad_arguments(kwargs, match):
+    """Bad workers, chunk sizes, scenarios and grid fields are refused with a ValueError naming them."""
     with pytest.raises(ValueError, match=match):
         run_batch([SAMPLED], **kwargs)
     with pytest.raises(ValueError, match="is not a flatstep Scenario"):
@@ -102,6 +110,7 @@ def test_bad_arguments(kwargs, match):
     (dict(plant=fs.Plant(MOTOR, load=lambda t: 1e-5 * t)), False),
 ])
 def test_the_c_summary_condition_is_explicit(change, in_c):
+    """Summarising in C is an explicit rule: not without a loop, with a delay over 8 or with a load function."""
     from flatstep.studies.batch import summarised_in_c
 
     assert summarised_in_c(replace(SAMPLED, **change)) is in_c
@@ -159,6 +168,7 @@ def counting(monkeypatch):
 
 
 def test_fingerprints_follow_the_content_not_the_object():
+    """A fingerprint follows the content, engine, keep and version, not the object or a function's address."""
     from flatstep.studies.fingerprint import fingerprint
 
     def fp(scenario, engine="c", keep=(), version="1"):
@@ -183,6 +193,7 @@ def test_fingerprints_follow_the_content_not_the_object():
 
 
 def test_the_file_starts_with_a_header_and_rows_carry_fingerprints(tmp_path):
+    """The file starts with a header naming the batch, and its rows carry fingerprints the returned rows do not."""
     from flatstep.studies.batch import _done_indices
 
     out = tmp_path / "rows.jsonl"
@@ -205,6 +216,7 @@ def test_the_file_starts_with_a_header_and_rows_carry_fingerprints(tmp_path):
     (dict(version="9.9"), r"the flatstep version differs: the file has '.*', this batch '9.9'"),
 ])
 def test_a_file_of_another_batch_is_refused_naming_the_difference(tmp_path, monkeypatch, second, match):
+    """A file of another batch is refused, naming the difference, before any run and with the file unchanged."""
     out = tmp_path / "rows.jsonl"
     run_batch(GRID[:2], out=out, workers=1)
     before = out.read_bytes()
@@ -219,6 +231,7 @@ def test_a_file_of_another_batch_is_refused_naming_the_difference(tmp_path, monk
 
 
 def test_a_file_without_a_header_is_refused(tmp_path):
+    """A file without a batch header, or a directory, is refused as the output."""
     out = tmp_path / "old.jsonl"
     out.write_text('{"index": 0, "name": "s", "theta_final": 1.0, "error": null}\n')
     with pytest.raises(ValueError, match="old.jsonl holds another batch: its first line is not a flatstep batch"):
@@ -228,6 +241,7 @@ def test_a_file_without_a_header_is_refused(tmp_path):
 
 
 def test_fresh_moves_the_old_file_to_bak(tmp_path, monkeypatch):
+    """With fresh=True the old file moves to .bak (then .bak.2) and every scenario runs again."""
     out = tmp_path / "rows.jsonl"
     run_batch(GRID[:2], out=out, workers=1)
     old = out.read_bytes()
@@ -241,6 +255,7 @@ def test_fresh_moves_the_old_file_to_bak(tmp_path, monkeypatch):
 
 
 def test_a_resume_reuses_exactly_the_matching_rows(tmp_path, monkeypatch):
+    """A resume reuses the rows that match, runs only the others, and gives the rows of a clean run."""
     out = tmp_path / "rows.jsonl"
     clean = run_batch(GRID, workers=1)
     ran = counting(monkeypatch)
@@ -259,6 +274,7 @@ def test_a_resume_reuses_exactly_the_matching_rows(tmp_path, monkeypatch):
     ("#!garbage\n", 10),  # closed by a newline, not JSON
 ])
 def test_a_last_line_cut_short_is_truncated_off(tmp_path, monkeypatch, tail, dropped):
+    """A last line cut short is truncated off with a warning, the whole rows kept and its scenario run again."""
     out = tmp_path / "rows.jsonl"
     run_batch(GRID[:2], out=out, workers=1)
     whole = out.read_bytes()
@@ -272,6 +288,7 @@ def test_a_last_line_cut_short_is_truncated_off(tmp_path, monkeypatch, tail, dro
 
 
 def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path, monkeypatch):
+    """A second writer is refused while the first holds the lock, and only the holder removes it."""
     import threading
 
     import flatstep.studies.batch as batch
@@ -304,6 +321,7 @@ def test_a_second_writer_is_refused_while_the_first_holds_the_lock(tmp_path, mon
 
 
 def test_a_stale_lock_is_taken_over(tmp_path):
+    """A lock whose process is gone, or left without a pid for over 10 s, is taken over with a warning."""
     out, lock = tmp_path / "rows.jsonl", tmp_path / "rows.jsonl.lock"
     gone = subprocess.Popen([sys.executable, "-c", "pass"])
     gone.wait()  # reaped: its pid no longer runs
@@ -320,6 +338,7 @@ def test_a_stale_lock_is_taken_over(tmp_path):
 
 
 def test_a_full_disk_hands_back_the_rows(tmp_path, monkeypatch):
+    """A full disk raises BatchWriteError holding every row; the cut row is truncated off and a rerun resumes."""
     from flatstep.studies.batch_file import BatchWriteError, RowWriter
 
     out = tmp_path / "rows.jsonl"
@@ -394,6 +413,7 @@ def running(pid):
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_kill_9_of_the_parent_ends_its_workers_and_the_file_resumes(tmp_path, monkeypatch):
+    """Kill -9 of the parent ends its workers, and a rerun takes over its lock and runs only the missing rows."""
     out = tmp_path / "rows.jsonl"
     root = Path(__file__).resolve().parent.parent
     proc = subprocess.Popen([sys.executable, "-c", KILLED_BATCH, str(out)], cwd=root)
@@ -442,6 +462,7 @@ time.sleep(30)
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("how", ["prctl", "watchdog"])
 def test_die_with_parent_ends_a_worker_when_its_parent_is_killed(how):
+    """A worker ends when its parent is killed, through prctl or through the watchdog thread."""
     proc = subprocess.Popen([sys.executable, "-c", ORPHAN, how], stdout=subprocess.PIPE, text=True)
     try:
         child = int(proc.stdout.readline())
@@ -457,6 +478,7 @@ def test_die_with_parent_ends_a_worker_when_its_parent_is_killed(how):
 
 
 def test_a_file_that_cannot_be_created_raises_batch_write_error(tmp_path, monkeypatch):
+    """A batch file that cannot be created raises BatchWriteError before any run, leaving no lock."""
     import flatstep.studies.batch_file as batch_file
 
     def full(path, head, rest):

@@ -54,6 +54,7 @@ def run_pair(motor, plan, measurement, options, gains=DESIGNED, effects=None, en
 
 @pytest.mark.parametrize("name", RUNS)
 def test_c_drive_loop_matches_the_reference(motor, plan, name):
+    """Each run of RUNS gives the reference's states, voltages and measurements on the C engine."""
     measurement, options = RUNS[name]
     c, py = run_pair(motor, plan, measurement, options)
     assert c.meta["engine"] == "c" and py.meta["engine"] == "python"
@@ -94,6 +95,7 @@ def test_the_saturation_runs_use_the_bus(motor, plan):
 
 
 def test_delays_shift_what_the_c_loop_sees(motor, plan):
+    """A measurement delay shifts the encoder readings by its periods; a compute delay holds the start's voltages."""
     c, = run_pair(motor, plan, "model", dict(sensors=Sensors(delay=8)), t_end=0.04, engines=("c",))
     enc = Sensors(delay=8).read_angle(c.theta)
     np.testing.assert_array_equal(c.meta["measured"]["theta"][8:], enc[:-8])
@@ -118,6 +120,7 @@ def test_controller_faults_are_counted_alike(motor, plan):
     dict(sensors=Sensors(delay=8), observer=Observer()),
 ])
 def test_default_engine_is_c(motor, plan, options):
+    """A drive loop with sensors, an observer or a delay runs on the C engine by default."""
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "observer" if "observer" in options else "ideal")
     r = fs.simulate(motor, plan, ctrl, loop=fs.DriveLoop(TS, **options), t_end=0.04)
     assert r.meta["engine"] == "c" and r.meta["control_period"] == TS
@@ -137,6 +140,7 @@ def test_c_engine_runs_plant_effects_like_the_reference(motor, plan):
 
 
 def test_c_engine_refuses_what_it_does_not_model(motor, plan):
+    """The C engine refuses a delay of over 8 periods, naming it; the Python engine runs it."""
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "observer")
     loop = fs.DriveLoop(TS, sensors=Sensors(delay=9), observer=Observer())
     with pytest.raises(ValueError, match=r"sensors.delay=9 periods \(the C loop holds at most 8\)"):
@@ -145,6 +149,7 @@ def test_c_engine_refuses_what_it_does_not_model(motor, plan):
 
 
 def test_run_sampled_checks_the_noise_shape(motor, plan):
+    """A noise array of the wrong shape is refused, naming its shape and the one expected."""
     ctrl = fs.FlatnessSMC(motor, plan, DESIGNED, "model")
     with pytest.raises(ValueError, match=r"noise has shape \(10, 2\); expected \(11, 2\)"):
         core.run_sampled(ctrl, motor, 0.0, plan.x0(motor.Nr), 10, Ts=TS, substeps=4, sensors=Sensors(),

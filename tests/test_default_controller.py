@@ -18,6 +18,7 @@ TORQUES = "[feedforward]\ndetent_torque = 1e-3\n"
 
 
 def test_the_default_types():
+    """The default is the plan-frame cascade on a drive (with the torques' options where known), smc without one."""
     assert default_type(sampled=True, torques=False) == DEFAULT_TYPE == "cascade+voltage_feedforward+plan_frame"
     assert default_type(sampled=True, torques=True) == DEFAULT_TYPE_TORQUES
     assert ControllerSpec.parse(DEFAULT_TYPE_TORQUES) == ControllerSpec(
@@ -33,6 +34,7 @@ def test_the_default_types():
     (DRIVE + '[controller]\nlaw = "dq_smc"\n', "dq_smc"),
 ])
 def test_a_file_runs_the_default_unless_it_names_a_law(tmp_path, text, kind):
+    """A file runs the default controller unless its [controller] table names a type or a law."""
     path = tmp_path / "s.toml"
     path.write_text(text)
     scenario = load_scenario(path)[0]
@@ -41,6 +43,7 @@ def test_a_file_runs_the_default_unless_it_names_a_law(tmp_path, text, kind):
 
 
 def test_sliding_gains_without_a_type_name_the_default(tmp_path):
+    """Sliding gains in a file that names no type are refused, naming the default's law."""
     path = tmp_path / "s.toml"
     path.write_text(DRIVE + "[controller]\nW1 = 50.0\n")
     with pytest.raises(ValueError, match=r"controller.W1: W1 is not a gain of law 'cascade' \(the file names no type"):
@@ -48,6 +51,7 @@ def test_sliding_gains_without_a_type_name_the_default(tmp_path):
 
 
 def test_without_torques_turns_off_what_needs_them():
+    """Without the torques a type loses the options that need them and keeps the rest."""
     spec = ControllerSpec.parse(DEFAULT_TYPE_TORQUES).without_torques()
     assert spec.name() == DEFAULT_TYPE
     assert ControllerSpec.parse("dq_smc_i_ff_km").without_torques().name() == "dq_smc_i"
@@ -72,6 +76,7 @@ def test_compare_clean_runs_a_file_whose_default_knows_the_torques(cli):
     (TORQUES + "[controller]\nfeedforward = true\n", "smc_ff"),  # no drive: the default is the paper's law
 ])
 def test_options_without_a_law_follow_the_default(tmp_path, text, kind):
+    """Options given without a law are set over the default's law and options."""
     path = tmp_path / "s.toml"
     path.write_text(text)
     assert load_scenario(path)[0].controller_type == kind

@@ -26,6 +26,7 @@ COUNT = 2 * np.pi / 4000
 
 
 def test_the_edge_is_behind_the_motion_and_its_age_from_the_speed():
+    """The last count edge lies behind the motion, its age from the speed; none at rest, and off by default."""
     s = Sensors(encoder_counts=4000, edge_timing=True)
     theta = 10.3 * COUNT
     assert s.read_edge(theta, 2.0) == pytest.approx((9.5 * COUNT, 0.8 * COUNT / 2.0), rel=1e-12)
@@ -70,10 +71,12 @@ def _run(motor, v_bus, distance, edge_timing, torque_ramp, engine="c"):
 
 @pytest.fixture(scope="module")
 def nema17():
+    """The NEMA 17 preset."""
     return fs.MotorParams.preset("nema17")
 
 
 def test_the_c_drive_loop_matches_the_reference_with_both_options(nema17):
+    """With both options the C drive loop gives the reference's angles, voltages and measurements."""
     c, _ = _run(nema17, 12.0, 0.1, True, True)
     py, _ = _run(nema17, 12.0, 0.1, True, True, engine="python")
     np.testing.assert_allclose(c.theta, py.theta, rtol=0, atol=1e-12)

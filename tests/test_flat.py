@@ -32,6 +32,7 @@ def parameterization():
 
 
 def eq1_residuals(ia, ib, omega, theta, va, vb):
+    """The residuals of eq. (1) for the given currents, speed, angle and voltages (zero along a solution)."""
     return [
         L * D(ia) - (va - R * ia + Km * omega * sp.sin(Nr * theta)),
         L * D(ib) - (vb - R * ib - Km * omega * sp.cos(Nr * theta)),
@@ -41,6 +42,7 @@ def eq1_residuals(ia, ib, omega, theta, va, vb):
 
 
 def test_phi_derivative_is_the_one_used():
+    """The phi derivative the map uses is the total time derivative of phi."""
     phi = parameterization()[0]
     A = J * q[2] + B * q[1] + tau
     claimed = -((J * q[3] + B * q[2]) * r[0] - A * r[1]) / (r[0] * sp.sqrt(Km**2 * r[0] ** 2 - A**2)) - Nr * q[1]
@@ -48,6 +50,7 @@ def test_phi_derivative_is_the_one_used():
 
 
 def test_parameterization_satisfies_eq1_identically():
+    """The corrected parameterization satisfies eq. (1) identically."""
     phi, ia, ib, omega, theta, va, vb = parameterization()
     for res in eq1_residuals(ia, ib, omega, theta, va, vb):
         assert sp.simplify(sp.expand_trig(res)) == 0
@@ -73,6 +76,7 @@ def test_printed_eq9_matrix_does_not_satisfy_eq1():
 
 
 def test_code_equals_the_proven_formula(motor):
+    """The code's flat map equals the proven formula at random flags, with a load."""
     phi, ia, ib, omega, theta, va, vb = parameterization()
     f = sp.lambdify([r[0], r[1], *q[:4], R, L, Km, J, B, Nr, tau], [ia, ib, va, vb], "numpy")
     rng = np.random.default_rng(7)
@@ -85,6 +89,7 @@ def test_code_equals_the_proven_formula(motor):
 
 
 def test_polar_model_eq8_matches_eq1(motor):
+    """The polar model of eq. (8) is eq. (1) by the chain rule, and polar and cartesian invert each other."""
     rng = np.random.default_rng(3)
     X, V = rng.normal(size=(4, 20)), rng.normal(size=(2, 20))
     rho, phi = fs.polar(X[0], X[1])
@@ -99,6 +104,7 @@ def test_polar_model_eq8_matches_eq1(motor):
 
 @pytest.mark.parametrize("load", [0.0, 1e-5])
 def test_round_trip_flag_state_flag(motor, plan, load):
+    """Flag to state and back gives the plan's flag, with and without a load."""
     t = np.linspace(0.0, 0.06, 601)
     flag = plan.flag(t)
     x, v = fs.flat_to_state(flag, motor, load)
@@ -108,6 +114,7 @@ def test_round_trip_flag_state_flag(motor, plan, load):
 
 
 def test_round_trip_state_flag_state(motor):
+    """State to flag and back gives the state, on the stable branch."""
     rng = np.random.default_rng(11)
     n = 200
     rho, delta = rng.uniform(0.05, 1.0, n), rng.uniform(0.05, np.pi - 0.05, n)  # the stable branch
@@ -134,6 +141,7 @@ def test_feedforward_open_loop_reproduces_the_plan(motor, plan):
 
 
 def test_flat_maps_refuse_singular_flags(motor):
+    """The flat maps refuse a torque demand beyond Km rho, rho = 0 and NaN, naming each."""
     flag = fs.FlatFlag(*(np.array([v]) for v in (0.4, 0.0, 0.0, 0.0, 6000.0, 0.0)))  # J theta'' = 0.0216 > Km rho
     with pytest.raises(ValueError, match="singular"):
         fs.flat_to_state(flag, motor)
@@ -144,5 +152,6 @@ def test_flat_maps_refuse_singular_flags(motor):
 
 
 def test_flat_voltages_at_rest_are_ohmic(motor):
+    """At rest the flat voltages are R times the equilibrium currents."""
     v = flat_voltages(motor, 0.4, 0.0, 0.02, 0.0, 0.0, 0.0, np.pi / 2 - 1.0, 0.0)
     np.testing.assert_allclose(v, 8.4 * np.array(fs.equilibrium_currents(0.02, 0.4, 50)), rtol=1e-14)

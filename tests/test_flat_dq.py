@@ -64,6 +64,7 @@ def vanishes(expr):
 
 @pytest.mark.parametrize("effects", [False, True], ids=["eq1", "eq1+detent+coulomb+load(t)"])
 def test_parameterization_satisfies_eq1_identically(effects):
+    """The d-q map satisfies eq. (1) identically, with and without the torques; a wrong voltage does not."""
     ia, ib, omega, theta, va, vb, dE, E = parameterization(effects)
     assert vanishes(D(E) - dE)  # the torque rate used is the derivative of the torque
     for res in eq1_residuals(ia, ib, omega, theta, va, vb, effects):
@@ -72,6 +73,7 @@ def test_parameterization_satisfies_eq1_identically(effects):
 
 
 def test_code_equals_the_proven_formula(motor):
+    """The code's d-q map equals the proven formula at random flags, with detent, Coulomb and a changing load."""
     ia, ib, _, _, va, vb, _, _ = parameterization(True)
     f = sp.lambdify([*q[:4], *d[:2], lo[0], lo[1], R, L, Km, J, B, Nr, Td, Tc, ws, h, ph], [ia, ib, va, vb], "numpy")
     rng = np.random.default_rng(7)
@@ -89,6 +91,7 @@ def test_code_equals_the_proven_formula(motor):
 
 
 def test_park_is_a_rotation_and_its_inverse():
+    """Park's transform keeps the current's magnitude, and inverse_park undoes it."""
     rng = np.random.default_rng(1)
     a, b, p = rng.normal(size=(3, 30))
     dd, qq = park(a, b, p)
@@ -99,6 +102,7 @@ def test_park_is_a_rotation_and_its_inverse():
 @pytest.mark.parametrize("tm", [TorqueModel(), TorqueModel(detent_torque=1e-3, detent_phase=-0.4, coulomb_torque=2e-4,
                                                            coulomb_speed=0.5, load=1e-5)], ids=["plain", "effects"])
 def test_round_trip_flag_state_flag(motor, plan, tm):
+    """Flag to state and back gives the flag, with and without the torque model's effects."""
     t = np.linspace(0.0, 0.06, 601)
     ref = plan.flag(t)
     flag = DQFlag(ref.theta, ref.dtheta, ref.ddtheta, ref.dddtheta, 0.1 * np.sin(200 * t), 20 * np.cos(200 * t))
@@ -109,6 +113,7 @@ def test_round_trip_flag_state_flag(motor, plan, tm):
 
 
 def test_round_trip_state_flag_state(motor):
+    """State to flag and back gives the state."""
     rng = np.random.default_rng(11)
     x = rng.normal(0, [0.5, 0.5, 5, 0.2], (200, 4)).T
     v = rng.normal(0, 5, (2, 200))

@@ -17,12 +17,14 @@ GAINS = {"current_bandwidth": 9000.0, "k_theta": 300.0, "k_omega": 1200.0, "ki_o
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
+    """The tiny study of conftest's TINY, read from a scenario file."""
     path = tmp_path_factory.mktemp("held") / "tiny.toml"
     path.write_text(TINY)
     return read_scenario_file(path)
 
 
 def test_the_runs_are_the_study_then_random_plants_then_the_stretched_moves(tiny):
+    """The runs are the study as tuned, then random plants, then the stretched moves, each built as stated."""
     runs = held_out_runs(tiny.scenario, tiny.robustness)
     assert [r.label for r in runs] == ["as tuned", f"{RANDOM_PLANTS} random plants"] + [
         f"move x {s:g}" for s in STRETCHES]
@@ -37,6 +39,7 @@ def test_the_runs_are_the_study_then_random_plants_then_the_stretched_moves(tiny
 
 
 def test_stretched_refuses_a_plan_it_cannot_scale(tiny):
+    """Stretching refuses a plan that is no rest-to-rest move, naming the scenario and the plan's type."""
     from flatstep.plan.piecewise import PiecewisePlan
 
     hold = PiecewisePlan([0.0, 0.05], [[0.0]], [[0.4]])  # a plan of segments: no one duration to scale
@@ -45,6 +48,7 @@ def test_stretched_refuses_a_plan_it_cannot_scale(tiny):
 
 
 def test_held_out_runs_the_given_gains_and_the_rule(tiny):
+    """The given gains and the rule's run on every held-out run; the first is the plain evaluation."""
     res = held_out(tiny.scenario, tiny.robustness, {CASCADE: GAINS, "cascade+voltage_feedforward+plan_frame": None})
     assert set(res) == {CASCADE, "cascade+voltage_feedforward+plan_frame"}
     assert all(len(evs) == 2 + len(STRETCHES) for evs in res.values())
@@ -60,6 +64,7 @@ def test_held_out_runs_the_given_gains_and_the_rule(tiny):
 
 
 def test_held_out_mean_is_nan_when_a_run_failed():
+    """The held-out mean averages the runs after the first: NaN where one lost its move or there is none."""
     ok = Evaluation({}, 1e-4, 5.0, 1e-3, 0.0, 0, 2)
     lost = Evaluation({}, 1e-4, 5.0, 1e-3, 0.0, 1, 2)
     assert held_out_mean([lost, ok, ok]) == pytest.approx(1e-4)
@@ -73,6 +78,7 @@ def _tuned_json(path, gains):
 
 
 def test_cli_held_out_reads_a_tuned_json_and_prints_the_default_beside(tiny, cli, tmp_path):
+    """The command line's --held-out reads a tuned.json and prints the rule's gains and default / best beside."""
     _tuned_json(tmp_path / "tuned.json", GAINS)
     run = cli(["compare", str(tiny.path), "--tuned", "tuned.json", "--held-out", "--controllers", CASCADE],
               cwd=tmp_path)
@@ -90,6 +96,7 @@ def test_cli_held_out_reads_a_tuned_json_and_prints_the_default_beside(tiny, cli
     (["--tuned", "bad.json", "--controllers", CASCADE], "not a tuned.json"),
 ])
 def test_cli_held_out_refuses(tiny, cli, tmp_path, argv, match):
+    """The command line refuses --held-out without --tuned, a law not in the file, --out and a bad tuned.json."""
     _tuned_json(tmp_path / "tuned.json", GAINS)
     (tmp_path / "bad.json").write_text("{}")
     run = cli(["compare", str(tiny.path)] + argv, cwd=tmp_path)

@@ -41,6 +41,7 @@ def test_dq_maps_drive_the_ab_model_along_the_flag(name):
 
 @pytest.mark.parametrize("name", MOTORS)
 def test_dq_forward_inverts_reverse(name):
+    """The d-q forward map inverts the reverse one, and Park's q current gives the motor's torque."""
     motor, tau = fs.MotorParams.preset(name), -1e-3
     t = np.linspace(0.0, 0.05, 101)
     flag = dq_flag(t)
@@ -54,6 +55,7 @@ def test_dq_forward_inverts_reverse(name):
 
 
 def test_dq_maps_refuse_a_nonfinite_flag(motor):
+    """The d-q maps refuse a flag holding a NaN, saying so."""
     flag = dq_flag(np.linspace(0, 0.01, 5))._replace(di_d=np.array([0, 0, np.nan, 0, 0]))
     with pytest.raises(ValueError, match="NaN or infinite"):
         interop.dq_flag_to_state(flag, motor)
@@ -139,6 +141,7 @@ def test_closed_loop_in_python_control_equals_flatstep_simulate(motor, plan, cas
 
 
 def test_nlsys_load_input_adds_to_the_plants_load(motor):
+    """A load input of nlsys adds to the plant's load, and a load function of time is read at the time."""
     plant = fs.Plant(motor, load=1e-5)
     x, v = np.array([0.3, -0.2, 4.0, 0.01]), np.array([2.0, -1.0])
     with_input = interop.nlsys(plant, load_input=True)
@@ -154,6 +157,7 @@ def test_nlsys_load_input_adds_to_the_plants_load(motor):
 
 
 def test_flatsys_load_from_params_and_forward_reverse(motor, plan):
+    """The flat system's forward and reverse maps invert each other, with the load from its params."""
     sys = interop.flatsys(motor, "rho_theta", load_torque=1e-5)
     t = np.array([0.025, 0.03, 0.035])
     x, v = flat_to_state(plan.flag(t), motor, 1e-5)
@@ -167,6 +171,7 @@ def test_flatsys_load_from_params_and_forward_reverse(motor, plan):
 
 
 def test_bad_requests_are_refused(motor, plan):
+    """Bad outputs, plants, loads, controllers, psi families and torque demands are refused, naming them."""
     with pytest.raises(ValueError, match="outputs='rho_phi' is not a choice.*valid"):
         interop.flatsys(motor, "rho_phi")
     with pytest.raises(ValueError, match="not a flatstep Plant or MotorParams"):

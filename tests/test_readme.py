@@ -51,6 +51,7 @@ def scratch(tmp_path_factory):
 
 
 def test_readme_has_the_commands_it_promises():
+    """The README holds the commands it promises: each main command, three Python blocks or more, no other make line."""
     commands = [c for c, _ in shell_commands()]
     assert len(commands) >= 7
     for name in ("simulate", "design", "robustness", "compare", "identify"):
@@ -88,6 +89,7 @@ LEFT_BEHIND = {"flatstep robustness": lambda where: (where / "out" / "rob" / "ro
 
 
 def test_shell_units_keep_every_command_once_in_order():
+    """The units hold every shell command once, in order, and the recording and its fit share one."""
     units = shell_units()
     flat = [c for u in units for c in u]
     assert sorted(flat, key=shell_commands().index) == shell_commands() and len(units) >= 7

@@ -1,3 +1,4 @@
+"""Scenario files: the examples load and run, the paper's files are its scenarios, bad files name the key."""
 from pathlib import Path
 
 import pytest
@@ -10,12 +11,14 @@ EXAMPLES = sorted((Path(__file__).parent.parent / "examples").glob("*.toml"))
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
 def test_every_example_loads_and_runs(path):
+    """Every example file loads, and its run ends within 2 mrad of the planned angle."""
     scenario, _ = load_scenario(path)
     s = scenario.run().summary()
     assert abs(s["theta_final"] - scenario.plan.theta2) < 2e-3
 
 
 def test_paper_files_are_the_papers_scenarios():
+    """The paper's Fig. 2 file is the paper's scenario: the same gains, plant, plan, motor and measurement."""
     fig2, study = load_scenario(EXAMPLES[0].parent / "paper-fig2.toml")
     ref = fs.PAPER_SCENARIOS["fig2"]
     assert (fig2.gains, fig2.simulated_plant, fig2.plan, fig2.motor, fig2.measurement) == (
@@ -25,6 +28,7 @@ def test_paper_files_are_the_papers_scenarios():
 
 
 def test_realistic_drive_file():
+    """The 20 kHz, 14-bit drive file gives its drive, sensors, observer, perturbed plant and study."""
     s, study = load_scenario(EXAMPLES[0].parent / "drive-20khz-14bit.toml")
     loop, plant = s.loop, s.simulated_plant
     assert s.control_period == loop.control_period == pytest.approx(5e-5) and loop.drive.v_bus == 24.0
@@ -35,6 +39,7 @@ def test_realistic_drive_file():
 
 
 def test_the_count_edges_and_the_torque_ramp_from_a_file(tmp_path):
+    """A file's edge_timing and torque_ramp reach the loop and change the run."""
     text = (EXAMPLES[0].parent / "compare-nema17-fast-weakening.toml").read_text()
     text = text.replace("[sensors]\n", "[sensors]\nedge_timing = true\n").replace(
         "[load]\n", "[observer]\ntorque_ramp = true\n\n[load]\n")
@@ -49,6 +54,7 @@ def test_the_count_edges_and_the_torque_ramp_from_a_file(tmp_path):
 
 
 def write(tmp_path, text):
+    """Write ``text`` to s.toml in ``tmp_path`` and return its path."""
     p = tmp_path / "s.toml"
     p.write_text(text)
     return p
@@ -73,10 +79,12 @@ def write(tmp_path, text):
     ("t_end = = 1", "not valid TOML"),
 ])
 def test_bad_files_name_the_key(tmp_path, text, match):
+    """A bad file is refused with a ValueError naming the key at fault (or saying it is not valid TOML)."""
     with pytest.raises(ValueError, match=match):
         load_scenario(write(tmp_path, text))
 
 
 def test_missing_file():
+    """A file that does not exist is refused, saying so."""
     with pytest.raises(ValueError, match="no such scenario file"):
         load_scenario("nowhere.toml")

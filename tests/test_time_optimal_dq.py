@@ -28,12 +28,14 @@ NEMA17 = MotorParams.preset("nema17")
 
 
 def limits(v_bus: float = 24.0, **kw: float) -> MotorLimits:
+    """The tests' limits: a ``v_bus`` bus of which 84 % is used, 1 A, and the keywords ``kw``."""
     return MotorLimits(v_bus=v_bus, i_max=1.0, v_use=0.84, **kw)
 
 
 @pytest.mark.parametrize("v_bus,distance", [(24.0, 0.1), (24.0, 0.3), (24.0, 5.0), (12.0, 0.1), (12.0, 1.0),
                                              (12.0, 20.0)])
 def test_c_and_reference_plan_the_same_move(v_bus: float, distance: float) -> None:
+    """The C planner and the Python reference plan the same move: duration, shape and tables."""
     py = plan_dq_move(distance, NEMA17, limits(v_bus), engine="python")
     c = plan_dq_move(distance, NEMA17, limits(v_bus), engine="c")
     assert c.tf == pytest.approx(py.tf, rel=1e-9)
@@ -45,6 +47,7 @@ def test_c_and_reference_plan_the_same_move(v_bus: float, distance: float) -> No
 
 
 def test_shot_lands_on_the_distance_at_rest_and_the_table_follows_it() -> None:
+    """The shot lands on the distance at rest, the table follows its samples, and the voltage meets the bus."""
     lim = limits(24.0)
     v = 0.98 * lim.v_use * lim.v_bus
     shot = shoot(0.3, NEMA17, v, 0.995, 0.995 * speed_cap(NEMA17, lim, 20000.0))
@@ -76,6 +79,7 @@ def _nema17_12v_shot() -> tuple:
 
 
 def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
+    """The terminal ramp's rate falls where the full rate would leave the bus, and a second shot keeps it."""
     v, cap, shot = _nema17_12v_shot()  # the ramp's start would leave the bus at the full rate
     assert shot.ramp < 1.0
     md = _Model(NEMA17, v, 0.995, cap, shot.h)
@@ -87,6 +91,7 @@ def test_terminal_ramp_rate_falls_where_the_ramp_would_leave_the_bus() -> None:
 
 
 def test_terminal_ramp_ends_near_the_bus_with_its_d_share_balancing_start_and_end() -> None:
+    """The terminal ramp ends near the bus, within it, its d share balancing the voltage at its start and end."""
     v, cap, shot = _nema17_12v_shot()
     md = _Model(NEMA17, v, 0.995, cap, shot.h)
     md.end_rate = shot.ramp * md.rate
@@ -102,6 +107,7 @@ def test_terminal_ramp_ends_near_the_bus_with_its_d_share_balancing_start_and_en
 @pytest.mark.parametrize("v_bus,beyond", [(12.0, True), (24.0, False)])
 def test_braking_target_beyond_the_envelope_only_where_the_bus_binds_the_whole_move(v_bus: float,
                                                                                     beyond: bool) -> None:
+    """The braking target goes beyond the steady envelope at 12 V, where the bus binds the whole move, not at 24 V."""
     lim = limits(v_bus)
     v = 0.98 * lim.v_use * lim.v_bus  # R i_max / V: 0.41 at 12 V, 0.20 at 24 V
     md = _Model(NEMA17, v, 0.995, speed_cap(NEMA17, lim, 20000.0), 1e-5)
@@ -116,6 +122,7 @@ def test_braking_target_beyond_the_envelope_only_where_the_bus_binds_the_whole_m
 
 
 def test_speeding_up_weakens_ahead_of_the_steady_envelope_at_12_v() -> None:
+    """Speeding up at 12 V weakens the field never later than the steady envelope, and well ahead of it."""
     lim = limits(12.0)
     v = 0.98 * lim.v_use * lim.v_bus
     shot = shoot(1.0, NEMA17, v, 0.995, 0.995 * speed_cap(NEMA17, lim, 20000.0))
@@ -130,6 +137,7 @@ def test_speeding_up_weakens_ahead_of_the_steady_envelope_at_12_v() -> None:
 @pytest.mark.parametrize("resistance,weakens", [(6.0, True), (14.0, False)])
 def test_look_ahead_follows_the_reactance_at_the_cruise_not_the_resistive_share(resistance: float,
                                                                                weakens: bool) -> None:
+    """The look-ahead weakens the field where the reactance at the cruise is high, not by the resistive share."""
     # R 6: R i_max / V 0.72 (a rule on the resistive share alone took the look-ahead from it), N_r W L / R 7;
     # R 14: N_r W L / R below 3, where the d current's own drop eats what it saves
     m = replace(NEMA17, R=resistance)
@@ -160,6 +168,7 @@ def _qsh5718_shot(v_bus: float) -> tuple:
 
 
 def test_speeding_up_d_target_moves_within_the_bus_rate() -> None:
+    """The d target moves within the bus's rate, so the first shot's table keeps the bus."""
     m, i_max, lim, v, shot = _qsh5718_shot(12.0)
     step = np.abs(np.diff(shot.accel.t_d[:shot.n_acc]))
     assert np.max(step) <= D_SLEW * shot.h * v / m.L * (1 + 1e-9)
@@ -170,6 +179,7 @@ def test_speeding_up_d_target_moves_within_the_bus_rate() -> None:
 
 
 def test_braking_current_held_to_the_current_limit_on_the_bus() -> None:
+    """The braking current keeps to the current limit (0.5 % at most beyond it) and brakes on it; one shot suffices."""
     m, i_max, lim, _, shot = _qsh5718_shot(24.0)
     b = shot.brake
     current = np.hypot(b.i_d[:shot.n_brake], b.i_q[:shot.n_brake])
@@ -181,6 +191,7 @@ def test_braking_current_held_to_the_current_limit_on_the_bus() -> None:
 
 @pytest.mark.parametrize("distance,exact", [(5.0, True), (0.3, False)])
 def test_root_finders_first_try_from_the_braking_distance(distance: float, exact: bool) -> None:
+    """The root finder's first try from the braking distance lands where the bracket does (exactly on a cruise)."""
     lim = limits(24.0)
     v = 0.98 * lim.v_use * lim.v_bus
     md = _Model(NEMA17, v, 0.995, 0.995 * speed_cap(NEMA17, lim, 20000.0), NEMA17.L * 0.995 / v / 10)
@@ -201,6 +212,7 @@ def test_root_finders_first_try_from_the_braking_distance(distance: float, exact
 
 
 def test_the_switch_guess_lands_where_the_whole_bracket_does() -> None:
+    """A switch guess near, far or out of the phase lands the shot where the whole bracket does."""
     v, cap, first = _nema17_12v_shot()
     for guess in (first.t_s, 0.9 * first.t_s, 1.2 * first.t_s, -1.0, 1.0):  # near, far and out of the phase
         again = shoot(0.3, NEMA17, v, 0.995, cap, 1.0, guess)
@@ -224,6 +236,7 @@ def _voltages(plan: object, d_current: DCurrentPlan, m: MotorParams, n: int = 20
 
 @pytest.mark.parametrize("v_bus,distance", [(24.0, 1.0), (12.0, 5.0)])
 def test_plan_keeps_its_limits_on_a_fine_grid_and_weakens_the_field(v_bus: float, distance: float) -> None:
+    """The plan keeps its voltage, current and speed limits on a fine grid, and weakens the field at speed."""
     lim = limits(v_bus)
     fw = time_optimal_dq(distance, NEMA17, lim, theta1=0.5, t0=0.01)
     v, i, w = _voltages(fw.plan, fw.d_current, NEMA17)
@@ -236,6 +249,7 @@ def test_plan_keeps_its_limits_on_a_fine_grid_and_weakens_the_field(v_bus: float
 
 
 def test_negative_move_mirrors_and_faster_than_without_field_weakening() -> None:
+    """A negative move mirrors the positive one, and field weakening goes beyond the bus's no-load speed."""
     lim = limits(24.0)
     up, down = time_optimal_dq(5.0, NEMA17, lim), time_optimal_dq(-5.0, NEMA17, lim)
     assert down.plan.tf == up.plan.tf and down.plan.theta2 == pytest.approx(-5.0, abs=1e-9)
@@ -247,6 +261,7 @@ def test_negative_move_mirrors_and_faster_than_without_field_weakening() -> None
 
 
 def test_speed_cap_follows_the_control_rate_and_the_user() -> None:
+    """The speed cap follows the control rate, and a user's speed_max caps it further."""
     lim = limits(24.0)
     assert speed_cap(NEMA17, lim, 20000.0) == pytest.approx(0.035 * 2 * math.pi * 20000 / 50)
     slow = plan_dq_move(20.0, NEMA17, lim, control_rate=10000.0)
@@ -256,6 +271,7 @@ def test_speed_cap_follows_the_control_rate_and_the_user() -> None:
 
 
 def test_envelope_currents_lie_on_both_limits() -> None:
+    """The envelope's currents keep both limits and lie on one of them; its top speed is set by friction."""
     v, i_max = 0.84 * 24.0, 1.0
     for w in (0.0, 50.0, 150.0):
         i_d, i_q, i_d2, i_q2 = best_currents(w, NEMA17, v, i_max)
@@ -269,6 +285,7 @@ def test_envelope_currents_lie_on_both_limits() -> None:
 
 
 def test_hermite_table_rate_is_the_derivative() -> None:
+    """The Hermite table's rate is the derivative of its current, and zero outside the knots."""
     knots = np.array([0.0, 1e-3, 3e-3, 4e-3])
     dc = DCurrentPlan(t0=0.0, tf=4e-3, knot_t=tuple(knots), knot_id=(0.0, -0.4, -0.5, 0.0),
                       knot_did=(0.0, -200.0, 100.0, 0.0))
@@ -281,6 +298,7 @@ def test_hermite_table_rate_is_the_derivative() -> None:
 
 
 def test_bad_arguments_are_named() -> None:
+    """Bad rates, voltages, engines and knot tables are refused, naming them; a short work array returns -4."""
     with pytest.raises(ValueError, match="control_rate"):
         plan_dq_move(1.0, NEMA17, limits(), control_rate=-1.0)
     with pytest.raises(ValueError, match="voltage"):
@@ -296,6 +314,7 @@ def test_bad_arguments_are_named() -> None:
 
 
 def test_plan_tracked_by_the_dq_law_on_a_20khz_drive() -> None:
+    """The d-q law tracks the plan on a 20 kHz drive within 2 mrad, following its d current below -0.2 A."""
     lim = limits(24.0)
     fw = time_optimal_dq(0.3, NEMA17, lim)
     loop = drive_loop(24.0, 20000.0, 4000)
@@ -332,6 +351,7 @@ type = "{ctrl}"
 
 
 def test_scenario_file_plans_field_weakening_for_the_dq_law(tmp_path: object) -> None:
+    """A scenario file plans the field-weakening move for the d-q law, and refuses it for another law or plan."""
     from pathlib import Path
 
     from flatstep.studies.scenario_file import read_scenario_file

@@ -18,6 +18,7 @@ FAST = dict(budget=10, population=5)
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
+    """The tiny study of conftest's TINY, read from a scenario file."""
     path = tmp_path_factory.mktemp("tune") / "tiny.toml"
     path.write_text(TINY)
     return read_scenario_file(path)
@@ -25,10 +26,12 @@ def tiny(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def tuned_smc(tiny):
+    """The paper's law tuned on the tiny study with seed 3 and the fast budget."""
     return tune(tiny.scenario, "smc", seed=3, study=tiny.robustness, **FAST)
 
 
 def test_seeded_tuning_is_reproducible(tiny, tuned_smc):
+    """A seed gives the same search and answer again; another seed searches elsewhere."""
     again = tune(tiny.scenario, "smc", seed=3, study=tiny.robustness, **FAST)
     assert again.gains == tuned_smc.gains
     assert again.best.move_max == tuned_smc.best.move_max
@@ -56,6 +59,7 @@ def test_the_early_stop_and_the_threads_change_nothing_but_the_time(tiny):
 
 
 def test_budget_is_the_same_for_every_law(tiny, tuned_smc):
+    """Every law gets the same budget of evaluations, over its own gains."""
     cascade = tune(tiny.scenario, "cascade", seed=3, study=tiny.robustness, **FAST)
     assert len(tuned_smc.evaluations) == len(cascade.evaluations) == 10
     assert set(cascade.gains) == {"current_bandwidth", "k_theta", "k_omega", "ki_omega"}
@@ -63,6 +67,7 @@ def test_budget_is_the_same_for_every_law(tiny, tuned_smc):
 
 
 def test_the_scenario_gains_are_the_first_candidate_and_never_beaten_by_a_worse(tiny, tuned_smc):
+    """The scenario's gains are the first candidate, and the answer is never worse than them."""
     start = tuned_smc.start
     for key, value in tiny.scenario.gains.as_dict().items():
         if key in start.gains:
@@ -73,6 +78,7 @@ def test_the_scenario_gains_are_the_first_candidate_and_never_beaten_by_a_worse(
 
 
 def test_caps_are_honoured(tiny, tuned_smc):
+    """A cap on the peak voltage or the copper is honoured, and one no run can meet leaves no feasible answer."""
     cap = 0.8 * tuned_smc.best.peak_voltage
     capped = tune(tiny.scenario, "smc", seed=3, study=tiny.robustness, caps=Caps(peak_voltage=cap), **FAST)
     assert capped.caps.peak_voltage == cap
@@ -87,6 +93,7 @@ def test_caps_are_honoured(tiny, tuned_smc):
 
 
 def test_frontier_points_meet_their_caps_and_improve_with_the_cap(tiny):
+    """Each frontier point meets its cap, and a larger cap gives an error no larger."""
     fr = frontier(tiny.scenario, "cascade", fractions=(0.5, 1.0), study=tiny.robustness, seed=1, **FAST)
     assert [p.cap for p in fr.points] == [12.0, 24.0]
     for p in fr.points:
@@ -96,6 +103,7 @@ def test_frontier_points_meet_their_caps_and_improve_with_the_cap(tiny):
 
 
 def test_outside_layer_share(tiny, tuned_smc):
+    """The share of samples outside the boundary layers is a fraction, and there is none for a law without them."""
     share = outside_layer(tuned_smc.tuned, tiny.robustness)
     assert 0.0 <= share["s1"] <= share["either"] <= 1.0
     assert share["s2"] <= share["either"]
@@ -106,6 +114,7 @@ def test_outside_layer_share(tiny, tuned_smc):
 
 
 def test_tuned_toml_keeps_the_file_and_reads_back(tiny, tuned_smc, tmp_path):
+    """The tuned file keeps the scenario file, reads back the tuned gains, and keeps other laws' gains out."""
     text = tiny.path.read_text()
     out = tuned_toml(text, "smc", tuned_smc.gains, "smc tuned")
     assert out.encode().startswith(TUNED_MARK)
@@ -127,6 +136,7 @@ def test_tuned_toml_keeps_the_file_and_reads_back(tiny, tuned_smc, tmp_path):
 
 
 def test_cli_tune_writes_a_table_that_simulate_reads(tiny, cli, tmp_path):
+    """The tune command writes a table simulate and compare read; a rerun replaces its own file with the same result."""
     (tmp_path / "s.toml").write_text(TINY)
     run = cli(["tune", "s.toml", "--law", "cascade", "--budget", "10", "--population", "5", "--out", "t.toml",
                "--quiet"], cwd=tmp_path)
@@ -164,6 +174,7 @@ def test_cli_tune_writes_a_table_that_simulate_reads(tiny, cli, tmp_path):
     (["--law", "cascade_ff"], "--law cascade_ff: controller type 'cascade_ff' needs the torques"),
 ])
 def test_cli_tune_refuses_bad_input(cli, tmp_path, argv, match):
+    """The tune command refuses bad input with exit 2 and a message naming it, no traceback."""
     (tmp_path / "s.toml").write_text(TINY)
     run = cli(["tune", "s.toml", *argv], cwd=tmp_path)
     assert run.returncode == 2
@@ -172,6 +183,7 @@ def test_cli_tune_refuses_bad_input(cli, tmp_path, argv, match):
 
 
 def test_cli_refuses_a_user_file_and_a_scenario_without_drive(cli, tmp_path):
+    """The command line refuses to write over a user's file, a scenario without a drive and bad --tuned options."""
     (tmp_path / "s.toml").write_text(TINY)
     (tmp_path / "mine.toml").write_text("# my notes\n")
     run = cli(["tune", "s.toml", "--out", "mine.toml"], cwd=tmp_path)
@@ -188,6 +200,7 @@ def test_cli_refuses_a_user_file_and_a_scenario_without_drive(cli, tmp_path):
 
 
 def test_api_refuses_bad_input(tiny):
+    """The tuning functions refuse bad laws, seeds, caps, budgets, fractions and gains with a ValueError."""
     with pytest.raises(ValueError, match="law 'nope'|is unknown"):
         tune(tiny.scenario, "nope", **FAST)
     with pytest.raises(ValueError, match="seed=-1"):
@@ -209,6 +222,7 @@ def test_api_refuses_bad_input(tiny):
 
 
 def test_every_law_has_a_table_row_with_bounds_around_its_value():
+    """Every law has a row of tunable gains with bounds around its value, and its variants share the row."""
     for law, row in TUNABLE.items():
         assert row.gains, law
         for g in row.gains:
@@ -219,6 +233,7 @@ def test_every_law_has_a_table_row_with_bounds_around_its_value():
 
 @pytest.mark.parametrize("kind", ["smc", "cascade", "microstep", "exact_linearization", "dq_smc"])
 def test_each_row_reads_and_applies_the_controller_as_built(tiny, kind):
+    """Each row reads the gains of the controller as built and applies them back unchanged."""
     import dataclasses as dc
 
     row = law_gains(kind)
@@ -237,6 +252,7 @@ def test_each_row_reads_and_applies_the_controller_as_built(tiny, kind):
 @pytest.mark.parametrize("example", ["compare-nema17-fast.toml", "compare-paper-20khz.toml"])
 @pytest.mark.parametrize("kind", ["smc", "cascade"])
 def test_full_tuning_on_the_shipped_examples(example, kind):
+    """A full tuning of the shipped examples is feasible, never worse than the start, and within the bus."""
     sf = read_scenario_file(EXAMPLES / example)
     res = tune(sf.scenario, kind, seed=0, study=sf.robustness)
     assert res.feasible

@@ -15,11 +15,13 @@ SMOOTH = {"psi": 3, "hermite": 3, "spline": 3, "scurve": 2}
 
 
 def sample(plan, n=40001):
+    """Times evenly spread over the plan's move, ``n`` of them."""
     return np.linspace(plan.t0, plan.tf, n)
 
 
 @pytest.mark.parametrize("family", FAMILIES)
 def test_every_family_is_smooth_meets_the_waypoints_and_the_caps(family):
+    """Every family is smooth at its breaks, passes the waypoints in order, keeps the caps and holds the dwell."""
     points = [p if not (isinstance(p, Waypoint) and p.velocity) or family in ("hermite", "spline")
               else Waypoint(p.theta) for p in POINTS]
     if family == "spline":  # a spline chooses its own via speeds
@@ -47,12 +49,14 @@ def test_every_family_is_smooth_meets_the_waypoints_and_the_caps(family):
 
 
 def test_caps_bind_the_psi_move_exactly():
+    """The speed cap binds the psi move exactly: its duration and peak speed are the cap's."""
     plan = plan_waypoints([0.0, 10.0], caps=Caps(50.0, 1e6, 1e9))
     assert abs(plan.tf - PSI_PEAKS[0] * 10.0 / 50.0) < 1e-12
     assert abs(np.max(plan.theta_deriv(sample(plan), 1)) - 50.0) < 1e-3
 
 
 def test_given_via_speed_is_met():
+    """A via speed given to a Hermite move is met, at zero acceleration, with the given durations."""
     plan = plan_waypoints([0.0, Waypoint(2.0, velocity=30.0), 3.0], family="hermite", durations=[0.1, 0.05])
     assert abs(plan.theta_deriv(np.array([0.1]), 1)[0] - 30.0) < 1e-9
     assert abs(plan.theta_deriv(np.array([0.1]), 2)[0]) < 1e-6
@@ -61,6 +65,7 @@ def test_given_via_speed_is_met():
 
 @pytest.mark.parametrize("distance", [0.001, 0.5, 5.0, 50.0])
 def test_scurve_phases_cover_the_distance_within_the_caps(distance):
+    """The S-curve's phases cover the distance within the speed and acceleration caps, its jerk bang-bang."""
     h, j = scurve_phases(distance, 100.0, 2000.0, 1e5)
     plan = plan_waypoints([1.0, 1.0 + distance], family="scurve", caps=CAPS)
     assert abs(plan.theta2 - 1.0 - distance) < 1e-12 * max(1.0, distance)
@@ -73,6 +78,7 @@ def test_scurve_phases_cover_the_distance_within_the_caps(distance):
 
 
 def test_scurve_time_for_a_long_move_is_the_textbook_one():
+    """A long S-curve move takes the textbook time D / v + v / a + a / j."""
     # the speed and acceleration caps are reached: T = D / v + v / a + a / j
     d, v, a, j = 50.0, 100.0, 2000.0, 1e5
     assert math.isclose(plan_waypoints([0.0, d], family="scurve", caps=Caps(v, a, j)).tf, d / v + v / a + a / j,
@@ -94,11 +100,13 @@ def test_scurve_time_for_a_long_move_is_the_textbook_one():
     ([0.0, 1.0], dict(rho=0.0, caps=CAPS), "rho=0.0"),
 ])
 def test_bad_requests_are_refused(args, kwargs, match):
+    """Bad waypoint requests are refused with a ValueError saying why."""
     with pytest.raises(ValueError, match=match):
         plan_waypoints(args, **kwargs)
 
 
 def test_bad_waypoints_and_caps_are_refused():
+    """A negative dwell, a NaN angle and a zero cap are refused, naming them."""
     with pytest.raises(ValueError, match="waypoint dwell"):
         Waypoint(1.0, dwell=-1.0)
     with pytest.raises(ValueError, match="waypoint theta"):
